@@ -1,0 +1,585 @@
+"""Tests of learning.data: NPZ / CSV round-trips, validation errors, atomic saves, summary."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import learning.data as data
+from learning.data import (DataFormatError, Demonstrations, Trial, load, load_csv_folder, load_npz,
+                           save, save_csv_folder, save_npz)
+
+OBS = ["x", "y", "z", "roll"]
+ACT = ["kx", "ky", "kz"]
+VOL = ["elev", "prot"]
+
+
+def make_demos(n_trials: int = 3, T: int = 40, optional: bool = True, seed: int = 0) -> Demonstrations:
+    rng = np.random.default_rng(seed)
+    trials = []
+    for i in range(n_trials):
+        n = T + 5 * i
+        trials.append(Trial(
+            obs=rng.normal(size=(n, len(OBS))), act=rng.normal(size=(n, len(ACT))),
+            t=0.5 * i + np.arange(n) / 100.0, trial_id=10 + i,
+            subject=i % 2 if optional else -1,
+            mode=rng.integers(-1, 4, n) if optional else None,
+            voluntary=rng.normal(size=(n, len(VOL))) if optional else None))
+    return Demonstrations(trials, 100.0, list(OBS), list(ACT), list(VOL) if optional else [])
+
+
+def assert_same(a: Demonstrations, b: Demonstrations) -> None:
+    assert a.rate_hz == pytest.approx(b.rate_hz, rel=1e-9)
+    assert (a.obs_names, a.act_names, a.vol_names) == (b.obs_names, b.act_names, b.vol_names)
+    sa, sb = a.stacked(), b.stacked()
+    assert sa.keys() == sb.keys()
+    for k in sa:
+        np.testing.assert_array_equal(sa[k], sb[k], err_msg=k)
+
+
+def stacked_arrays(demos: Demonstrations) -> dict[str, np.ndarray]:
+    arrays = demos.stacked()
+    arrays.update(obs_names=np.array(demos.obs_names), act_names=np.array(demos.act_names),
+                  rate_hz=np.array(demos.rate_hz))
+    if demos.has_voluntary:
+        arrays["vol_names"] = np.array(demos.vol_names)
+    return arrays
+
+
+def check_error(exc: pytest.ExceptionInfo, path, field, row) -> None:
+    """The error names file, field and row (attributes and message)."""
+    e = exc.value
+    msg = str(e)
+    assert e.path == str(path)
+    assert str(path) in msg
+    assert e.field == field
+    if field is not None:
+        assert f"field '{field}'" in msg
+    assert e.row == row
+    if row is not None:
+        assert f"row {row}" in msg
+
+
+# ------------------------------------------------------------------ round trips
+
+
+@pytest.mark.parametrize("optional", [True, False])
+def test_npz_round_trip(tmp_path: Path, optional: bool) -> None:
+    d = make_demos(optional=optional)
+    save(d, tmp_path / "d.npz")
+    back = load(tmp_path / "d.npz")
+    assert_same(d, back)
+    assert back.has_modes == optional and back.has_voluntary == optional
+    assert [tr.subject for tr in back] == [tr.subject for tr in d]
+
+
+@pytest.mark.parametrize("optional", [True, False])
+def test_csv_round_trip(tmp_path: Path, optional: bool) -> None:
+    d = make_demos(optional=optional)
+    save(d, tmp_path / "folder")
+    files = sorted(os.listdir(tmp_path / "folder"))
+    assert files == ["trial_010.csv", "trial_011.csv", "trial_012.csv"]
+    header = (tmp_path / "folder" / "trial_010.csv").read_text().splitlines()[0].split(",")
+    assert header[:1 + len(OBS)] == ["t"] + [f"obs_{n}" for n in OBS]
+    back = load(tmp_path / "folder")
+    assert_same(d, back)  # floats written with 17 significant digits: exact
+    assert [tr.trial_id for tr in back] == [10, 11, 12]
+
+
+def test_npz_minimal_fields_time_from_rate(tmp_path: Path) -> None:
+    p = tmp_path / "m.npz"
+    obs = np.arange(12.0).reshape(6, 2)
+    np.savez(p, obs=obs, act=obs[:, :1], trial=np.array([3, 3, 3, 1, 1, 1]), rate_hz=np.array(50.0))
+    d = load_npz(p)
+    assert d.trial_ids == [3, 1]
+    np.testing.assert_allclose(d[0].t, [0, 0.02, 0.04])
+    np.testing.assert_allclose(d[1].t, [0, 0.02, 0.04])
+    assert d.obs_names == ["0", "1"] and d.act_names == ["0"]
+    assert [tr.subject for tr in d] == [-1, -1] and not d.has_modes
+
+
+def test_npz_rate_inferred_from_time(tmp_path: Path) -> None:
+    p = tmp_path / "m.npz"
+    obs = np.zeros((8, 1))
+    np.savez(p, obs=obs, act=obs, trial=np.repeat([0, 1], 4), t=np.tile(np.arange(4) * 0.01, 2),
+             mode=np.array([0, 0, 1, 1, 2, 2, -1, -1], dtype=float))  # integral floats are fine
+    d = load_npz(p)
+    assert d.rate_hz == 100.0
+    assert d[1].mode.dtype.kind == "i"
+
+
+def test_from_stacked_matches_stacked() -> None:
+    d = make_demos()
+    s = d.stacked()
+    back = Demonstrations.from_stacked(rate_hz=d.rate_hz, obs_names=OBS, act_names=ACT, vol_names=VOL, **s)
+    assert_same(d, back)
+
+
+def test_save_dispatch_and_no_pickle(tmp_path: Path) -> None:
+    d = make_demos()
+    save_npz(d, tmp_path / "a.npz")
+    with np.load(tmp_path / "a.npz", allow_pickle=False) as z:
+        assert set(z.files) <= set(data.NPZ_FIELDS)
+        for k in z.files:
+            assert z[k].dtype != object
+    save_csv_folder(d, tmp_path / "c")
+    assert_same(load_csv_folder(tmp_path / "c"), load_npz(tmp_path / "a.npz"))
+
+
+def test_summary() -> None:
+    d = make_demos()
+    s = d.summary()
+    assert s["n_trials"] == 3 and s["n_samples"] == 40 + 45 + 50
+    assert s["subjects"] == [0, 1]
+    assert s["duration_s"] == pytest.approx(1.35)
+    assert s["duration_s_per_subject"] == {0: pytest.approx(0.9), 1: pytest.approx(0.45)}
+    assert s["rate_hz"] == 100.0 and s["obs_names"] == OBS and s["vol_names"] == VOL
+    assert sum(s["mode_counts"].values()) == 135
+    assert make_demos(optional=False).summary()["mode_counts"] is None
+    import json
+    json.dumps(s)
+
+
+# ------------------------------------------------------------------ NPZ errors
+
+
+def write_npz(tmp_path: Path, **override) -> Path:
+    arrays = stacked_arrays(make_demos())
+    for k, v in override.items():
+        if v is None:
+            arrays.pop(k, None)
+        else:
+            arrays[k] = v
+    p = tmp_path / "bad.npz"
+    np.savez(p, **arrays)
+    return p
+
+
+def base() -> dict[str, np.ndarray]:
+    return make_demos().stacked()
+
+
+@pytest.mark.parametrize("fld, col, value, row", [
+    ("obs", 2, np.nan, 17), ("act", 0, np.inf, 50), ("voluntary", 1, -np.inf, 3), ("t", None, np.nan, 90),
+])
+def test_npz_non_finite(tmp_path: Path, fld, col, value, row) -> None:
+    a = base()[fld].copy()
+    if col is None:
+        a[row] = value
+    else:
+        a[row, col] = value
+    p = write_npz(tmp_path, **{fld: a})
+    with pytest.raises(DataFormatError, match="non-finite") as exc:
+        load(p)
+    check_error(exc, p, fld, row)
+    if col is not None:
+        assert f"column {col}" in str(exc.value)
+
+
+def test_npz_ragged_act(tmp_path: Path) -> None:
+    p = write_npz(tmp_path, act=base()["act"][:-3])
+    with pytest.raises(DataFormatError, match="rows but obs has") as exc:
+        load(p)
+    check_error(exc, p, "act", 132)
+
+
+def test_npz_ragged_names(tmp_path: Path) -> None:
+    p = write_npz(tmp_path, obs_names=np.array(["a", "b"]))
+    with pytest.raises(DataFormatError, match="2 names but 4 channels") as exc:
+        load(p)
+    check_error(exc, p, "obs_names", None)
+
+
+def test_npz_ragged_mode(tmp_path: Path) -> None:
+    p = write_npz(tmp_path, mode=base()["mode"][:100])
+    with pytest.raises(DataFormatError, match="shape") as exc:
+        load(p)
+    check_error(exc, p, "mode", 100)
+
+
+def test_npz_single_sample_trial(tmp_path: Path) -> None:
+    tr = base()["trial"].copy()
+    tr[-1] = 99  # the last row becomes its own trial
+    p = write_npz(tmp_path, trial=tr)
+    with pytest.raises(DataFormatError, match="single-sample") as exc:
+        load(p)
+    check_error(exc, p, "trial", 134)
+
+
+def test_npz_empty(tmp_path: Path) -> None:
+    p = tmp_path / "e.npz"
+    np.savez(p, obs=np.zeros((0, 2)), act=np.zeros((0, 1)), trial=np.zeros(0, int), rate_hz=np.array(10.0))
+    with pytest.raises(DataFormatError, match="no samples") as exc:
+        load(p)
+    check_error(exc, p, "obs", None)
+
+
+def test_npz_non_contiguous_trial(tmp_path: Path) -> None:
+    tr = base()["trial"].copy()
+    tr[60:62] = 10  # trial 10 (rows 0..39) reappears inside trial 11
+    p = write_npz(tmp_path, trial=tr)
+    with pytest.raises(DataFormatError, match="not contiguous") as exc:
+        load(p)
+    check_error(exc, p, "trial", 60)
+
+
+@pytest.mark.parametrize("delta", [0.0, -0.5])
+def test_npz_time_not_increasing(tmp_path: Path, delta: float) -> None:
+    t = base()["t"].copy()
+    t[45] = t[44] + delta
+    p = write_npz(tmp_path, t=t)
+    with pytest.raises(DataFormatError, match="not strictly increasing") as exc:
+        load(p)
+    check_error(exc, p, "t", 45)
+
+
+def test_npz_time_does_not_match_rate(tmp_path: Path) -> None:
+    p = write_npz(tmp_path, rate_hz=np.array(50.0))
+    with pytest.raises(DataFormatError, match="does not match rate_hz") as exc:
+        load(p)
+    check_error(exc, p, "t", None)
+
+
+def test_npz_unknown_field(tmp_path: Path) -> None:
+    p = write_npz(tmp_path, extra=np.zeros(3))
+    with pytest.raises(DataFormatError, match="unknown field") as exc:
+        load(p)
+    check_error(exc, p, "extra", None)
+
+
+@pytest.mark.parametrize("missing", ["obs", "act", "trial"])
+def test_npz_missing_required(tmp_path: Path, missing: str) -> None:
+    p = write_npz(tmp_path, **{missing: None})
+    with pytest.raises(DataFormatError, match="required field missing") as exc:
+        load(p)
+    check_error(exc, p, missing, None)
+
+
+def test_npz_neither_time_nor_rate(tmp_path: Path) -> None:
+    p = write_npz(tmp_path, t=None, rate_hz=None)
+    with pytest.raises(DataFormatError, match="neither") as exc:
+        load(p)
+    check_error(exc, p, "rate_hz", None)
+
+
+def test_npz_subject_changes_within_trial(tmp_path: Path) -> None:
+    s = base()["subject"].copy()
+    s[70] = 5
+    p = write_npz(tmp_path, subject=s)
+    with pytest.raises(DataFormatError, match="subject changes") as exc:
+        load(p)
+    check_error(exc, p, "subject", 70)
+
+
+def test_npz_non_integer_mode(tmp_path: Path) -> None:
+    m = base()["mode"].astype(float)
+    m[33] = 1.5
+    p = write_npz(tmp_path, mode=m)
+    with pytest.raises(DataFormatError, match="integer") as exc:
+        load(p)
+    check_error(exc, p, "mode", 33)
+
+
+def test_npz_mode_below_minus_one(tmp_path: Path) -> None:
+    m = base()["mode"].copy()
+    m[81] = -2
+    p = write_npz(tmp_path, mode=m)
+    with pytest.raises(DataFormatError, match="< -1") as exc:
+        load(p)
+    check_error(exc, p, "mode", 81)
+
+
+def test_npz_object_array_refused(tmp_path: Path) -> None:
+    p = write_npz(tmp_path, obs_names=np.array(["a", 1, None, 2.0], dtype=object))
+    with pytest.raises(DataFormatError, match="without pickle") as exc:
+        load(p)
+    check_error(exc, p, "obs_names", None)
+
+
+def test_npz_not_a_zip(tmp_path: Path) -> None:
+    p = tmp_path / "junk.npz"
+    p.write_bytes(b"not a zip file at all")
+    with pytest.raises(DataFormatError, match="not a readable NPZ") as exc:
+        load(p)
+    check_error(exc, p, None, None)
+
+
+def test_load_missing_and_unknown_format(tmp_path: Path) -> None:
+    with pytest.raises(DataFormatError, match="no such"):
+        load(tmp_path / "nope.npz")
+    with pytest.raises(DataFormatError, match="no such"):
+        load(tmp_path / "nope")
+    (tmp_path / "x.txt").write_text("hi")
+    with pytest.raises(DataFormatError, match="unknown format"):
+        load(tmp_path / "x.txt")
+
+
+# ------------------------------------------------------------------ CSV errors
+
+
+@pytest.fixture
+def csv_dir(tmp_path: Path) -> Path:
+    p = tmp_path / "csv"
+    save_csv_folder(make_demos(), p)
+    return p
+
+
+def edit_csv(path: Path, row: int, column: str, value: str) -> None:
+    """Set one cell (data row ``row``, 0-based) of a CSV file."""
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    cells = lines[row + 1].split(",")
+    cells[header.index(column)] = value
+    lines[row + 1] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("column, value, match", [
+    ("obs_y", "nan", "non-finite"), ("act_kz", "inf", "non-finite"), ("vol_prot", "-inf", "non-finite"),
+    ("t", "nan", "non-finite"), ("obs_roll", "abc", "not a number"), ("act_kx", "", "not a number"),
+])
+def test_csv_bad_cell(csv_dir: Path, column: str, value: str, match: str) -> None:
+    f = csv_dir / "trial_011.csv"
+    edit_csv(f, 7, column, value)
+    with pytest.raises(DataFormatError, match=match) as exc:
+        load(csv_dir)
+    check_error(exc, f, column, 7)
+
+
+def test_csv_ragged_row(csv_dir: Path) -> None:
+    f = csv_dir / "trial_012.csv"
+    lines = f.read_text().splitlines()
+    lines[5] = lines[5].rsplit(",", 1)[0]  # data row 4 loses its last cell
+    f.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataFormatError, match="values but the header has") as exc:
+        load(csv_dir)
+    check_error(exc, f, None, 4)
+    assert "file line 6" in str(exc.value)
+
+
+def test_csv_unknown_column(csv_dir: Path) -> None:
+    f = csv_dir / "trial_010.csv"
+    lines = f.read_text().splitlines()
+    f.write_text("\n".join([lines[0] + ",speed"] + [ln + ",1" for ln in lines[1:]]) + "\n")
+    with pytest.raises(DataFormatError, match="unknown column") as exc:
+        load(csv_dir)
+    check_error(exc, f, "speed", None)
+
+
+def test_csv_missing_time_column(csv_dir: Path) -> None:
+    f = csv_dir / "trial_010.csv"
+    lines = f.read_text().splitlines()
+    f.write_text("\n".join(ln.split(",", 1)[1] for ln in lines) + "\n")
+    with pytest.raises(DataFormatError, match="required column missing") as exc:
+        load(csv_dir)
+    check_error(exc, f, "t", None)
+
+
+def test_csv_no_action_column(tmp_path: Path) -> None:
+    f = tmp_path / "trial_000.csv"
+    f.write_text("t,obs_a\n0,1\n0.01,2\n")
+    with pytest.raises(DataFormatError, match="no act_") as exc:
+        load(tmp_path)
+    check_error(exc, f, "act_*", None)
+
+
+def test_csv_duplicate_column(tmp_path: Path) -> None:
+    f = tmp_path / "trial_000.csv"
+    f.write_text("t,obs_a,obs_a,act_b\n0,1,1,1\n0.01,2,2,2\n")
+    with pytest.raises(DataFormatError, match="duplicate column") as exc:
+        load(tmp_path)
+    check_error(exc, f, "obs_a", None)
+
+
+def test_csv_empty_and_single_sample(tmp_path: Path) -> None:
+    f = tmp_path / "trial_000.csv"
+    f.write_text("t,obs_a,act_b\n")
+    with pytest.raises(DataFormatError, match="empty trial") as exc:
+        load(tmp_path)
+    check_error(exc, f, "t", None)
+    f.write_text("t,obs_a,act_b\n0,1,2\n")
+    with pytest.raises(DataFormatError, match="single-sample") as exc:
+        load(tmp_path)
+    check_error(exc, f, "obs", 0)
+    f.write_text("")
+    with pytest.raises(DataFormatError, match="no header"):
+        load(tmp_path)
+
+
+def test_csv_time_not_increasing(csv_dir: Path) -> None:
+    f = csv_dir / "trial_011.csv"
+    edit_csv(f, 12, "t", "0.0")
+    with pytest.raises(DataFormatError, match="not strictly increasing") as exc:
+        load(csv_dir)
+    check_error(exc, f, "t", 12)
+
+
+def test_csv_inconsistent_channel_names(csv_dir: Path) -> None:
+    f = csv_dir / "trial_012.csv"
+    text = f.read_text().splitlines()
+    f.write_text("\n".join([text[0].replace("obs_y", "obs_w")] + text[1:]) + "\n")
+    with pytest.raises(DataFormatError, match="differ from") as exc:
+        load(csv_dir)
+    check_error(exc, f, "obs_*", None)
+    assert "trial_010.csv" in str(exc.value)
+
+
+def test_csv_optional_column_in_some_files_only(tmp_path: Path) -> None:
+    (tmp_path / "trial_000.csv").write_text("t,obs_a,act_b,mode\n0,1,2,0\n0.01,1,2,1\n")
+    (tmp_path / "trial_001.csv").write_text("t,obs_a,act_b\n0,1,2\n0.01,1,2\n")
+    with pytest.raises(DataFormatError, match="absent here but present") as exc:
+        load(tmp_path)
+    check_error(exc, tmp_path / "trial_001.csv", "mode", None)
+
+
+def test_csv_subject_changes(csv_dir: Path) -> None:
+    f = csv_dir / "trial_010.csv"
+    edit_csv(f, 9, "subject", "3")
+    with pytest.raises(DataFormatError, match="subject changes") as exc:
+        load(csv_dir)
+    check_error(exc, f, "subject", 9)
+
+
+def test_csv_non_integer_mode(csv_dir: Path) -> None:
+    f = csv_dir / "trial_011.csv"
+    edit_csv(f, 21, "mode", "2.5")
+    with pytest.raises(DataFormatError, match="integer") as exc:
+        load(csv_dir)
+    check_error(exc, f, "mode", 21)
+
+
+def test_csv_bad_file_names(csv_dir: Path) -> None:
+    (csv_dir / "notes.txt").write_text("ignored")
+    assert len(load(csv_dir)) == 3
+    (csv_dir / "trial_11.csv").write_bytes((csv_dir / "trial_011.csv").read_bytes())
+    with pytest.raises(DataFormatError, match="trial id 11 also given") as exc:
+        load(csv_dir)
+    check_error(exc, csv_dir / "trial_11.csv", "trial", None)
+    os.unlink(csv_dir / "trial_11.csv")
+    (csv_dir / "extra.csv").write_text("t,obs_a,act_b\n")
+    with pytest.raises(DataFormatError, match="trial_<integer id>.csv") as exc:
+        load(csv_dir)
+    check_error(exc, csv_dir / "extra.csv", None, None)
+
+
+def test_csv_empty_folder(tmp_path: Path) -> None:
+    with pytest.raises(DataFormatError, match="no trial_"):
+        load(tmp_path)
+
+
+# ------------------------------------------------------------ in-memory checks
+
+
+def test_trial_rejects_non_integer_mode() -> None:
+    with pytest.raises(DataFormatError, match="integer") as exc:
+        Trial(obs=np.zeros((3, 1)), act=np.zeros((3, 1)), t=np.arange(3.0), mode=[0, 1.5, 2])
+    assert exc.value.field == "mode" and exc.value.row == 1
+
+
+def test_validate_catches_problems() -> None:
+    d = make_demos()
+    assert d.validate() is d
+    d.trials[1].trial_id = d.trials[0].trial_id
+    with pytest.raises(DataFormatError, match="duplicate trial id"):
+        d.validate()
+    d = make_demos()
+    d.trials[2].mode = None
+    with pytest.raises(DataFormatError, match="some trials only"):
+        d.validate()
+    d = make_demos()
+    d.obs_names[1] = "a,b"
+    with pytest.raises(DataFormatError, match="channel name"):
+        d.validate()
+    d = make_demos()
+    d.trials[0].act = d.trials[0].act[:, :2]
+    with pytest.raises(DataFormatError, match="act channels"):
+        d.validate()
+    d = make_demos()
+    d.trials[1].obs[4, 0] = np.nan
+    with pytest.raises(DataFormatError, match="trial 11: non-finite") as exc:
+        d.validate()
+    assert exc.value.row == 4 and exc.value.field == "obs"
+    with pytest.raises(DataFormatError, match="no trials"):
+        Demonstrations([], 10.0).validate()
+    with pytest.raises(DataFormatError, match="rate_hz"):
+        Demonstrations(make_demos().trials, -1.0).validate()
+
+
+# --------------------------------------------------------------- atomic saves
+
+
+def _leftovers(folder: Path) -> list[str]:
+    return sorted(n for n in os.listdir(folder) if n.startswith("."))
+
+
+def test_npz_save_failure_keeps_old_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    p = tmp_path / "d.npz"
+    old = make_demos(seed=1)
+    save(old, p)
+    before = p.read_bytes()
+
+    def broken(f, **arrays):
+        f.write(b"PK partial garbage")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(np, "savez_compressed", broken)
+    with pytest.raises(OSError, match="disk full"):
+        save(make_demos(seed=2), p)
+    monkeypatch.undo()
+    assert p.read_bytes() == before
+    assert_same(load(p), old)
+    assert _leftovers(tmp_path) == []
+
+
+def test_invalid_demos_are_not_written(tmp_path: Path) -> None:
+    d = make_demos()
+    d.trials[0].act[3, 1] = np.nan
+    with pytest.raises(DataFormatError):
+        save(d, tmp_path / "x.npz")
+    with pytest.raises(DataFormatError):
+        save(d, tmp_path / "x")
+    assert os.listdir(tmp_path) == []
+
+
+def test_csv_save_failure_keeps_old_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    p = tmp_path / "f"
+    old = make_demos(seed=1)
+    save(old, p)
+    calls = {"n": 0}
+    real = data._write_csv_trial
+
+    def flaky(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise OSError("disk full")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(data, "_write_csv_trial", flaky)
+    with pytest.raises(OSError, match="disk full"):
+        save(make_demos(seed=2), p)
+    monkeypatch.undo()
+    assert_same(load(p), old)
+    assert _leftovers(tmp_path) == []
+
+
+def test_csv_save_replaces_existing_folder(tmp_path: Path) -> None:
+    p = tmp_path / "f"
+    save(make_demos(n_trials=4), p)
+    new = make_demos(n_trials=2, seed=5)
+    save(new, p)
+    assert sorted(os.listdir(p)) == ["trial_010.csv", "trial_011.csv"]
+    assert_same(load(p), new)
+    assert _leftovers(tmp_path) == []
+
+
+def test_csv_save_refuses_folder_with_other_files(tmp_path: Path) -> None:
+    p = tmp_path / "f"
+    p.mkdir()
+    (p / "precious.txt").write_text("keep me")
+    with pytest.raises(FileExistsError, match="precious.txt"):
+        save(make_demos(), p)
+    assert os.listdir(p) == ["precious.txt"]
+    assert _leftovers(tmp_path) == []
