@@ -590,7 +590,7 @@ def save_npz(demos: Demonstrations, path: PathLike) -> None:
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
     try:
         with os.fdopen(fd, "wb") as f:
-            np.savez_compressed(f, **arrays)
+            np.savez(f, **arrays)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, p)
@@ -604,7 +604,7 @@ def save_npz(demos: Demonstrations, path: PathLike) -> None:
 
 
 def _csv_header(path: str) -> list[str]:
-    with open(path, newline="") as f:
+    with open(path, newline="", encoding="utf-8-sig") as f:  # tolerate a byte-order mark
         first = f.readline()
     if not first.strip():
         raise DataFormatError("empty file (no header line)", path=path)

@@ -525,7 +525,7 @@ def test_npz_save_failure_keeps_old_file(tmp_path: Path, monkeypatch: pytest.Mon
         f.write(b"PK partial garbage")
         raise OSError("disk full")
 
-    monkeypatch.setattr(np, "savez_compressed", broken)
+    monkeypatch.setattr(np, "savez", broken)
     with pytest.raises(OSError, match="disk full"):
         save(make_demos(seed=2), p)
     monkeypatch.undo()
@@ -583,3 +583,11 @@ def test_csv_save_refuses_folder_with_other_files(tmp_path: Path) -> None:
         save(make_demos(), p)
     assert os.listdir(p) == ["precious.txt"]
     assert _leftovers(tmp_path) == []
+
+
+def test_csv_tolerates_crlf_and_byte_order_mark(tmp_path: Path) -> None:
+    (tmp_path / "trial_004.csv").write_bytes(
+        b"\xef\xbb\xbft,obs_a,act_b,subject\r\n0,1,2,3\r\n0.01,1,2,3\r\n0.02,3,4,3\r\n")
+    d = load(tmp_path)
+    assert d.trial_ids == [4] and d.subjects == [3] and d.rate_hz == 100.0
+    np.testing.assert_array_equal(d[0].obs[:, 0], [1, 1, 3])
