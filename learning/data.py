@@ -35,6 +35,7 @@ import os
 import re
 import shutil
 import tempfile
+import warnings
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -614,7 +615,6 @@ def _csv_header(path: str) -> list[str]:
 def _csv_body(path: str, ncols: int, header: list[str]) -> np.ndarray:
     """Numeric body (rows, ncols); a bad cell raises naming its column and row."""
     try:
-        import warnings
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "empty input file"
             data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2, dtype=float,
