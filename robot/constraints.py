@@ -1,0 +1,184 @@
+"""QP constraints on the joint acceleration a [rad/s²], each a small object.
+
+Every constraint returns its rows ``(G, h)`` meaning ``G·a ≤ h`` for the
+current :class:`~robot.state.ControlState` (the style of mink and pink).  The
+kinematic ones are per-joint intervals and also expose ``bounds(state) ->
+(lo, hi)``; the controller intersects those in priority order (see
+:func:`intersect_by_priority`) so that a state outside the limits still gives a
+well-defined, non-empty box.
+
+One control period dt [s] with constant acceleration a is integrated exactly:
+
+    v⁺ = v + a·dt,      q⁺ = q + v·dt + ½·a·dt² = q + dt·(v + v⁺)/2
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, Sequence, runtime_checkable
+
+import numpy as np
+
+from .limits import JointLimits
+from .state import ControlState
+
+
+@runtime_checkable
+class Constraint(Protocol):
+    """Anything that returns rows ``G·a ≤ h`` with a fixed number of rows."""
+
+    name: str
+
+    def num_rows(self, n: int) -> int: ...
+
+    def rows(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+class BoxConstraint:
+    """A per-joint interval lo ≤ a ≤ hi; rows are ``[I; −I]·a ≤ [hi; −lo]``."""
+
+    name = "box"
+
+    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def num_rows(self, n: int) -> int:
+        return 2 * n
+
+    def rows(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self.bounds(state)
+        eye = np.eye(lo.size)
+        return np.vstack([eye, -eye]), np.concatenate([hi, -lo])
+
+
+class AccelerationLimit(BoxConstraint):
+    """|a_i| ≤ a_max,i [rad/s²]."""
+
+    name = "acceleration"
+
+    def __init__(self, limits: JointLimits) -> None:
+        self.a_max = limits.a_max
+
+        self._neg = -self.a_max
+
+    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        return self._neg, self.a_max
+
+
+class VelocityLimit(BoxConstraint):
+    """|v⁺_i| ≤ v_max,i [rad/s]  ⇔  (−v_max − v)/dt ≤ a ≤ (v_max − v)/dt."""
+
+    name = "velocity"
+
+    def __init__(self, limits: JointLimits) -> None:
+        self.v_max = limits.v_max
+
+    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        inv_dt = 1.0 / state.dt
+        return (-self.v_max - state.v) * inv_dt, (self.v_max - state.v) * inv_dt
+
+
+def viable_velocity_bound(gap: np.ndarray, v: np.ndarray, dt: float, a_brake: np.ndarray) -> np.ndarray:
+    """Largest next velocity v⁺ [rad/s] toward a limit at distance ``gap`` = q_lim − q [rad].
+
+    After the step the arm must still be able to stop before the limit by
+    decelerating at a_brake (A).  With exact integration, braking at A from
+    v⁺ > 0 covers at most v⁺²/(2A) + A·dt²/8 (the last partial step adds at
+    most A·dt²/8), so we require (q⁺ the position after this step)
+
+        v⁺ ≤ 0   or   q⁺ + v⁺²/(2A) + A·dt²/8 ≤ q_lim,
+
+    and always q⁺ ≤ q_lim.  Substituting q⁺ = q + dt(v + v⁺)/2 the second
+    condition is a quadratic in v⁺ whose discriminant simplifies, so the union
+    is exactly (no linearisation needed, per joint)
+
+        v⁺ ≤ max(0, (−A·dt + sqrt(8A·(gap − v·dt/2)))/2)     and
+        v⁺ ≤ 2·gap/dt − v                                       (q⁺ ≤ q_lim).
+
+    The set {v ≤ 0 or q + v²/(2A) + A·dt²/8 ≤ q_lim} is invariant under
+    braking a = max(−A, −v/dt), so the constraint stays feasible forever when
+    A is available (torque-feasible).
+    """
+    d = np.maximum(gap - 0.5 * dt * v, 0.0)
+    u_viable = np.maximum(0.0, 0.5 * (np.sqrt(8.0 * a_brake * d) - a_brake * dt))
+    return np.minimum(u_viable, 2.0 * gap / dt - v)
+
+
+class PositionLimit(BoxConstraint):
+    """q_min ≤ q⁺ ≤ q_max, jointly viable with braking at a_brake [rad/s²].
+
+    See :func:`viable_velocity_bound` for the upper side; the lower side is its
+    mirror image (q → −q).  Returns a ≤ (u_up − v)/dt and a ≥ (−u_low − v)/dt.
+    """
+
+    name = "position"
+
+    def __init__(self, limits: JointLimits) -> None:
+        self.q_min, self.q_max, self.a_brake = limits.q_min, limits.q_max, limits.a_brake
+        n = limits.n
+        # both sides in one vectorised call: gap = s·(q_lim − q), velocity s·v, s = +1 (upper), −1 (lower)
+        self._sign = np.concatenate([np.ones(n), -np.ones(n)])
+        self._qlim = np.concatenate([self.q_max, self.q_min])
+        self._a2 = np.concatenate([self.a_brake, self.a_brake])
+        self._n = n
+
+    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        n, sign = self._n, self._sign
+        q2 = np.concatenate([state.q, state.q])
+        v2 = np.concatenate([state.v, state.v])
+        u = viable_velocity_bound(sign * (self._qlim - q2), sign * v2, state.dt, self._a2)
+        v, inv_dt = state.v, 1.0 / state.dt
+        return (-u[n:] - v) * inv_dt, (u[:n] - v) * inv_dt
+
+
+class TorqueLimit:
+    """|τ_i| ≤ τ_max,i [N·m] with τ = M(q)·a + h(q, v):  [M; −M]·a ≤ [τ_max − h; τ_max + h]."""
+
+    name = "torque"
+
+    def __init__(self, limits: JointLimits) -> None:
+        self.tau_max = limits.tau_max
+
+    def num_rows(self, n: int) -> int:
+        return 2 * n
+
+    def rows(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        M, h = state.M, state.h
+        return np.concatenate([M, -M]), np.concatenate([self.tau_max - h, self.tau_max + h])
+
+
+def intersect_by_priority(boxes: Sequence[tuple[np.ndarray, np.ndarray]],
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Intersect intervals in priority order, first = most important.
+
+    Where a lower-priority interval does not meet the running intersection
+    (the state is outside that limit, e.g. a start beyond a position limit),
+    the running interval collapses to its end point nearest to it: maximum
+    effort toward satisfying the violated limit without breaking the more
+    important ones.  An interval that is itself empty (lo > hi) is replaced by
+    its midpoint.  Returns (lo, hi, conflict) with ``conflict[i]`` the number
+    of intervals that had to be collapsed for joint i.
+    """
+    lo, hi = boxes[0]
+    for c_lo, c_hi in boxes[1:]:  # fast path: the plain intersection is what the priority gives when non-empty
+        lo, hi = np.maximum(lo, c_lo), np.minimum(hi, c_hi)
+    if bool((lo <= hi).all()):
+        return lo, hi, np.zeros(lo.size, dtype=int)
+    lo, hi = boxes[0]
+    conflict = np.zeros(lo.size, dtype=int)
+    for c_lo, c_hi in boxes[1:]:
+        bad = c_lo > c_hi
+        if bad.any():
+            mid = 0.5 * (c_lo + c_hi)
+            c_lo, c_hi = np.where(bad, mid, c_lo), np.where(bad, mid, c_hi)
+        below = c_hi < lo  # wants less than we may give: pin at lo
+        above = c_lo > hi  # wants more: pin at hi
+        new_lo = np.where(below, lo, np.where(above, hi, np.maximum(lo, c_lo)))
+        new_hi = np.where(below, lo, np.where(above, hi, np.minimum(hi, c_hi)))
+        conflict += below | above | bad
+        lo, hi = new_lo, new_hi
+    return lo, hi, conflict
+
+
+def default_constraints(limits: JointLimits) -> tuple[list[BoxConstraint], list[Constraint]]:
+    """Box constraints in priority order (acceleration, velocity, position) and the torque limit."""
+    return [AccelerationLimit(limits), VelocityLimit(limits), PositionLimit(limits)], [TorqueLimit(limits)]

@@ -1,0 +1,372 @@
+"""Acceleration-level QP controller: knife-tip reference → joint commands within limits.
+
+Each control period dt [s] the controller solves, for the joint acceleration
+a [rad/s²],
+
+    minimise   Σ_tasks w·‖A_k·a − b_k‖²          (tip tracking, posture, damping, regularisation)
+    subject to lo ≤ a ≤ hi                        (acceleration, velocity, viable position limits)
+               −τ_max ≤ M(q)·a + h(q, v) ≤ τ_max  (torque limits, inverse dynamics)
+
+and returns a, the torque τ = M(q)·a + h(q, v) [N·m] and the state integrated
+over dt with constant a: v⁺ = v + a·dt, q⁺ = q + v·dt + ½·a·dt².
+
+Safe answers instead of exceptions in the loop (``QPResult.status``):
+
+* ``ok`` — every limit holds.
+* ``recovering`` — the state is outside a kinematic limit (e.g. a start beyond
+  a position limit): the box is built by :func:`robot.constraints.intersect_by_priority`
+  (acceleration > velocity > position) so the arm moves back at maximum
+  allowed effort; torque limits still hold.
+* ``relaxed`` — the box and the torque limits do not intersect: a second QP
+  with slack s ≥ 0 on the box (lo − s ≤ a ≤ hi + s, cost ρ₁·Σs + ½ρ₂·‖s‖²)
+  keeps the torque limits hard and relaxes the kinematic box as little as
+  possible; ``slack`` reports max s [rad/s²].
+* ``invalid_reference`` — non-finite reference: tracking is dropped, the
+  posture/damping tasks hold the arm.
+* ``invalid_state`` — non-finite q or v: a = 0, the last valid torque, q⁺ and
+  v⁺ equal to the last valid state.
+* ``solver_failed`` — both QPs failed: brake, a = clip(−v/dt) into the box,
+  torque clipped to its limits.
+
+A singular pose needs nothing special (posture and regularisation keep the
+Hessian positive definite, the tip task becomes damped least squares); it is
+reported in ``reason`` when the manipulability √det(J·Jᵀ) is below
+``QPConfig.singular_threshold``.  Misuse (unknown frame, wrong shapes, bad
+gains) raises :class:`robot.errors.ControllerConfigError` subclasses.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Sequence
+
+import numpy as np
+
+from .constraints import BoxConstraint, Constraint, TorqueLimit, default_constraints, intersect_by_priority
+from .errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
+from .limits import JointLimits
+from .solvers import make_backend
+from .state import ControlState, StateEvaluator
+from .tasks import AccelerationRegularization, DampingTask, PostureTask, Task, TipTrackingTask
+
+
+class QPStatus(str, Enum):
+    """Outcome of one controller step (see the module docstring)."""
+
+    OK = "ok"
+    RECOVERING = "recovering"
+    RELAXED = "relaxed"
+    INVALID_REFERENCE = "invalid_reference"
+    INVALID_STATE = "invalid_state"
+    SOLVER_FAILED = "solver_failed"
+
+
+@dataclass
+class QPResult:
+    """One control period's command.
+
+    a [rad/s²], tau [N·m], v_next [rad/s], q_next [rad]; ``tip_error`` [m]
+    ‖p_ref − p‖ at the current state (nan without reference); ``slack``
+    [rad/s²] largest box relaxation; ``manipulability`` √det(J·Jᵀ) [m³];
+    ``iterations`` of the solver; ``solve_time`` [s] of the whole step.
+    """
+
+    a: np.ndarray
+    tau: np.ndarray
+    v_next: np.ndarray
+    q_next: np.ndarray
+    status: QPStatus
+    reason: str = ""
+    tip_error: float = float("nan")
+    slack: float = 0.0
+    manipulability: float = float("nan")
+    iterations: int = 0
+    solve_time: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.status is QPStatus.OK
+
+
+@dataclass
+class QPConfig:
+    """Controller settings.
+
+    dt [s] control period; tip_kp [1/s²], tip_kd [1/s], tip_max_error [m]
+    (None: no clipping); posture gains [1/s²], [1/s]; ``q_posture`` [rad]
+    (None: middle of the joint range); slack weights ρ₁ (linear), ρ₂
+    (quadratic); ``solver``: ``"daqp"`` (dense active set, default, fastest),
+    ``"osqp"`` (persistent workspace, warm-started) or ``"qpsolvers:<name>"``;
+    ``eps`` OSQP tolerance.
+    """
+
+    dt: float = 0.01
+    tip_weight: float = 1.0
+    tip_kp: float = 400.0
+    tip_kd: float = 40.0
+    tip_max_error: float | None = 0.1
+    posture_weight: float = 1e-4
+    posture_kp: float = 25.0
+    posture_kd: float = 10.0
+    q_posture: np.ndarray | None = None
+    damping_weight: float = 0.0
+    damping_kd: float = 10.0
+    regularization: float = 1e-6
+    slack_linear: float = 1e3
+    slack_quadratic: float = 1e2
+    solver: str = "daqp"
+    eps: float = 1e-9
+    singular_threshold: float = 1e-4
+
+
+def _finite(x: np.ndarray) -> bool:
+    """True when every entry is finite (a sum is NaN/inf otherwise; overflow above ~1e307 also counts)."""
+    return math.isfinite(float(x.sum()))
+
+
+def manipulability(J: np.ndarray) -> float:
+    """Yoshikawa manipulability √det(J·Jᵀ) of a (3, n) translational Jacobian [m³ for n = 3]."""
+    a = J @ J.T
+    det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+           - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+           + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+    return math.sqrt(max(float(det), 0.0))
+
+
+class QPController:
+    """Joint acceleration QP for any Pinocchio model and end-effector frame.
+
+    Parameters: ``model`` (Pinocchio, nq == nv), ``frame`` (name or id of the
+    tool frame), ``limits`` (default: from the model's URDF limits with
+    a_max = 10 rad/s², see :meth:`JointLimits.from_model`), ``config``;
+    ``tasks``, ``box_constraints`` (priority order) and ``constraints``
+    override the defaults built from ``config`` and ``limits``.
+    """
+
+    def __init__(self, model, frame: str | int, limits: JointLimits | None = None,
+                 config: QPConfig | None = None, tasks: Sequence[Task] | None = None,
+                 box_constraints: Sequence[BoxConstraint] | None = None,
+                 constraints: Sequence[Constraint] | None = None) -> None:
+        self.config = cfg = config or QPConfig()
+        if model.nq != model.nv:
+            raise UnsupportedModelError(
+                f"model has nq={model.nq} ≠ nv={model.nv} (free-flyer, spherical or continuous joints); "
+                "the controller integrates q additively and supports revolute/prismatic joints only")
+        if isinstance(frame, str):
+            if not model.existFrame(frame):
+                raise FrameNotFoundError(f"frame {frame!r} not in model {model.name!r}")
+            frame_id = model.getFrameId(frame)
+        else:
+            frame_id = int(frame)
+            if not 0 <= frame_id < model.nframes:
+                raise FrameNotFoundError(f"frame id {frame_id} out of range [0, {model.nframes})")
+        if not (np.isfinite(cfg.dt) and cfg.dt > 0):
+            raise ControllerConfigError(f"dt must be > 0, got {cfg.dt}")
+        n = model.nv
+        self.model, self.frame_id, self.n = model, frame_id, n
+        self.limits = limits if limits is not None else JointLimits.from_model(model, a_max=10.0)
+        if self.limits.n != n:
+            raise ControllerConfigError(f"limits are for {self.limits.n} joints, model has {n}")
+
+        q_post = cfg.q_posture if cfg.q_posture is not None else 0.5 * (self.limits.q_min + self.limits.q_max)
+        q_post = np.asarray(q_post, dtype=float)
+        if q_post.shape != (n,):
+            raise ControllerConfigError(f"q_posture must have shape ({n},), got {q_post.shape}")
+        self.tip_task = TipTrackingTask(cfg.tip_weight, cfg.tip_kp, cfg.tip_kd, cfg.tip_max_error)
+        if tasks is None:
+            tasks = [self.tip_task, PostureTask(q_post, cfg.posture_weight, cfg.posture_kp, cfg.posture_kd),
+                     AccelerationRegularization(cfg.regularization)]
+            if cfg.damping_weight > 0:
+                tasks.append(DampingTask(cfg.damping_weight, cfg.damping_kd))
+        else:
+            found = [t for t in tasks if isinstance(t, TipTrackingTask)]
+            if found:
+                self.tip_task = found[0]
+        self.tasks = list(tasks)
+        default_boxes, default_rows = default_constraints(self.limits)
+        self.box_constraints = list(box_constraints) if box_constraints is not None else default_boxes
+        self.constraints = list(constraints) if constraints is not None else default_rows
+        if not self.box_constraints:
+            raise ControllerConfigError("at least one box constraint (the acceleration limit) is required")
+        self._torque = next((c for c in self.constraints if isinstance(c, TorqueLimit)), None)
+        self.m = sum(c.num_rows(n) for c in self.constraints)
+
+        self._evaluate = StateEvaluator(model, frame_id)
+        self._primary = make_backend(cfg.solver, n, self.m, cfg.eps)
+        self._relaxed = make_backend(cfg.solver, 2 * n, 2 * n + self.m, cfg.eps)
+        eye = np.eye(n)
+        self._g_relax_top = np.block([[eye, -eye], [-eye, -eye]])
+        self._no_rows = (np.zeros((0, n)), np.zeros(0))
+        self._lb_relax = np.concatenate([np.full(n, -np.inf), np.zeros(n)])
+        self._ub_relax = np.full(2 * n, np.inf)
+        self._last_tau = np.zeros(n)
+        self._last_q: np.ndarray | None = None
+        self._last_v: np.ndarray | None = None
+
+    # ------------------------------------------------------------------
+    @classmethod
+    def for_superlimb(cls, params=None, config: QPConfig | None = None) -> "QPController":
+        """Controller on the SuperLimb's ``knife_tip`` with its derived limits."""
+        from .superlimb import SuperLimbParams, TOOL_FRAME, build_pinocchio_model
+
+        p = params or SuperLimbParams()
+        model, _, _ = build_pinocchio_model(p)
+        return cls(model, TOOL_FRAME, JointLimits.from_superlimb(p), config)
+
+    @property
+    def dt(self) -> float:
+        return self.config.dt
+
+    def _vector(self, name: str, x: object, size: int) -> np.ndarray:
+        if type(x) is np.ndarray and x.shape == (size,) and x.dtype == np.float64:
+            return x
+        arr = np.asarray(x, dtype=float)
+        if arr.shape != (size,):
+            raise ControllerConfigError(f"{name} must have shape ({size},), got {arr.shape}")
+        return arr
+
+    # ------------------------------------------------------------------
+    def step(self, q: np.ndarray, v: np.ndarray, p_ref: np.ndarray | None = None,
+             v_ref: np.ndarray | None = None, a_ref: np.ndarray | None = None) -> QPResult:
+        """One control period from state (q [rad], v [rad/s]) toward the tip reference.
+
+        p_ref [m], v_ref [m/s], a_ref [m/s²] in the world frame; p_ref None
+        means "no tip task" (the arm holds its posture).  Never raises for
+        non-finite values; raises :class:`ControllerConfigError` for wrong shapes.
+        """
+        t0 = time.perf_counter()
+        n, dt = self.n, self.config.dt
+        q = self._vector("q", q, n)
+        v = self._vector("v", v, n)
+        if not (_finite(q) and _finite(v)):
+            return self._hold(q, v, t0)
+        reasons: list[str] = []
+        status = QPStatus.OK
+
+        # reference ------------------------------------------------------
+        task = self.tip_task
+        if p_ref is None:
+            task.clear_reference()
+        else:
+            p_ref = self._vector("p_ref", p_ref, 3)
+            v_ref = None if v_ref is None else self._vector("v_ref", v_ref, 3)
+            a_ref = None if a_ref is None else self._vector("a_ref", a_ref, 3)
+            if not _finite(p_ref):
+                task.clear_reference()
+                status = QPStatus.INVALID_REFERENCE
+                reasons.append("non-finite p_ref: tip tracking dropped")
+            else:
+                if v_ref is not None and not _finite(v_ref):
+                    v_ref = None
+                    reasons.append("non-finite v_ref ignored")
+                if a_ref is not None and not _finite(a_ref):
+                    a_ref = None
+                    reasons.append("non-finite a_ref ignored")
+                task.set_reference(p_ref, v_ref, a_ref)
+
+        state = self._evaluate(q, v, dt)
+        manip = manipulability(state.J)
+        if manip < self.config.singular_threshold:
+            reasons.append(f"near singular pose (manipulability {manip:.2e})")
+        if task.p_ref is not None:
+            e = task.p_ref - state.p
+            tip_error = math.sqrt(float(e @ e))
+        else:
+            tip_error = float("nan")
+
+        # constraints ----------------------------------------------------
+        lo, hi, conflict = intersect_by_priority([c.bounds(state) for c in self.box_constraints])
+        if conflict.any():
+            if status is QPStatus.OK:
+                status = QPStatus.RECOVERING
+            reasons.append("outside kinematic limits on joints " + ",".join(map(str, np.flatnonzero(conflict)))
+                           + ": maximum-effort recovery")
+        if len(self.constraints) == 1:
+            G, h = self.constraints[0].rows(state)
+        elif self.constraints:
+            rows = [c.rows(state) for c in self.constraints]
+            G = np.concatenate([r[0] for r in rows])
+            h = np.concatenate([r[1] for r in rows])
+        else:
+            G, h = self._no_rows
+
+        # cost -------------------------------------------------------------
+        costs = [t.cost(state) for t in self.tasks]
+        H = sum(Hc[0] for Hc in costs[1:]) + costs[0][0]
+        c = sum(Hc[1] for Hc in costs[1:]) + costs[0][1]
+
+        # solve ------------------------------------------------------------
+        slack = 0.0
+        out = self._primary.solve(H, c, lo, hi, G, h)
+        iterations = out.iterations
+        a = out.x
+        if a is not None:
+            a = np.minimum(np.maximum(a, lo), hi)
+        else:
+            a, s, it2, why = self._solve_relaxed(H, c, lo, hi, G, h)
+            iterations += it2
+            if a is not None:
+                slack = float(s.max())
+                lo, hi = lo - s, hi + s
+                a = np.minimum(np.maximum(a, lo), hi)
+                if status in (QPStatus.OK, QPStatus.RECOVERING):
+                    status = QPStatus.RELAXED
+                reasons.append(f"box and torque limits conflict ({out.status}): box relaxed by {slack:.3g} rad/s²")
+            else:
+                status = QPStatus.SOLVER_FAILED
+                reasons.append(f"QP failed ({out.status}; relaxed: {why}): braking")
+                a = np.minimum(np.maximum(-v / dt, lo), hi)
+
+        tau = state.M @ a + state.h
+        if self._torque is not None:
+            a, tau = self._enforce_torque(state, a, tau)
+        v_next = v + a * dt
+        q_next = q + (v + 0.5 * dt * a) * dt
+        self._last_tau, self._last_q, self._last_v = tau, q_next, v_next
+        return QPResult(a, tau, v_next, q_next, status, "; ".join(reasons), tip_error, slack, manip,
+                        iterations, time.perf_counter() - t0)
+
+    # ------------------------------------------------------------------
+    def _solve_relaxed(self, H: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                       G: np.ndarray, h: np.ndarray):
+        """QP over x = [a, s]: box softened by s ≥ 0, torque rows hard (always feasible)."""
+        n, cfg = self.n, self.config
+        P2 = np.zeros((2 * n, 2 * n))
+        P2[:n, :n] = H
+        P2[n:, n:] = cfg.slack_quadratic * np.eye(n)
+        c2 = np.concatenate([c, np.full(n, cfg.slack_linear)])
+        G2 = np.vstack([self._g_relax_top, np.hstack([G, np.zeros((G.shape[0], n))])])
+        h2 = np.concatenate([hi, -lo, h])
+        out = self._relaxed.solve(P2, c2, self._lb_relax, self._ub_relax, G2, h2)
+        if out.x is None:
+            return None, None, out.iterations, out.status
+        return out.x[:n], np.maximum(out.x[n:], 0.0), out.iterations, out.status
+
+    def _enforce_torque(self, state: ControlState, a: np.ndarray, tau: np.ndarray):
+        """Clip+verify: if solver tolerance left |τ| above τ_max, move a so τ = clip(τ).
+
+        δa = M⁻¹·(clip(τ) − τ); the change is of the order of the solver
+        tolerance (≪ 1e-6), so the kinematic limits are not affected at that level.
+        """
+        tau_max = self._torque.tau_max
+        over = np.abs(tau) > tau_max
+        if over.any():
+            tau_c = np.clip(tau, -tau_max, tau_max)
+            a = a + np.linalg.solve(state.M, tau_c - tau)
+            tau = tau_c
+        return a, tau
+
+    def _hold(self, q: np.ndarray, v: np.ndarray, t0: float) -> QPResult:
+        n = self.n
+        q_hold = self._last_q if self._last_q is not None else np.where(np.isfinite(q), q, 0.0)
+        v_hold = self._last_v if self._last_v is not None else np.zeros(n)
+        return QPResult(np.zeros(n), self._last_tau.copy(), v_hold.copy(), q_hold.copy(), QPStatus.INVALID_STATE,
+                        "non-finite q or v: holding the last valid command", solve_time=time.perf_counter() - t0)
+
+    def reset(self) -> None:
+        """Forget the last command (used by ``invalid_state`` answers)."""
+        self._last_tau = np.zeros(self.n)
+        self._last_q = self._last_v = None

@@ -1,0 +1,143 @@
+"""QP tasks on the joint acceleration a [rad/s²], each returning its cost terms.
+
+A task with weight w and residual r(a) = A·a − b contributes
+w·‖A·a − b‖² = ½·aᵀ(2w·AᵀA)·a − (2w·Aᵀb)ᵀ·a + const, returned as ``(H, c)``
+with ``H = 2w·AᵀA`` and ``c = −2w·Aᵀb``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from .errors import ControllerConfigError
+from .state import ControlState
+
+
+@runtime_checkable
+class Task(Protocol):
+    """Anything with ``cost(state) -> (H, c)`` for ½·aᵀ·H·a + cᵀ·a."""
+
+    name: str
+
+    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+def _nonneg(name: str, x: float) -> float:
+    x = float(x)
+    if not np.isfinite(x) or x < 0:
+        raise ControllerConfigError(f"{name} must be finite and ≥ 0, got {x}")
+    return x
+
+
+class TipTrackingTask:
+    """Tool-tip acceleration tracking (operational-space PD with feed-forward).
+
+    Desired tip acceleration [m/s²]
+
+        ẍ_des = a_ref + kd·(v_ref − ṗ) + kp·(p_ref − p),
+
+    optionally with the position error clipped to ``max_error`` [m] so that a
+    far target does not ask for huge accelerations.  Residual J·a + J̇·v − ẍ_des.
+    kp [1/s²], kd [1/s].  Without a reference (``clear_reference``) the task
+    contributes nothing.
+    """
+
+    name = "tip"
+
+    def __init__(self, weight: float = 1.0, kp: float = 400.0, kd: float = 40.0,
+                 max_error: float | None = None) -> None:
+        self.weight = _nonneg("weight", weight)
+        self.kp = _nonneg("kp", kp)
+        self.kd = _nonneg("kd", kd)
+        self.max_error = None if max_error is None else _nonneg("max_error", max_error)
+        self.p_ref: np.ndarray | None = None
+        self.v_ref = np.zeros(3)
+        self.a_ref = np.zeros(3)
+
+    def set_reference(self, p_ref: np.ndarray, v_ref: np.ndarray | None = None,
+                      a_ref: np.ndarray | None = None) -> None:
+        """Tip position [m], velocity [m/s] and acceleration [m/s²] in the world frame."""
+        self.p_ref = p_ref
+        self.v_ref = np.zeros(3) if v_ref is None else v_ref
+        self.a_ref = np.zeros(3) if a_ref is None else a_ref
+
+    def clear_reference(self) -> None:
+        self.p_ref = None
+
+    def desired_acceleration(self, state: ControlState) -> np.ndarray:
+        """ẍ_des [m/s²] for the current state (requires a reference)."""
+        assert self.p_ref is not None
+        err = self.p_ref - state.p
+        if self.max_error is not None:
+            norm = math.sqrt(float(err @ err))
+            if norm > self.max_error:
+                err = err * (self.max_error / norm)
+        return self.a_ref + self.kd * (self.v_ref - state.p_dot) + self.kp * err
+
+    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        n = state.v.size
+        if self.p_ref is None or self.weight == 0.0:
+            return np.zeros((n, n)), np.zeros(n)
+        b = self.desired_acceleration(state) - state.drift
+        Jt = state.J.T * (2.0 * self.weight)
+        return Jt @ state.J, -(Jt @ b)
+
+
+class PostureTask:
+    """Joint-space PD toward a posture: residual a − (kp·(q_ref − q) − kd·v).
+
+    q_ref [rad], kp [1/s²], kd [1/s].  Keeps the redundant / singular
+    directions defined and the Hessian positive definite.
+    """
+
+    name = "posture"
+
+    def __init__(self, q_ref: np.ndarray, weight: float = 1e-3, kp: float = 25.0, kd: float = 10.0) -> None:
+        self.q_ref = np.asarray(q_ref, dtype=float).copy()
+        self.weight = _nonneg("weight", weight)
+        self.kp = _nonneg("kp", kp)
+        self.kd = _nonneg("kd", kd)
+        self._H = 2.0 * self.weight * np.eye(self.q_ref.size)
+
+    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        if self.q_ref.shape != state.q.shape:
+            raise ControllerConfigError(f"posture q_ref must have shape {state.q.shape}, got {self.q_ref.shape}")
+        target = self.kp * (self.q_ref - state.q) - self.kd * state.v
+        return self._H, (-2.0 * self.weight) * target
+
+
+class DampingTask:
+    """Joint damping: residual a + kd·v (a decays the velocity at rate kd [1/s])."""
+
+    name = "damping"
+
+    def __init__(self, weight: float = 1e-3, kd: float = 10.0) -> None:
+        self.weight = _nonneg("weight", weight)
+        self.kd = _nonneg("kd", kd)
+
+    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        n = state.v.size
+        w2 = 2.0 * self.weight
+        return w2 * np.eye(n), w2 * self.kd * state.v
+
+
+class AccelerationRegularization:
+    """w·‖a‖²: the minimum-effort tie-breaker, keeps H ≻ 0 at singular poses."""
+
+    name = "regularization"
+
+    def __init__(self, weight: float = 1e-6) -> None:
+        self.weight = _nonneg("weight", weight)
+        if self.weight == 0:
+            raise ControllerConfigError("regularization weight must be > 0")
+        self._H: np.ndarray | None = None
+        self._c: np.ndarray | None = None
+
+    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        n = state.v.size
+        if self._H is None or self._H.shape[0] != n:
+            self._H, self._c = 2.0 * self.weight * np.eye(n), np.zeros(n)
+        return self._H, self._c
