@@ -88,7 +88,7 @@ class OsqpBackend:
                                max_iter=self.max_iter, warm_starting=True, adaptive_rho=True)
         else:
             self._solver.update(q=c, l=l, u=u, Px=px, Ax=ax)
-        res = self._solver.solve()
+        res = self._solver.solve(raise_error=False)  # failures are reported through the status
         status = res.info.status_val
         st = self._osqp.SolverStatus
         ok = status in (st.OSQP_SOLVED, st.OSQP_SOLVED_INACCURATE)
