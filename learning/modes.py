@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any, Iterator, Literal, Sequence
 
 import numpy as np
+from hmmlearn.base import ConvergenceMonitor
 from hmmlearn.hmm import GaussianHMM
 from scipy import linalg
 from sklearn.base import BaseEstimator
@@ -200,14 +201,27 @@ class _RegularizedGaussianHMM(GaussianHMM):
             cov = 0.5 * (cov + np.swapaxes(cov, 1, 2)) + reg * np.eye(cov.shape[-1])
         elif self.covariance_type == "tied":
             cov = 0.5 * (cov + cov.T) + reg * np.eye(cov.shape[-1])
-        else:
+        elif self.covariance_type == "diag":
             cov = cov + reg
+        else:  # spherical: hmmlearn's M-step tiles to (K, D), which breaks its covars_
+            cov = (cov.mean(axis=1) if cov.ndim == 2 else cov) + reg
         dead = ~(stats["post"] > 0) | ~np.isfinite(self.means_).all(axis=1)
         if dead.any():
             self.means_[dead] = means_old[dead]
             if self.covariance_type != "tied":
                 cov[dead] = covars_old[dead]
         self._covars_ = cov
+
+
+class _AbsDeltaMonitor(ConvergenceMonitor):
+    """Converged when |Δ log-likelihood| < tol. hmmlearn's monitor also stops on any
+    decrease; with the covariance floor and the transition prior EM is a regularised
+    ascent whose log-likelihood can dip, and stopping there would be premature."""
+
+    @property
+    def converged(self) -> bool:
+        h = self.history
+        return self.iter >= self.n_iter or (len(h) >= 2 and abs(h[-1] - h[-2]) < self.tol)
 
 
 def _n_hmm_parameters(K: int, D: int, covariance_type: str) -> int:
@@ -225,6 +239,7 @@ class _Restart:
     converged: bool
     empty: np.ndarray
     seed: int
+    n_iter: int
 
 
 class TaskModes(BaseEstimator):
@@ -333,7 +348,7 @@ class TaskModes(BaseEstimator):
         self.model_ = best.model
         self.loglik_ = best.loglik
         self.loglik_history_ = best.history
-        self.n_iter_ = len(best.history)
+        self.n_iter_ = best.n_iter
         self.converged_ = best.converged
         self.restart_logliks_ = [r.loglik for r in runs]
         self.empty_modes_ = best.empty
@@ -359,6 +374,7 @@ class TaskModes(BaseEstimator):
             n_iter=int(self.n_iter), tol=float(self.tol) * N, random_state=seed,
             params="stmc", init_params="", implementation="log")
         hmm.reg_covar = float(self.min_covar)
+        hmm.monitor_ = _AbsDeltaMonitor(hmm.tol, hmm.n_iter, False)
         return hmm
 
     def _init_hmm(self, hmm: _RegularizedGaussianHMM, Z: np.ndarray, lengths: np.ndarray,
@@ -397,10 +413,12 @@ class TaskModes(BaseEstimator):
         hmm = self._new_hmm(N, seed)
         self._init_hmm(hmm, Z, lengths, seed)
         history: list[float] = []
+        n_iter = 0
         for attempt in range(2):  # fit, then at most one re-seeding of empty states
             with _quiet_hmmlearn():
                 hmm.fit(Z, lengths)
             history.extend(hmm.monitor_.history)
+            n_iter += hmm.monitor_.iter
             loglik, post = hmm.score_samples(Z, lengths)
             occupancy = post.sum(axis=0)
             empty = np.flatnonzero(occupancy < max(_EMPTY_FRACTION * N, 1.0))
@@ -410,7 +428,7 @@ class TaskModes(BaseEstimator):
         h = hmm.monitor_.history
         converged = len(h) >= 2 and abs(h[-1] - h[-2]) < hmm.tol
         return _Restart(hmm, float(loglik), [float(v) for v in history], bool(converged),
-                        empty, seed)
+                        empty, seed, n_iter)
 
     def _reseed(self, hmm: _RegularizedGaussianHMM, Z: np.ndarray, lengths: np.ndarray,
                 empty: np.ndarray, seed: int) -> None:

@@ -63,6 +63,17 @@ def forward_filter_log(log_startprob: np.ndarray, log_transmat: np.ndarray,
     return log_post, log_pred
 
 
+def _full_covars(c: np.ndarray, covariance_type: str, K: int, D: int) -> np.ndarray:
+    """(K, D, D) covariance matrices from hmmlearn's compact ``_covars_``."""
+    if covariance_type == "full":
+        return c.reshape(K, D, D)
+    if covariance_type == "tied":
+        return np.broadcast_to(c.reshape(D, D), (K, D, D))
+    if covariance_type == "diag":
+        return c.reshape(K, D)[:, :, None] * np.eye(D)
+    return np.broadcast_to(c.reshape(K, -1)[:, :1], (K, D))[:, :, None] * np.eye(D)
+
+
 class ModeFilter:
     """Online, causal task-mode posterior for the control loop.
 
@@ -108,7 +119,7 @@ class ModeFilter:
         Dz = P.shape[1]
         self._dz = Dz
         # Emissions: log b_j = −½(Dz log 2π + log|Σ_j|) − ½‖L_j⁻¹(z − μ_j)‖², Σ_j = L_j L_jᵀ.
-        covars = np.asarray(hmm.covars_, dtype=float).reshape(K, Dz, Dz)
+        covars = _full_covars(np.asarray(hmm._covars_, dtype=float), hmm.covariance_type, K, Dz)
         G = np.empty((self.n_features_in, K * Dz))
         h = np.empty(K * Dz)
         lognorm = np.empty(K)

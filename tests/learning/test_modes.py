@@ -1,0 +1,365 @@
+"""Tests of learning.modes: TaskModes, ModeFilter, select_n_modes, agreement metrics."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from hmmlearn.hmm import GaussianHMM
+from sklearn.exceptions import NotFittedError
+
+from learning.modes import (
+    ModeFilter,
+    ModeSelection,
+    TaskModes,
+    check_sequences,
+    match_modes,
+    mode_agreement,
+    mode_ari,
+    relabel,
+    select_n_modes,
+)
+from learning.modes import _single_threaded
+
+
+@pytest.fixture(autouse=True)
+def _one_blas_thread():
+    """hmmlearn's reference computations use tiny threaded BLAS calls that crawl on a busy
+    2-core machine; TaskModes limits threads itself, the vanilla references here do not."""
+    with _single_threaded():
+        yield
+
+
+def sample_hmm(K: int = 4, D: int = 9, n_trials: int = 6, T: int = 400, seed: int = 0,
+               sep: float = 3.0, stay: float = 0.97) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """Trials sampled from a known Gaussian HMM (numpy only): X (N, D), states (N,), lengths."""
+    rng = np.random.default_rng(seed)
+    means = rng.standard_normal((K, D)) * sep
+    chols = []
+    for _ in range(K):
+        Q = rng.standard_normal((D, D)) * 0.3
+        chols.append(np.linalg.cholesky(Q @ Q.T + 0.5 * np.eye(D)))
+    chols = np.array(chols)
+    A = np.full((K, K), (1 - stay) / (K - 1))
+    np.fill_diagonal(A, stay)
+    Xs, Ss = [], []
+    for _ in range(n_trials):
+        s = np.empty(T, dtype=int)
+        s[0] = rng.integers(K)
+        for t in range(1, T):
+            s[t] = rng.choice(K, p=A[s[t - 1]])
+        Xs.append(means[s] + np.einsum("tij,tj->ti", chols[s], rng.standard_normal((T, D))))
+        Ss.append(s)
+    return np.concatenate(Xs), np.concatenate(Ss), [T] * n_trials
+
+
+@pytest.fixture(scope="module")
+def data():
+    return sample_hmm(sep=1.0)
+
+
+@pytest.fixture(scope="module")
+def fitted(data):
+    X, _, L = data
+    return TaskModes(n_modes=4, n_restarts=3, seed=0).fit(X, L)
+
+
+def vanilla_hmm(m: TaskModes) -> GaussianHMM:
+    """A plain hmmlearn GaussianHMM with the fitted parameters (independent reference)."""
+    ref = GaussianHMM(m.model_.n_components, "full")
+    ref.startprob_ = m.model_.startprob_
+    ref.transmat_ = m.model_.transmat_
+    ref.means_ = m.model_.means_
+    ref.covars_ = m.model_.covars_
+    ref.n_features = m.n_components_
+    return ref
+
+
+# ------------------------------------------------------------------ fitting
+
+def test_recovers_known_modes(data, fitted):
+    X, S, L = data
+    acc, mapping = mode_agreement(fitted.predict(X, L), S)
+    assert acc >= 0.95
+    assert sorted(mapping.values()) == [0, 1, 2, 3]
+    assert mode_ari(fitted.predict(X, L), S) > 0.9
+    assert fitted.converged_
+    assert fitted.empty_modes_.size == 0
+    assert 1 < fitted.n_iter_ < fitted.n_iter
+    # the causal filter is nearly as good on clear data
+    assert mode_agreement(fitted.filter_proba(X, L).argmax(1), S)[0] >= 0.9
+
+
+def test_fitted_attributes_and_parameter_count(data, fitted):
+    X, _, L = data
+    K, D = 4, 9
+    assert fitted.n_features_in_ == D and fitted.n_components_ == D
+    assert fitted.n_parameters_ == (K - 1) + K * (K - 1) + K * D + K * D * (D + 1) // 2
+    assert fitted.n_parameters_ == sum(fitted.model_._get_n_fit_scalars_per_param().values())
+    assert len(fitted.restart_logliks_) == 3
+    assert fitted.loglik_ == pytest.approx(max(fitted.restart_logliks_))
+    np.testing.assert_allclose(fitted.transmat_.sum(1), 1.0)
+    assert (fitted.transmat_ > 0).all()  # one pseudo-transition everywhere
+    assert (fitted.expected_durations_ > 10).all()  # true: 1 / 0.03 ≈ 33 samples
+    score = fitted.score(X, L)
+    assert score == pytest.approx(fitted.loglik_, rel=1e-9)
+    assert fitted.bic(X, L) == pytest.approx(-2 * score + fitted.n_parameters_ * np.log(len(X)))
+    assert fitted.bic(X, L) == pytest.approx(vanilla_hmm(fitted).bic(fitted.transform(X), L))
+    P = fitted.predict_proba(X, L)
+    assert P.shape == (len(X), 4)
+    np.testing.assert_allclose(P.sum(1), 1.0)
+
+
+def test_deterministic_for_a_seed(data):
+    X, _, L = data
+    a = TaskModes(3, n_restarts=2, seed=7, n_pca=5).fit(X, L)
+    b = TaskModes(3, n_restarts=2, seed=7, n_pca=5).fit(X, L)
+    np.testing.assert_array_equal(a.model_.means_, b.model_.means_)
+    np.testing.assert_array_equal(a.model_.transmat_, b.model_.transmat_)
+    np.testing.assert_array_equal(a.predict(X, L), b.predict(X, L))
+    assert a.restart_logliks_ == b.restart_logliks_
+
+
+@pytest.mark.parametrize("cov", ["diag", "spherical", "tied"])
+def test_other_covariance_types(data, cov):
+    X, S, L = data
+    m = TaskModes(4, covariance_type=cov, n_restarts=2).fit(X, L)
+    # the true covariances are anisotropic: spherical states are a poor (but valid) model
+    assert mode_agreement(m.predict(X, L), S)[0] > (0.6 if cov == "spherical" else 0.8)
+    f = m.make_filter()
+    post = np.array([f.step(o) for o in X[:50]])
+    np.testing.assert_allclose(post, m.filter_proba(X[:50]), atol=1e-9)
+
+
+def test_pca_is_fitted_on_training_data_only(data):
+    X, _, L = data
+    m = TaskModes(2, n_pca=3, n_restarts=1).fit(X[:800], [400, 400])
+    assert m.n_components_ == 3
+    np.testing.assert_allclose(m.scaler_.mean_, X[:800].mean(0))
+    assert m.transform(X[800:]).shape == (len(X) - 800, 3)
+    m2 = TaskModes(2, n_pca=0.9, n_restarts=1).fit(X, L)
+    assert 1 <= m2.n_components_ <= 9
+
+
+def test_degenerate_data_does_not_crash():
+    rng = np.random.default_rng(0)
+    # two distinct points, duplicated, and six states
+    X = np.repeat(np.array([[0.0, 1.0, 2.0], [5.0, -1.0, 0.5]]), 100, axis=0)
+    X = X[rng.permutation(len(X))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = TaskModes(6, n_restarts=2).fit(X, [120, 80])
+    for cov in m.model_.covars_:
+        assert np.linalg.eigvalsh(cov).min() > 0
+    assert np.isfinite(m.model_.means_).all()
+    pred = m.predict(X, [120, 80])
+    assert set(np.unique(pred)) <= set(range(6))
+    assert np.isfinite(m.score(X, [120, 80]))
+    assert np.isfinite(m.predict_proba(X)).all()
+    f = m.make_filter(fixed_lag=2)
+    for o in X[:10]:
+        assert np.isfinite(f.step(o)).all()
+    # constant data, and a constant column
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c = TaskModes(3, n_restarts=1).fit(np.ones((50, 2)))
+    assert np.isfinite(c.predict_proba(np.ones((5, 2)))).all()
+    Xc = rng.standard_normal((300, 3))
+    Xc[:, 1] = 4.0
+    assert TaskModes(2, n_restarts=1).fit(Xc).predict(Xc).shape == (300,)
+
+
+def test_more_states_than_clusters_reports_empty_states():
+    X, _, L = sample_hmm(K=2, D=3, n_trials=2, T=300, sep=6.0, seed=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = TaskModes(5, n_restarts=2).fit(X, L)
+    assert m.predict(X, L).shape == (len(X),)
+    assert m.empty_modes_.ndim == 1  # reported (possibly none: extra states may split clusters)
+
+
+# ------------------------------------------------------------------ input errors
+
+def test_clear_errors_on_bad_input(data, fitted):
+    X, _, L = data
+    with pytest.raises(NotFittedError):
+        TaskModes().predict(X)
+    with pytest.raises(NotFittedError):
+        TaskModes().make_filter()
+    Xn = X.copy()
+    Xn[5, 2] = np.nan
+    with pytest.raises(ValueError, match="NaN or inf.*row 5, column 2"):
+        TaskModes(2).fit(Xn, L)
+    with pytest.raises(ValueError, match="NaN"):
+        fitted.predict(Xn, L)
+    with pytest.raises(ValueError, match="8 features.*fitted with 9"):
+        fitted.predict(X[:, :8], L)
+    with pytest.raises(ValueError, match="lengths sum to"):
+        fitted.score(X, [10, 20])
+    with pytest.raises(ValueError, match="lengths sum to"):
+        TaskModes(2).fit(X, [len(X) - 1])
+    with pytest.raises(ValueError, match="positive"):
+        check_sequences(X, [0, len(X)])
+    with pytest.raises(ValueError, match="2-D"):
+        fitted.predict(X[:, 0])
+    with pytest.raises(ValueError, match="cannot be split"):
+        TaskModes(4).fit(X[:3])
+    with pytest.raises(ValueError, match="covariance_type"):
+        TaskModes(2, covariance_type="banana").fit(X)
+    with pytest.raises(ValueError, match="n_pca"):
+        TaskModes(2, n_pca=1.5).fit(X)
+    f = fitted.make_filter()
+    with pytest.raises(ValueError, match="shape"):
+        f.step(X[0, :8])
+    with pytest.raises(ValueError, match="non-finite"):
+        f.step(np.full(9, np.nan))
+    assert f.n_steps == 0  # a rejected observation does not change the state
+    with pytest.raises(ValueError, match="fixed_lag"):
+        fitted.make_filter(fixed_lag=-1)
+
+
+# ------------------------------------------------------------------ online filter
+
+def test_mode_filter_equals_offline_filter_and_hmmlearn(data, fitted):
+    X, _, L = data
+    T = 150
+    seq = X[400:400 + T]  # a prefix of the second trial
+    f = fitted.make_filter()
+    post = np.empty((T, 4))
+    logp = np.empty(T)
+    for t, o in enumerate(seq):
+        post[t] = f.step(o)
+        logp[t] = f.log_predictive
+        assert f.posterior_time == t
+        np.testing.assert_array_equal(post[t], f.filtered)
+    np.testing.assert_allclose(post, fitted.filter_proba(seq), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(logp, fitted.log_predictive(seq), rtol=0, atol=1e-9)
+    ref = vanilla_hmm(fitted)
+    Z = fitted.transform(seq)
+    for t in (0, 1, 2, 10, 57, T - 1):
+        # the smoothed posterior at the last time of a prefix is the filtered one
+        np.testing.assert_allclose(post[t], ref.predict_proba(Z[:t + 1])[-1], rtol=0, atol=1e-9)
+        assert logp[:t + 1].sum() == pytest.approx(ref.score(Z[:t + 1]), rel=0, abs=1e-9)
+    # offline filter restarts at each trial boundary
+    both = fitted.filter_proba(X[:800], [400, 400])
+    np.testing.assert_allclose(both[400:400 + T], post, atol=1e-9)
+    # reset starts a new trial
+    f.reset()
+    np.testing.assert_allclose(f.step(seq[0]), post[0], atol=1e-12)
+
+
+def test_mode_filter_with_pca_on_windowed_like_input():
+    X, _, L = sample_hmm(D=20, n_trials=3, T=200, seed=5, sep=1.0)
+    m = TaskModes(3, n_pca=6, n_restarts=1).fit(X, L)
+    f = m.make_filter()
+    post = np.array([f.step(o) for o in X[:100]])
+    np.testing.assert_allclose(post, m.filter_proba(X[:100]), atol=1e-9)
+    ref = vanilla_hmm(m)
+    assert m.log_predictive(X[:100]).sum() == pytest.approx(ref.score(m.transform(X[:100])),
+                                                            abs=1e-9)
+
+
+@pytest.mark.parametrize("lag", [1, 3, 8])
+def test_fixed_lag_equals_offline_smoothing_on_the_window(data, fitted, lag):
+    X, _, _ = data
+    seq = X[:60]
+    ref = vanilla_hmm(fitted)
+    Z = fitted.transform(seq)
+    f = fitted.make_filter(fixed_lag=lag)
+    for t, o in enumerate(seq):
+        p = f.step(o)
+        tau = max(t - lag, 0)
+        assert f.posterior_time == tau
+        np.testing.assert_allclose(p, ref.predict_proba(Z[:t + 1])[tau], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(p, f.posterior)
+        np.testing.assert_allclose(f.filtered, ref.predict_proba(Z[:t + 1])[-1], atol=1e-9)
+
+
+def test_novelty_score_flags_outliers(fitted, data):
+    X, _, _ = data
+    f = fitted.make_filter()
+    for o in X[:20]:
+        f.step(o)
+    usual = f.log_predictive
+    f.step(X[20] + 50.0)
+    assert f.log_predictive < usual - 100
+
+
+# ------------------------------------------------------------------ model selection
+
+def test_select_n_modes_picks_the_true_number():
+    X, _, L = sample_hmm(K=3, D=4, n_trials=6, T=250, sep=3.0, seed=11)
+    sel = select_n_modes(X, L, candidates=[2, 3, 4, 5], cv=3, seed=0, n_restarts=2)
+    assert isinstance(sel, ModeSelection)
+    assert sel.n_modes == 3
+    assert sel.n_modes_bic == 3
+    assert len(sel.heldout_loglik) == len(sel.bic) == 4
+    assert sel.heldout_loglik[1] > sel.heldout_loglik[0]
+    assert sel.best_estimator.n_modes == 3
+    d = sel.to_dict()
+    assert d["n_folds"] == 3 and d["cv"] == "3-fold by trial" and "estimators" not in d
+
+
+def test_select_n_modes_loto_and_errors():
+    X, _, L = sample_hmm(K=2, D=3, n_trials=3, T=150, sep=4.0, seed=2)
+    sel = select_n_modes(X, L, candidates=[1, 2], cv="loto", n_restarts=1, rule="max")
+    assert sel.n_folds == 3 and sel.n_modes == 2 and sel.n_modes_max == 2
+    with pytest.raises(ValueError, match="2 trials"):
+        select_n_modes(X, None, candidates=[2])
+    with pytest.raises(ValueError, match="cv"):
+        select_n_modes(X, L, candidates=[2], cv="bogus")
+
+
+# ------------------------------------------------------------------ agreement
+
+def test_hungarian_matching_on_hand_made_labels():
+    true = np.array([0, 0, 0, 1, 1, 1, 2, 2, -1, -1])
+    pred = np.array([5, 5, 3, 3, 3, 3, 7, 7, 5, 9])
+    mapping = match_modes(pred, true)
+    assert mapping == {3: 1, 5: 0, 7: 2, 9: -1}
+    acc, m2 = mode_agreement(pred, true)
+    assert m2 == mapping
+    assert acc == pytest.approx(7 / 8)  # samples with true = -1 are ignored
+    np.testing.assert_array_equal(relabel(pred, mapping), [0, 0, 1, 1, 1, 1, 2, 2, 0, -1])
+    # fewer predicted modes than labels: each mode takes its best label
+    acc, m = mode_agreement(np.array([0, 0, 1, 1, 1, 1]), np.array([0, 0, 1, 1, 2, 2]))
+    assert m == {0: 0, 1: 1} or m == {0: 0, 1: 2}
+    assert acc == pytest.approx(4 / 6)
+    # a permutation is perfect agreement; ARI ignores numbering
+    t = np.array([0, 1, 2, 2, 1, 0])
+    assert mode_agreement((t + 1) % 3, t)[0] == 1.0
+    assert mode_ari((t + 1) % 3, t) == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="no labelled"):
+        mode_agreement(np.array([0, 1]), np.array([-1, -1]))
+    with pytest.raises(ValueError, match="labels"):
+        match_modes(np.array([0, 1]), np.array([0, 1, 2]))
+
+
+def test_mode_filter_type(fitted):
+    assert isinstance(fitted.make_filter(), ModeFilter)
+
+
+def test_regularised_hmm_matches_hmmlearn_em_step(data):
+    """The fast scatter statistics and the emission override reproduce hmmlearn's EM."""
+    from learning.modes import _RegularizedGaussianHMM
+
+    X, _, L = data
+    rng = np.random.default_rng(0)
+    K, D = 3, X.shape[1]
+    init = dict(startprob_=np.full(K, 1 / K), transmat_=np.full((K, K), 1 / K),
+                means_=X[rng.choice(len(X), K)], covars_=np.array([np.cov(X.T)] * K))
+    kw = dict(n_components=K, covariance_type="full", n_iter=2, tol=-np.inf, init_params="",
+              covars_prior=0.0, covars_weight=1.0, means_weight=0.0)
+    ours, ref = _RegularizedGaussianHMM(**kw), GaussianHMM(**kw)
+    ours.reg_covar = 0.0
+    for h in (ours, ref):
+        for k, v in init.items():
+            setattr(h, k, v.copy())
+    np.testing.assert_allclose(ours._compute_log_likelihood(X), ref._compute_log_likelihood(X),
+                               rtol=1e-10)
+    ours.fit(X, L)
+    ref.fit(X, L)
+    np.testing.assert_allclose(ours.means_, ref.means_, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(ours.covars_, ref.covars_, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(ours.transmat_, ref.transmat_, rtol=1e-9)
