@@ -1,0 +1,293 @@
+"""Conservative screening features and leaf boxes for exact Lipschitz quotients.
+
+Lower bound on ‖x_i − x_j‖ (what a library k-d tree cannot give us with the
+error guarantees we need). With the centred point v = x − m, an orthonormal
+basis P (k × d) of leading principal directions and the residual
+r = v − PᵀPv, Pythagoras gives
+
+    ‖x_i − x_j‖² = ‖P(v_i − v_j)‖² + ‖r_i − r_j‖² ≥ ‖P(v_i − v_j)‖² + (‖r_i‖ − ‖r_j‖)²,
+
+so the K = k + 1 features z = [Pv, ‖r‖] satisfy ‖z_i − z_j‖ ≤ ‖x_i − x_j‖ for
+any orthonormal P (the basis only has to be good, not optimal, so it is fitted
+on a subsample).
+
+Screening in float32 (see ``screen_matrix_features``): for a row i with current
+lower bound L_i on its quotient, the pair (i, j) can matter only if
+‖y_i − y_j‖ ≥ L_i‖x_i − x_j‖, and we test the sufficient-to-prune condition
+    S_ij = ub(‖Δy‖²) − T_i · lb(‖Δx‖²) < 0,   T_i ≤ L_i²,
+as ONE matrix product of augmented features:
+    row  = [−2ŵ_i, 1, b_i, 2T_iẑ_i, −T_i, −T_i a_i]
+    col  = [ŵ_j, b_j, 1, ẑ_j, a_j, 1]
+with ŵ, ẑ the float32 (power-of-two-scaled) centred y and z, b = (1 + c)‖ŵ‖²,
+a = (1 − c)‖ẑ‖². The margin c = 2 (K' + 16) u covers the rounding of the
+inputs to float32, of the product of length K' (γ_K' ≤ K'u/(1 − K'u)), of the
+norms and of the final additions (each a few u relative to ‖·‖² of the pair),
+so S ≥ 0 whenever the true quotient reaches L_i. u is the unit roundoff of the
+matrix product: 2⁻²⁴ for IEEE float32, larger when a backend is allowed
+reduced-precision products (TF32/bf16), see ``unit_roundoff``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Features", "build_features", "build_leaves", "leaf_upper_ratios", "margin_constant",
+           "F32_UNIT_ROUNDOFF"]
+
+F32_UNIT_ROUNDOFF = 2.0 ** -24
+_F64_U = 2.0 ** -53
+_T_MAX = 2.0 ** 100  # cap on T so T·‖z‖² stays far inside float32 range (‖z‖ ≤ 1 after scaling)
+_NORM_FLOOR = 2.0 ** -60  # absolute floor on scaled squared norms: covers float32 subnormals
+
+
+def margin_constant(inner_dim: int, unit_roundoff: float = F32_UNIT_ROUNDOFF) -> float:
+    """Relative margin c on ‖·‖² for a float32 product of the given inner length."""
+    return 2.0 * (inner_dim + 16) * unit_roundoff
+
+
+@dataclass
+class Features:
+    """Screening data for one group, rows in *leaf order* (see ``perm``).
+
+    Attributes:
+        perm: (n,) original index of each leaf-ordered row.
+        leaf_start: (n_leaves + 1,) row offsets of the leaves.
+        z: (n, K) float64 lower-bound features (unscaled).
+        w: (n, d_y) float64 centred outputs (unscaled).
+        col_z: (n, K + d_y + 3) float32 column features for the z screen.
+        col_x: (n, d + d_y + 3) float32 column features for the full-d screen, or None.
+        zs, ws, xs: float32 scaled features (rows): ẑ, ŵ, x̂.
+        na, nb, nx: float32 a = (1−c)‖ẑ‖², b = (1+c)‖ŵ‖² (z screen), a for full-d screen.
+        scale_x, scale_y: powers of two applied to x (and z) and y before float32.
+        delta_z, delta_y: absolute float64 error bounds on z and w (per group, max).
+        c_z, c_x: margins used for the z screen and the full-d screen.
+    """
+
+    perm: np.ndarray
+    leaf_start: np.ndarray
+    z: np.ndarray
+    w: np.ndarray
+    zs: np.ndarray
+    ws: np.ndarray
+    xs: np.ndarray | None
+    na: np.ndarray
+    nb: np.ndarray
+    nbx: np.ndarray | None
+    nx: np.ndarray | None
+    col_z: np.ndarray
+    col_x: np.ndarray | None
+    scale_x: float
+    scale_y: float
+    delta_z: float
+    delta_y: float
+    c_z: float
+    c_x: float
+
+
+def _pow2_scale(max_abs: float) -> float:
+    """Power of two s with s·max_abs ≤ 1 (exact scaling); 1 for zero data."""
+    if not np.isfinite(max_abs) or max_abs <= 0.0:
+        return 1.0
+    return float(2.0 ** (-np.ceil(np.log2(max_abs))))
+
+
+def _pca_basis(V: np.ndarray, k: int, max_rows: int = 20000) -> np.ndarray:
+    """Orthonormal (k × d) basis of leading principal directions of V (centred).
+
+    Fitted on at most ``max_rows`` evenly spaced rows (deterministic); any
+    orthonormal basis gives a valid bound, a good one a tight bound.
+    """
+    n, d = V.shape
+    step = max(1, n // max_rows)
+    S = V[::step]
+    C = S.T @ S
+    _, vecs = np.linalg.eigh(C)
+    P = vecs[:, ::-1][:, :k].T.copy()
+    # Re-orthonormalise so ‖PPᵀ − I‖ is at rounding level (the bound needs orthonormal rows).
+    Q, _ = np.linalg.qr(P.T)
+    P = Q.T
+    err = np.abs(P @ P.T - np.eye(k)).max() if k else 0.0
+    if err > 1e-13:  # pragma: no cover - QR output is orthonormal to ~1e-16
+        raise FloatingPointError(f"PCA basis not orthonormal ({err:.2e})")
+    return np.ascontiguousarray(P)
+
+
+def choose_components(d: int, n: int, requested: int | None) -> int:
+    """Number k of principal components used for the lower bound."""
+    if requested is not None:
+        return int(max(0, min(requested, d)))
+    return int(min(d, 16, max(1, n // 8)))
+
+
+def build_leaves(z: np.ndarray, leaf_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """k-d split of the rows of z into leaves of ≤ leaf_size points.
+
+    Each segment is split at its median along the feature of largest spread.
+    Returns (perm, leaf_start): perm lists row indices leaf by leaf.
+    """
+    n = len(z)
+    perm = np.arange(n)
+    segments = [(0, n)]
+    done: list[tuple[int, int]] = []
+    while segments:
+        nxt = []
+        for s, e in segments:
+            if e - s <= leaf_size:
+                done.append((s, e))
+                continue
+            idx = perm[s:e]
+            sub = z[idx]
+            axis = int(np.argmax(sub.max(axis=0) - sub.min(axis=0))) if z.shape[1] else 0
+            half = (e - s) // 2
+            if z.shape[1]:
+                part = np.argpartition(sub[:, axis], half)
+                perm[s:e] = idx[part]
+            nxt.append((s, s + half))
+            nxt.append((s + half, e))
+        segments = nxt
+    done.sort()
+    leaf_start = np.array([s for s, _ in done] + [n], dtype=np.int64)
+    return perm, leaf_start
+
+
+def build_features(X: np.ndarray, Y: np.ndarray, idx: np.ndarray, *, leaf_size: int,
+                   n_components: int | None, full_screen: bool,
+                   unit_roundoff: float = F32_UNIT_ROUNDOFF, chunk: int = 65536) -> Features:
+    """Features of the points ``idx`` (original indices) of one group; see module doc."""
+    n = len(idx)
+    d = X.shape[1]
+    dy = Y.shape[1]
+    Xg = X[idx] if len(idx) != len(X) else X
+    Yg = Y[idx] if len(idx) != len(Y) else Y
+    m = Xg.mean(axis=0)
+    k = choose_components(d, n, n_components)
+    K = k + 1
+    z = np.empty((n, K))
+    vmax = 0.0
+    P = _pca_basis(Xg[:: max(1, n // 20000)] - m, k) if k else np.zeros((0, d))
+    for s in range(0, n, chunk):
+        e = min(s + chunk, n)
+        V = Xg[s:e] - m  # one rounding per coordinate: relative error ≤ u64
+        Z = V @ P.T
+        R = V - Z @ P
+        z[s:e, :k] = Z
+        z[s:e, k] = np.sqrt(np.einsum("ij,ij->i", R, R))
+        vmax = max(vmax, float(np.sqrt(np.einsum("ij,ij->i", V, V)).max()))
+    # Absolute float64 error of the computed z (subtraction, product, residual):
+    # ≤ few·(d + k)·u64·‖v‖; generous constant.
+    delta_z = 8.0 * (d + k + 4) * _F64_U * vmax
+    # Centre y on the median row so exactly equal outputs stay exactly equal (→ 0).
+    my = Yg[np.argsort(Yg[:, 0], kind="stable")[n // 2]] if dy else np.zeros(0)
+    w = Yg - my
+    wmax = float(np.sqrt((w * w).sum(axis=1)).max()) if dy else 0.0
+    delta_y = 8.0 * (dy + 4) * _F64_U * wmax
+
+    perm, leaf_start = build_leaves(z, leaf_size)
+    z = z[perm]
+    w = w[perm]
+
+    sx = _pow2_scale(float(np.abs(z).max()) if z.size else 0.0)
+    sy = _pow2_scale(float(np.abs(w).max()) if w.size else 0.0)
+    zs = (z * sx).astype(np.float32)
+    ws = (w * sy).astype(np.float32)
+    c_z = margin_constant(K + dy + 4, unit_roundoff)
+    nz = np.maximum(np.einsum("ij,ij->i", zs.astype(np.float64), zs.astype(np.float64)), _NORM_FLOOR)
+    nw = np.maximum(np.einsum("ij,ij->i", ws.astype(np.float64), ws.astype(np.float64)), _NORM_FLOOR)
+    na = ((1.0 - c_z) * nz).astype(np.float32)
+    nb = ((1.0 + c_z) * nw).astype(np.float32)
+    col_z = np.empty((n, dy + 2 + K + 2), dtype=np.float32)
+    col_z[:, :dy] = ws
+    col_z[:, dy] = nb
+    col_z[:, dy + 1] = 1.0
+    col_z[:, dy + 2:dy + 2 + K] = zs
+    col_z[:, dy + 2 + K] = na
+    col_z[:, dy + 3 + K] = 1.0
+
+    xs = nx = col_x = nbx = None
+    c_x = margin_constant(d + dy + 4, unit_roundoff)
+    if full_screen:
+        col_x = np.empty((n, dy + 2 + d + 2), dtype=np.float32)
+        nxx = np.empty(n)
+        for s in range(0, n, chunk):
+            e = min(s + chunk, n)
+            V = (Xg[perm[s:e]] - m) * sx
+            V32 = V.astype(np.float32)
+            col_x[s:e, dy + 2:dy + 2 + d] = V32
+            V64 = V32.astype(np.float64)
+            nxx[s:e] = np.einsum("ij,ij->i", V64, V64)
+        nxx = np.maximum(nxx, _NORM_FLOOR)
+        nx = ((1.0 - c_x) * nxx).astype(np.float32)
+        nbx = ((1.0 + c_x) * nw).astype(np.float32)
+        col_x[:, :dy] = ws
+        col_x[:, dy] = nbx
+        col_x[:, dy + 1] = 1.0
+        col_x[:, dy + 2 + d] = nx
+        col_x[:, dy + 3 + d] = 1.0
+        xs = col_x[:, dy + 2:dy + 2 + d]
+    return Features(perm=idx[perm], leaf_start=leaf_start, z=z, w=w, zs=zs, ws=ws, xs=xs,
+                    na=na, nb=nb, nbx=nbx, nx=nx, col_z=col_z, col_x=col_x, scale_x=sx,
+                    scale_y=sy, delta_z=delta_z, delta_y=delta_y, c_z=c_z, c_x=c_x)
+
+
+def thresholds(L: np.ndarray, scale_x: float, scale_y: float) -> np.ndarray:
+    """T ≤ (L·s_y/s_x)², rounded down and capped, as float32 (see module doc)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        T = (L * (scale_y / scale_x)) ** 2 * (1.0 - 2.0 ** -20)
+    T = np.minimum(np.nan_to_num(T, nan=0.0, posinf=_T_MAX), _T_MAX)
+    T32 = T.astype(np.float32)
+    # Round toward zero where float32 rounding went up.
+    up = T32.astype(np.float64) > T
+    if up.any():
+        T32[up] = np.nextafter(T32[up], np.float32(0))
+    return T32
+
+
+def row_features(ws: np.ndarray, nb: np.ndarray, xs: np.ndarray, na: np.ndarray,
+                 T: np.ndarray) -> np.ndarray:
+    """Row features [−2ŵ, 1, b, 2Tẑ, −T, −Ta] (float32) for the screen S = row·colᵀ."""
+    a, dy = ws.shape
+    K = xs.shape[1]
+    R = np.empty((a, dy + 2 + K + 2), dtype=np.float32)
+    R[:, :dy] = ws
+    R[:, :dy] *= -2.0
+    R[:, dy] = 1.0
+    R[:, dy + 1] = nb
+    R[:, dy + 2:dy + 2 + K] = xs
+    R[:, dy + 2:dy + 2 + K] *= (2.0 * T)[:, None]
+    R[:, dy + 2 + K] = -T
+    R[:, dy + 3 + K] = -T * na
+    return R
+
+
+def leaf_boxes(f: Features) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per-leaf bounding boxes of z and w and centroids of z."""
+    st = f.leaf_start[:-1]
+    zlo = np.minimum.reduceat(f.z, st, axis=0)
+    zhi = np.maximum.reduceat(f.z, st, axis=0)
+    if f.w.shape[1]:
+        wlo = np.minimum.reduceat(f.w, st, axis=0)
+        whi = np.maximum.reduceat(f.w, st, axis=0)
+    else:
+        wlo = whi = np.zeros((len(st), 0))
+    cnt = np.diff(f.leaf_start)[:, None]
+    zc = np.add.reduceat(f.z, st, axis=0) / cnt
+    return zlo, zhi, wlo, whi, zc
+
+
+def leaf_upper_ratios(a: int, zlo: np.ndarray, zhi: np.ndarray, wlo: np.ndarray, whi: np.ndarray,
+                      delta_z: float, delta_y: float) -> np.ndarray:
+    """Upper bound on ‖Δy‖/‖Δx‖ over all pairs of leaf a × leaf b, for every b.
+
+    ‖Δx‖ ≥ box distance of z (minus the float64 error of z); ‖Δy‖ ≤ largest
+    distance between the y boxes (plus the error of w).
+    """
+    gap = np.maximum(zlo - zhi[a], zlo[a] - zhi)
+    np.maximum(gap, 0.0, out=gap)
+    zmin = np.sqrt(np.einsum("ij,ij->i", gap, gap)) * (1.0 - 1e-12) - 2.0 * delta_z
+    span = np.maximum(np.abs(whi - wlo[a]), np.abs(whi[a] - wlo))
+    ymax = np.sqrt(np.einsum("ij,ij->i", span, span)) * (1.0 + 1e-12) + 2.0 * delta_y
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ub = np.where(zmin > 0.0, ymax / np.where(zmin > 0.0, zmin, 1.0), np.inf)
+    return ub

@@ -1,0 +1,252 @@
+"""Exact point-wise Lipschitz quotients (is the output y predictable from x?).
+
+    q_i = max_{j ≠ i, g_j = g_i} ‖y_i − y_j‖ / ‖x_i − x_j‖      [units of y per unit of x]
+
+Euclidean norms; pairs identical in both x and y are skipped; identical x with
+different y give ``inf``; a point with no partner gets 0. The result equals a
+float64 direct-difference computation (every quotient that can be the maximum
+is recomputed by direct differences), while almost all pairs are discarded by
+conservative bounds: a principal-component lower bound on ‖Δx‖ with boxes of a
+k-d split to skip whole leaves, and a float32 matrix-product screen with a
+proven rounding margin (see ``_lipschitz_bounds`` and ``_lipschitz_search``).
+
+Memory is O(N·(d + block)) — the float32 copy of X plus a few (block × chunk)
+screening matrices; time is near-linear on data of low intrinsic dimension
+(windowed time series) and falls back to a blocked product (the brute-force
+cost) on i.i.d. data, where no bound can prune.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
+from typing import Literal
+
+import numpy as np
+
+from ._lipschitz_bounds import F32_UNIT_ROUNDOFF, build_features
+from ._lipschitz_exact import dense_exact, pair_ratios, update_best
+from ._lipschitz_search import LeafContext, NumpyKernel, SearchStats, search_leaf
+
+__all__ = ["pointwise_quotients", "check_inputs", "last_search_stats"]
+
+_SMALL_GROUP = 512  # groups up to this size are done densely (all pairs, exactly)
+_TIME_NEIGHBOURS = 2  # initial bounds from rows k±1, k±2 of the same group
+_last_stats: dict = {}
+
+
+def last_search_stats() -> dict:
+    """Counters of the last ``pointwise_quotients`` call in this process.
+
+    Keys: ``n_pairs`` (unordered pairs within groups), ``pairs_screened`` (ordered
+    pairs screened with the low-dimensional bound), ``pairs_full_screened``
+    (ordered pairs screened with the full-dimensional float32 product),
+    ``pairs_exact`` (pairs recomputed exactly in float64, ordered).
+    """
+    return dict(_last_stats)
+
+
+def _check_array(A, name: str) -> np.ndarray:
+    A = np.asarray(A)
+    if A.ndim == 1:
+        A = A[:, None]
+    if A.ndim != 2:
+        raise ValueError(f"{name} must be 1-D or 2-D (samples × features), got ndim={A.ndim}")
+    if A.shape[0] == 0:
+        raise ValueError(f"{name} is empty (0 rows)")
+    if A.shape[1] == 0:
+        raise ValueError(f"{name} has no columns")
+    if not (np.issubdtype(A.dtype, np.number) or A.dtype == bool) or np.iscomplexobj(A):
+        raise ValueError(f"{name} must be real numeric, got dtype {A.dtype}")
+    A = np.ascontiguousarray(A, dtype=np.float64)
+    step = max(1, (1 << 22) // A.shape[1])
+    for s in range(0, A.shape[0], step):
+        ok = np.isfinite(A[s:s + step]).all(axis=1)
+        if not ok.all():
+            row = s + int(np.argmin(ok))
+            raise ValueError(f"{name} contains NaN or inf at row {row}")
+    return A
+
+
+def check_inputs(X, Y, groups=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Validate and convert: float64 C-contiguous (N, d) X and (N, d_y) Y, (N,) groups.
+
+    Raises ``ValueError`` naming the array (and the first bad row) for wrong
+    ndim, empty input, NaN/inf, or mismatched lengths.
+    """
+    X = _check_array(X, "X")
+    Y = _check_array(Y, "Y")
+    if len(X) != len(Y):
+        raise ValueError(f"X has {len(X)} rows but Y has {len(Y)}")
+    if groups is not None:
+        groups = np.asarray(groups)
+        if groups.ndim != 1:
+            raise ValueError(f"groups must be 1-D, got ndim={groups.ndim}")
+        if len(groups) != len(X):
+            raise ValueError(f"groups has {len(groups)} entries but X has {len(X)} rows")
+        if groups.dtype.kind == "f":
+            bad = ~np.isfinite(groups)
+            if bad.any():
+                raise ValueError(f"groups contains NaN or inf at row {int(np.argmax(bad))}")
+    return X, Y, groups
+
+
+def _default_jobs() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _blas_single_thread():
+    """Context limiting BLAS to one thread while our own threads run (no oversubscription)."""
+    try:
+        from sklearn.utils.fixes import _get_threadpool_controller
+        return _get_threadpool_controller().limit(limits=1, user_api="blas")
+    except Exception:  # pragma: no cover - private sklearn helper moved
+        return nullcontext()
+
+
+def _time_neighbour_init(X, Y, idx, q, partner, lags: int) -> None:
+    """Exact quotients of rows k and k+s (s = 1..lags) of a group: cheap, strong initial bounds.
+
+    On windowed time series the nearest neighbours of a sample in x are
+    usually its neighbours in time, which often give the maximum.
+    """
+    for s in range(1, min(lags, len(idx) - 1) + 1):
+        i, j = idx[:-s], idx[s:]
+        r = pair_ratios(X, Y, i, j)
+        update_best(q, partner, np.concatenate([i, j]), np.concatenate([j, i]),
+                    np.concatenate([r, r]))
+
+
+def _make_kernel(backend: str, device, f, X, Y):
+    if backend == "numpy":
+        return NumpyKernel(f, X, Y)
+    from ._lipschitz_torch import TorchKernel
+    return TorchKernel(f, X, Y, device=device)
+
+
+def _resolve_backend(backend: str, device) -> tuple[str, object, float]:
+    """(backend, device, unit roundoff of its float32 products)."""
+    if backend not in ("auto", "numpy", "torch"):
+        raise ValueError(f"backend must be 'auto', 'numpy' or 'torch', got {backend!r}")
+    if backend == "auto":
+        if device is not None and str(device) != "cpu":
+            backend = "torch"
+        else:
+            try:
+                import torch
+                backend = "torch" if torch.cuda.is_available() else "numpy"
+            except ImportError:  # pragma: no cover
+                backend = "numpy"
+    if backend == "numpy":
+        return "numpy", None, F32_UNIT_ROUNDOFF
+    from ._lipschitz_torch import resolve_device, torch_unit_roundoff
+    dev = resolve_device(device)
+    return "torch", dev, torch_unit_roundoff(dev)
+
+
+def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, block: int = 256,
+                        n_jobs: int | None = None,
+                        backend: Literal["auto", "numpy", "torch"] = "auto", device=None,
+                        progress: bool = False, n_components: int | None = None):
+    """Exact point-wise Lipschitz quotients q_i (see module doc for the definition).
+
+    Args:
+        X: (N, d) inputs (1-D is taken as one feature).
+        Y: (N, d_y) outputs.
+        groups: optional (N,) labels; pairs are formed only within a label.
+        return_partner: also return, per point, the index j attaining q_i
+            (smallest such j; -1 where q_i = 0, i.e. no partner or all quotients 0).
+        block: leaf size of the k-d split (rows screened together).
+        n_jobs: threads (default: all available cores; forced to 1 on a GPU).
+        backend: "numpy", "torch" (CPU or CUDA), or "auto" (torch if CUDA is available).
+        device: torch device for the torch backend (default: CUDA if available).
+        progress: show a tqdm progress bar (points completed).
+        n_components: principal components in the lower bound (default ≤ 16).
+
+    Returns:
+        q (N,) float64, or (q, partner) with partner (N,) int64.
+    """
+    X, Y, groups = check_inputs(X, Y, groups)
+    N = len(X)
+    backend, dev, u = _resolve_backend(backend, device)
+    if n_jobs is None:
+        n_jobs = _default_jobs()
+    n_jobs = max(1, int(n_jobs))
+    if backend == "torch" and str(dev) != "cpu":
+        n_jobs = 1
+    block = max(8, int(block))
+    q = np.zeros(N)
+    partner = np.full(N, -1, dtype=np.int64)
+    if groups is None:
+        group_idx = [np.arange(N)]
+    else:
+        order = np.argsort(groups, kind="stable")
+        _, starts = np.unique(groups[order], return_index=True)
+        group_idx = np.split(order, starts[1:])
+    stats = SearchStats()
+    n_pairs = sum(len(g) * (len(g) - 1) // 2 for g in group_idx)
+
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=N, unit="pt", desc="Lipschitz quotients")
+    pool = ThreadPoolExecutor(max_workers=n_jobs) if n_jobs > 1 else None
+    limit = _blas_single_thread() if (pool is not None and backend == "numpy") else nullcontext()
+    try:
+        with limit:
+            for idx in group_idx:
+                _one_group(X, Y, idx, q, partner, block=block, n_components=n_components,
+                           backend=backend, device=dev, u=u, pool=pool, bar=bar, stats=stats)
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True)
+        if bar is not None:
+            bar.close()
+    _last_stats.clear()
+    _last_stats.update(n_pairs=n_pairs, pairs_screened=stats.pairs_screened,
+                       pairs_full_screened=stats.pairs_full_screened,
+                       pairs_exact=stats.pairs_exact)
+    return (q, partner) if return_partner else q
+
+
+def _one_group(X, Y, idx, q, partner, *, block, n_components, backend, device, u, pool, bar,
+               stats: SearchStats) -> None:
+    n = len(idx)
+    if n <= _SMALL_GROUP:
+        dense_exact(X, Y, idx, q, partner)
+        stats.pairs_exact += n * (n - 1)
+        if bar is not None:
+            bar.update(n)
+        return
+    if (Y[idx] == Y[idx[0]]).all():  # constant output: every quotient is 0 or skipped
+        if bar is not None:
+            bar.update(n)
+        return
+    _time_neighbour_init(X, Y, idx, q, partner, _TIME_NEIGHBOURS)
+    f = build_features(X, Y, idx, leaf_size=block, n_components=n_components,
+                       full_screen=True, unit_roundoff=u)
+    qp = q[f.perm]
+    pp = partner[f.perm]
+    ctx = LeafContext(f=f, kernel=_make_kernel(backend, device, f, X, Y), q=qp, partner=pp)
+    n_leaves = len(f.leaf_start) - 1
+    sizes = np.diff(f.leaf_start)
+
+    def task(a: int) -> SearchStats:
+        return search_leaf(ctx, a)
+
+    if pool is None:
+        for a in range(n_leaves):
+            stats.add(task(a))
+            if bar is not None:
+                bar.update(int(sizes[a]))
+    else:
+        for a, st in enumerate(pool.map(task, range(n_leaves))):
+            stats.add(st)
+            if bar is not None:
+                bar.update(int(sizes[a]))
+    q[f.perm] = qp
+    partner[f.perm] = pp
