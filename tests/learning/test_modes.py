@@ -354,6 +354,7 @@ def test_regularised_hmm_matches_hmmlearn_em_step(data):
     ours, ref = _RegularizedGaussianHMM(**kw), GaussianHMM(**kw)
     ours.reg_covar = 0.0
     for h in (ours, ref):
+        h.n_features = D
         for k, v in init.items():
             setattr(h, k, v.copy())
     np.testing.assert_allclose(ours._compute_log_likelihood(X), ref._compute_log_likelihood(X),
