@@ -123,16 +123,16 @@ class QPConfig:
 
 
 def _finite(x: np.ndarray) -> bool:
-    """True when every entry is finite (a sum is NaN/inf otherwise; overflow above ~1e307 also counts)."""
-    return math.isfinite(float(x.sum()))
+    """True when every entry is finite: x·x is NaN/inf otherwise (|x| > 1e154, absurd here, also counts)."""
+    return math.isfinite(float(x @ x))
 
 
 def manipulability(J: np.ndarray) -> float:
     """Yoshikawa manipulability √det(J·Jᵀ) of a (3, n) translational Jacobian [m³ for n = 3]."""
-    a = J @ J.T
-    det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
-           - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-           + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+    a = (J @ J.T).tolist()
+    det = (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+           - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+           + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]))
     return math.sqrt(max(float(det), 0.0))
 
 
@@ -186,6 +186,9 @@ class QPController:
             if found:
                 self.tip_task = found[0]
         self.tasks = list(tasks)
+        if not self.tasks:
+            raise ControllerConfigError("at least one task is required")
+        self._other_tasks = self.tasks[1:]
         default_boxes, default_rows = default_constraints(self.limits)
         self.box_constraints = list(box_constraints) if box_constraints is not None else default_boxes
         self.constraints = list(constraints) if constraints is not None else default_rows
@@ -200,8 +203,8 @@ class QPController:
         eye = np.eye(n)
         self._g_relax_top = np.block([[eye, -eye], [-eye, -eye]])
         self._no_rows = (np.zeros((0, n)), np.zeros(0))
-        self._lb_relax = np.concatenate([np.full(n, -np.inf), np.zeros(n)])
-        self._ub_relax = np.full(2 * n, np.inf)
+        self._lb_relax = np.concatenate([np.full(n, -1e30), np.zeros(n)])  # 1e30: "infinite" for OSQP and DAQP
+        self._ub_relax = np.full(2 * n, 1e30)
         self._last_tau = np.zeros(n)
         self._last_q: np.ndarray | None = None
         self._last_v: np.ndarray | None = None
@@ -294,9 +297,11 @@ class QPController:
             G, h = self._no_rows
 
         # cost -------------------------------------------------------------
-        costs = [t.cost(state) for t in self.tasks]
-        H = sum(Hc[0] for Hc in costs[1:]) + costs[0][0]
-        c = sum(Hc[1] for Hc in costs[1:]) + costs[0][1]
+        H, c = self.tasks[0].cost(state)
+        for t in self._other_tasks:
+            Ht, ct = t.cost(state)
+            H = H + Ht
+            c = c + ct
 
         # solve ------------------------------------------------------------
         slack = 0.0

@@ -21,6 +21,7 @@ Problem (x ∈ Rⁿˣ):   minimise ½·xᵀP·x + cᵀx   s.t.   lb ≤ x ≤ ub
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -107,20 +108,24 @@ class DaqpBackend:
         self.n, self.m = n, m
         self._sense = np.zeros(n + m, dtype=np.int32)
         self._settings = {"primal_tol": primal_tol, "iter_limit": iter_limit}
-        self._free = np.full(m, -1e30)
+        self._upper = np.empty(n + m)
+        self._lower = np.full(n + m, -1e30)  # rows of G are one-sided (G·x ≤ h)
 
     def solve(self, P: np.ndarray, c: np.ndarray, lb: np.ndarray, ub: np.ndarray,
               G: np.ndarray, h: np.ndarray) -> SolveOutcome:
+        """Bounds must be finite or ±1e30 (DAQP's infinity)."""
+        n = self.n
+        self._upper[:n] = ub
+        self._upper[n:] = h
+        self._lower[:n] = lb
         try:
-            x, _, flag, info = self._solve(P, c, G, np.concatenate([np.minimum(ub, 1e30), h]),
-                                           np.concatenate([np.maximum(lb, -1e30), self._free]),
-                                           self._sense, **self._settings)
+            x, _, flag, info = self._solve(P, c, G, self._upper, self._lower, self._sense, **self._settings)
         except Exception as exc:  # a solver error must not escape the control loop
             return SolveOutcome(None, f"error: {exc}", False, 0)
         # exit flags: 1 optimal, 2 soft optimal, -1 infeasible, others: limits / numerical trouble
-        ok = flag in (1, 2) and np.all(np.isfinite(x))
-        return SolveOutcome(np.asarray(x) if ok else None, f"daqp exitflag {flag}", flag == -1,
-                            int(info.get("iterations", 0)))
+        if flag in (1, 2) and math.isfinite(float(x @ x)):
+            return SolveOutcome(x, "solved", False, info["iterations"])
+        return SolveOutcome(None, f"daqp exitflag {flag}", flag == -1, info["iterations"])
 
 
 class QpsolversBackend:

@@ -49,7 +49,7 @@ class StateEvaluator:
         placement = pin.updateFramePlacement(model, data, fid)
         p_dot = pin.getFrameVelocity(model, data, fid, _LWA).linear
         drift = pin.getFrameClassicalAcceleration(model, data, fid, _LWA).linear
-        pin.computeJointJacobians(model, data, q)
+        pin.computeJointJacobians(model, data)  # uses the placements of forwardKinematics above
         J = pin.getFrameJacobian(model, data, fid, _LWA)[:3]
         M = pin.crba(model, data, q).copy()
         M[self._upper[1], self._upper[0]] = M[self._upper]  # crba fills the upper triangle

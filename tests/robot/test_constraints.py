@@ -152,3 +152,14 @@ def test_limits_validation() -> None:
         JointLimits([0.0], [1.0], [1.0], [1.0], [2.0], [1.0])  # a_brake > a_max
     with pytest.raises(ControllerConfigError):
         JointLimits([0.0, 0.0], [1.0], [1.0], [1.0], [1.0], [1.0])
+
+
+@settings(max_examples=200, deadline=None)
+@given(gap=st.floats(-0.5, 2.0, **finite), v=st.floats(-3.0, 3.0, **finite),
+       dt=st.floats(1e-3, 0.02, **finite), a_brake=st.floats(0.5, 50.0, **finite))
+def test_scalar_and_vector_viable_bounds_agree(gap, v, dt, a_brake) -> None:
+    """PositionLimit uses a scalar loop for speed; it must equal the documented vector formula."""
+    from robot.constraints import _viable_bound_scalar
+
+    vec = float(viable_velocity_bound(np.array([gap]), np.array([v]), dt, np.array([a_brake]))[0])
+    assert _viable_bound_scalar(gap, v, dt, a_brake) == pytest.approx(vec, rel=1e-12, abs=1e-12)
