@@ -225,3 +225,24 @@ def test_solvers_agree() -> None:
         ra, rb, rc = a.step(q, v, p), b.step(q, v, p), c.step(q, v, p)
         np.testing.assert_allclose(ra.a, rb.a, atol=1e-4 * (1 + np.abs(ra.a).max()))
         np.testing.assert_allclose(ra.a, rc.a, atol=1e-8 * (1 + np.abs(ra.a).max()))
+
+
+def test_commanded_torque_produces_the_commanded_acceleration_in_mujoco() -> None:
+    """τ from the QP applied to the MuJoCo model (same source) gives back a: dynamics are consistent."""
+    import mujoco
+
+    from robot.superlimb import to_mjcf
+
+    m = mujoco.MjModel.from_xml_string(to_mjcf(PARAMS))
+    d = mujoco.MjData(m)
+    ctl = QPController.for_superlimb()
+    rng = np.random.default_rng(11)
+    q = np.array([0.1, 0.4, 1.1])
+    v = np.zeros(3)
+    for k in range(60):
+        target = np.array([0.45, -0.15, 0.2]) + 0.1 * rng.normal(size=3) * (k % 20 == 0)
+        r = ctl.step(q, v, target)
+        d.qpos[:], d.qvel[:], d.ctrl[:] = q, v, r.tau
+        mujoco.mj_forward(m, d)
+        np.testing.assert_allclose(d.qacc, r.a, atol=1e-6 * (1 + np.abs(r.a).max()))
+        q, v = r.q_next, r.v_next
