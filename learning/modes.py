@@ -15,6 +15,14 @@ Public API
   log-likelihood over trials (BIC as a second opinion).
 - :func:`match_modes`, :func:`mode_agreement`, :func:`mode_ari`, :func:`relabel` —
   agreement with ground-truth labels (Hungarian matching, accuracy, ARI).
+
+Which inputs (measured on ``sim.demonstrator.generate_demonstrations(3, 10)``, 18k samples
+at 10 Hz, 4 true modes, defaults otherwise): per-sample observations (D = 9) give 98 %
+agreement (Viterbi; 98 % causal) with a ~2 s fit; 1 s causal windows (D = 90) give only
+83–86 % even with PCA to 16 — overlapping windows straddle mode changes and break the
+HMM's conditional independence. Fit the modes on per-sample (or short-window) inputs.
+On such non-Gaussian data the held-out likelihood and BIC keep rising with K (they chose
+6 there), so treat :func:`select_n_modes` as evidence, not as the truth, when K is known.
 """
 
 from __future__ import annotations

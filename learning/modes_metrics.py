@@ -30,13 +30,15 @@ def _labels(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return pred.astype(np.int64), true.astype(np.int64)
 
 
-def match_modes(pred: np.ndarray, true: np.ndarray) -> dict[int, int]:
-    """One-to-one map predicted mode → true label that maximises agreement.
+def match_modes(pred: np.ndarray, true: np.ndarray, one_to_one: bool = True) -> dict[int, int]:
+    """Map predicted mode → true label that maximises agreement.
 
     Maximises Σ_p C[p, mapping[p]] over one-to-one mappings, C[p, l] = #{t: pred_t = p,
     true_t = l, true_t ≥ 0} (Hungarian algorithm). The numbers of labels may differ:
     predicted modes left without a partner (more modes than labels) map to -1, i.e. they
-    count as wrong. Every label occurring in ``pred`` is a key.
+    count as wrong. With ``one_to_one=False`` each mode maps to its majority label instead
+    (several modes may share a label: agreement of an over-segmentation). Every label
+    occurring in ``pred`` is a key.
     """
     pred, true = _labels(pred, true)
     keep = true >= 0
@@ -49,6 +51,11 @@ def match_modes(pred: np.ndarray, true: np.ndarray) -> dict[int, int]:
     ti = np.searchsorted(t_labels, true[keep])
     counts = np.zeros((p_labels.size, t_labels.size), dtype=np.int64)
     np.add.at(counts, (pi, ti), 1)
+    if not one_to_one:
+        for r in range(p_labels.size):
+            if counts[r].any():
+                mapping[int(p_labels[r])] = int(t_labels[np.argmax(counts[r])])
+        return mapping
     rows, cols = linear_sum_assignment(counts, maximize=True)
     for r, c in zip(rows, cols):
         mapping[int(p_labels[r])] = int(t_labels[c])
@@ -64,16 +71,16 @@ def relabel(pred: np.ndarray, mapping: dict[int, int]) -> np.ndarray:
     return out
 
 
-def mode_agreement(pred: np.ndarray, true: np.ndarray) -> tuple[float, dict[int, int]]:
-    """Accuracy after the best matching, over samples with ``true ≥ 0``; and the matching.
-
-    Raises ValueError when no sample is labelled.
+def mode_agreement(pred: np.ndarray, true: np.ndarray, one_to_one: bool = True
+                   ) -> tuple[float, dict[int, int]]:
+    """Accuracy after the best matching (:func:`match_modes`), over samples with
+    ``true ≥ 0``; and the matching. Raises ValueError when no sample is labelled.
     """
     pred, true = _labels(pred, true)
     keep = true >= 0
     if not keep.any():
         raise ValueError("no labelled samples: every true label is < 0 (unknown)")
-    mapping = match_modes(pred, true)
+    mapping = match_modes(pred, true, one_to_one)
     acc = float(np.mean(relabel(pred[keep], mapping) == true[keep]))
     return acc, mapping
 

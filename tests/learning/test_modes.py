@@ -326,6 +326,10 @@ def test_hungarian_matching_on_hand_made_labels():
     acc, m = mode_agreement(np.array([0, 0, 1, 1, 1, 1]), np.array([0, 0, 1, 1, 2, 2]))
     assert m == {0: 0, 1: 1} or m == {0: 0, 1: 2}
     assert acc == pytest.approx(4 / 6)
+    # over-segmentation: many-to-one majority mapping on request
+    acc, m = mode_agreement(np.array([0, 1, 2, 2]), np.array([0, 0, 1, 1]), one_to_one=False)
+    assert m == {0: 0, 1: 0, 2: 1} and acc == 1.0
+    assert mode_agreement(np.array([0, 1, 2, 2]), np.array([0, 0, 1, 1]))[0] == 0.75
     # a permutation is perfect agreement; ARI ignores numbering
     t = np.array([0, 1, 2, 2, 1, 0])
     assert mode_agreement((t + 1) % 3, t)[0] == 1.0
