@@ -80,8 +80,9 @@ class ModeFilter:
     ``step(o)`` runs one step of the forward recursion (module docstring) on one raw
     observation ``o`` (the same features ``TaskModes.fit`` saw, before scaling): it applies
     the fitted scaler and PCA, evaluates the K Gaussian log densities through Cholesky
-    factors precomputed here, and updates the posterior: O(K² + K·D·D_in) per step, no
-    hmmlearn call. The result equals ``TaskModes.filter_proba`` on the same prefix.
+    factors precomputed here, and updates the posterior: O(K² + K·D·D_in) per step
+    (D = model dimension after PCA; scaler, PCA and each L_j⁻¹ are folded into one
+    D_in × K·D matrix at construction), no hmmlearn call. The result equals ``TaskModes.filter_proba`` on the same prefix.
 
     With ``fixed_lag = L > 0``, ``step`` returns the fixed-lag smoothed posterior
     p(s_{t−L} | o_0..o_t) (a backward pass over the last L steps, O(L·K²) more); during the
