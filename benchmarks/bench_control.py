@@ -26,9 +26,11 @@ import pinocchio as pin
 from ruckig import InputParameter, OutputParameter, Ruckig
 
 from robot.qp import QPConfig, QPController
+from robot.solvers import daqp_available
 from robot.smoothing import ReferenceSmoother
 from robot.superlimb import build_pinocchio_model
 
+SOLVERS = ("daqp", "osqp") if daqp_available() else ("osqp",)
 TARGETS_US = {"qp_step_daqp": 150.0, "qp_step_osqp": 150.0, "ruckig_update": 20.0}
 
 
@@ -104,15 +106,15 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3, help="interleaved rounds (samples are pooled)")
     args = ap.parse_args()
 
-    for solver in ("daqp", "osqp"):  # warm-up: imports, allocations, first OSQP setup
+    for solver in SOLVERS:  # warm-up: imports, allocations, first OSQP setup
         bench_qp(solver, 200)
     bench_smoother(200)
-    samples: dict[str, list[int]] = {k: [] for k in ("baseline_rnea", "qp_step_daqp", "qp_step_osqp",
-                                                       "ruckig_update", "ruckig_raw")}
+    names = ["baseline_rnea", *(f"qp_step_{s}" for s in SOLVERS), "ruckig_update", "ruckig_raw"]
+    samples: dict[str, list[int]] = {k: [] for k in names}
     info: dict[str, dict] = {}
     for _ in range(args.rounds):
         samples["baseline_rnea"] += bench_rnea(args.n)
-        for solver in ("daqp", "osqp"):
+        for solver in SOLVERS:
             s, info[solver] = bench_qp(solver, args.n)
             samples[f"qp_step_{solver}"] += s
         samples["ruckig_update"] += bench_smoother(args.n)
@@ -125,7 +127,7 @@ def main() -> None:
         if name in TARGETS_US:
             stats["target_p50_us"] = TARGETS_US[name]
             stats["meets_target"] = stats["p50_us"] <= TARGETS_US[name]
-    for solver in ("daqp", "osqp"):
+    for solver in SOLVERS:
         results[f"qp_step_{solver}"].update(info[solver])
     print(json.dumps({"machine": platform.processor() or platform.machine(), "python": platform.python_version(),
                       "results": results}, indent=2))

@@ -12,7 +12,7 @@ limits [rad], to the velocity limits [rad/s] and to the torque limits as a
 fraction of τ_max (negative would be a violation); how many steps were not
 ``ok``; the median step time [µs].
 
-Usage: ``python examples/tune_qp.py [--seconds 6] [--raw] [--solver daqp]``.
+Usage: ``python examples/tune_qp.py [--seconds 6] [--raw] [--solver auto]``.
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seconds", type=float, default=6.0)
     ap.add_argument("--raw", action="store_true", help="feed the jumping reference to the QP without ruckig")
-    ap.add_argument("--solver", default="daqp")
+    ap.add_argument("--solver", default="auto", help="auto, daqp, osqp or qpsolvers:<name>")
     args = ap.parse_args()
 
     kps = [100.0, 400.0, 1000.0]

@@ -18,15 +18,15 @@ Safe answers instead of exceptions in the loop (``QPResult.status``):
   (acceleration > velocity > position) so the arm moves back at maximum
   allowed effort; torque limits still hold.
 * ``relaxed`` — the box and the torque limits do not intersect: a second QP
-  with slack s ≥ 0 on the box (lo − s ≤ a ≤ hi + s, cost ρ₁·Σs + ½ρ₂·‖s‖²)
-  keeps the torque limits hard and relaxes the kinematic box as little as
-  possible; ``slack`` reports max s [rad/s²].
+  with slack s ≥ 0 on the box (lo − s ≤ a ≤ hi + s, cost ρ₁·Σs + ½ρ₂·‖s‖²,
+  task cost normalised to ≤ 1) keeps the torque limits hard and relaxes the
+  kinematic box as little as possible; ``slack`` reports max s [rad/s²].
 * ``invalid_reference`` — non-finite reference: tracking is dropped, the
   posture/damping tasks hold the arm.
 * ``invalid_state`` — non-finite q or v: a = 0, the last valid torque, q⁺ and
   v⁺ equal to the last valid state.
 * ``solver_failed`` — both QPs failed: brake, a = clip(−v/dt) into the box,
-  torque clipped to its limits.
+  torque clipped to its limits (the torque limits hold in every case).
 
 A singular pose needs nothing special (posture and regularisation keep the
 Hessian positive definite, the tip task becomes damped least squares); it is
@@ -98,8 +98,9 @@ class QPConfig:
     dt [s] control period; tip_kp [1/s²], tip_kd [1/s], tip_max_error [m]
     (None: no clipping); posture gains [1/s²], [1/s]; ``q_posture`` [rad]
     (None: middle of the joint range); slack weights ρ₁ (linear), ρ₂
-    (quadratic); ``solver``: ``"daqp"`` (dense active set, default, fastest),
-    ``"osqp"`` (persistent workspace, warm-started) or ``"qpsolvers:<name>"``;
+    (quadratic); ``solver``: ``"auto"`` (default: DAQP if installed, else OSQP),
+    ``"daqp"`` (dense active set, fastest), ``"osqp"`` (persistent workspace,
+    warm-started) or ``"qpsolvers:<name>"``;
     ``eps`` OSQP tolerance.
     """
 
@@ -115,9 +116,9 @@ class QPConfig:
     damping_weight: float = 0.0
     damping_kd: float = 10.0
     regularization: float = 1e-6
-    slack_linear: float = 1e3
+    slack_linear: float = 1e4
     slack_quadratic: float = 1e2
-    solver: str = "daqp"
+    solver: str = "auto"
     eps: float = 1e-9
     singular_threshold: float = 1e-4
 
@@ -145,6 +146,8 @@ class QPController:
     ``tasks``, ``box_constraints`` (priority order) and ``constraints``
     override the defaults built from ``config`` and ``limits``.
     """
+
+    TORQUE_TOL = 1e-9  # [N·m] rounding allowance in the clip+verify step, ≪ the 1e-6 contract
 
     def __init__(self, model, frame: str | int, limits: JointLimits | None = None,
                  config: QPConfig | None = None, tasks: Sequence[Task] | None = None,
@@ -307,27 +310,24 @@ class QPController:
         slack = 0.0
         out = self._primary.solve(H, c, lo, hi, G, h)
         iterations = out.iterations
-        a = out.x
-        if a is not None:
-            a = np.minimum(np.maximum(a, lo), hi)
-        else:
-            a, s, it2, why = self._solve_relaxed(H, c, lo, hi, G, h)
+        done = False
+        if out.x is not None:
+            a, tau, done = self._finalize(state, out.x, lo, hi)
+        if not done:
+            a_r, s, it2, why = self._solve_relaxed(H, c, lo, hi, G, h)
             iterations += it2
-            if a is not None:
+            if a_r is not None:
                 slack = float(s.max())
-                lo, hi = lo - s, hi + s
-                a = np.minimum(np.maximum(a, lo), hi)
+                a, tau, done = self._finalize(state, a_r, lo - s, hi + s)
+            if done:
                 if status in (QPStatus.OK, QPStatus.RECOVERING):
                     status = QPStatus.RELAXED
                 reasons.append(f"box and torque limits conflict ({out.status}): box relaxed by {slack:.3g} rad/s²")
             else:
                 status = QPStatus.SOLVER_FAILED
                 reasons.append(f"QP failed ({out.status}; relaxed: {why}): braking")
-                a = np.minimum(np.maximum(-v / dt, lo), hi)
+                a, tau = self._brake(state, lo, hi)
 
-        tau = state.M @ a + state.h
-        if self._torque is not None:
-            a, tau = self._enforce_torque(state, a, tau)
         v_next = v + a * dt
         q_next = q + (v + 0.5 * dt * a) * dt
         self._last_tau, self._last_q, self._last_v = tau, q_next, v_next
@@ -339,10 +339,13 @@ class QPController:
                        G: np.ndarray, h: np.ndarray):
         """QP over x = [a, s]: box softened by s ≥ 0, torque rows hard (always feasible)."""
         n, cfg = self.n, self.config
+        # Normalise the task part so that the slack penalty dominates whatever the task gains:
+        # the relaxation is then (nearly) the smallest possible, the tasks only break ties.
+        scale = 1.0 / max(1.0, float(np.abs(H).max()), float(np.abs(c).max()))
         P2 = np.zeros((2 * n, 2 * n))
-        P2[:n, :n] = H
+        P2[:n, :n] = H * scale
         P2[n:, n:] = cfg.slack_quadratic * np.eye(n)
-        c2 = np.concatenate([c, np.full(n, cfg.slack_linear)])
+        c2 = np.concatenate([c * scale, np.full(n, cfg.slack_linear)])
         G2 = np.vstack([self._g_relax_top, np.hstack([G, np.zeros((G.shape[0], n))])])
         h2 = np.concatenate([hi, -lo, h])
         out = self._relaxed.solve(P2, c2, self._lb_relax, self._ub_relax, G2, h2)
@@ -350,18 +353,40 @@ class QPController:
             return None, None, out.iterations, out.status
         return out.x[:n], np.maximum(out.x[n:], 0.0), out.iterations, out.status
 
-    def _enforce_torque(self, state: ControlState, a: np.ndarray, tau: np.ndarray):
-        """Clip+verify: if solver tolerance left |τ| above τ_max, move a so τ = clip(τ).
+    def _finalize(self, state: ControlState, a: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+        """Clip+verify a solver's answer: returns (a, τ, ok).
 
-        δa = M⁻¹·(clip(τ) − τ); the change is of the order of the solver
-        tolerance (≪ 1e-6), so the kinematic limits are not affected at that level.
+        a is clipped into [lo, hi]; if the solver tolerance left |τ| above
+        τ_max, a moves by δa = M⁻¹·(clip(τ) − τ), alternated with clipping
+        (projections onto two convex sets, at most 5 rounds).  ``ok`` is False
+        when they do not meet (the problem was infeasible after all).  Torques
+        within ``TORQUE_TOL`` [N·m] of the limit (rounding at a vertex of the
+        feasible set) count as satisfied.
         """
+        a = np.minimum(np.maximum(a, lo), hi)
+        tau = state.M @ a + state.h
+        if self._torque is None:
+            return a, tau, True
         tau_max = self._torque.tau_max
-        over = np.abs(tau) > tau_max
-        if over.any():
-            tau_c = np.clip(tau, -tau_max, tau_max)
-            a = a + np.linalg.solve(state.M, tau_c - tau)
-            tau = tau_c
+        tau_ok = tau_max + self.TORQUE_TOL
+        for _ in range(5):
+            if not (np.abs(tau) > tau_ok).any():
+                return a, tau, True
+            tau_c = np.minimum(np.maximum(tau, -tau_max), tau_max)
+            a_t = a + np.linalg.solve(state.M, tau_c - tau)
+            a = np.minimum(np.maximum(a_t, lo), hi)
+            if not (a != a_t).any():
+                return a, tau_c, True
+            tau = state.M @ a + state.h
+        return a, tau, False
+
+    def _brake(self, state: ControlState, lo: np.ndarray, hi: np.ndarray):
+        """Last resort: a = clip(−v/dt, lo, hi), then τ clipped to its limits and a = M⁻¹(τ − h)."""
+        a = np.minimum(np.maximum(-state.v / state.dt, lo), hi)
+        tau = state.M @ a + state.h
+        if self._torque is not None:
+            tau = np.minimum(np.maximum(tau, -self._torque.tau_max), self._torque.tau_max)
+            a = np.linalg.solve(state.M, tau - state.h)
         return a, tau
 
     def _hold(self, q: np.ndarray, v: np.ndarray, t0: float) -> QPResult:

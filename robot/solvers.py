@@ -43,7 +43,7 @@ class SolveOutcome:
 class OsqpBackend:
     """Persistent OSQP workspace for a problem with dense P (n×n) and dense G (m×n)."""
 
-    def __init__(self, n: int, m: int, eps: float = 1e-9, max_iter: int = 4000) -> None:
+    def __init__(self, n: int, m: int, eps: float = 1e-9, max_iter: int = 1000) -> None:
         import osqp
 
         self._osqp = osqp
@@ -92,9 +92,12 @@ class OsqpBackend:
         res = self._solver.solve(raise_error=False)  # failures are reported through the status
         status = res.info.status_val
         st = self._osqp.SolverStatus
-        ok = status in (st.OSQP_SOLVED, st.OSQP_SOLVED_INACCURATE)
         infeasible = status in (st.OSQP_PRIMAL_INFEASIBLE, st.OSQP_PRIMAL_INFEASIBLE_INACCURATE)
-        x = np.array(res.x) if ok and np.all(np.isfinite(res.x)) else None
+        # An iterate stopped by max_iter is still close to optimal: the controller clips it into the
+        # box and verifies the torque rows, so it is used rather than relaxing the problem.
+        usable = status in (st.OSQP_SOLVED, st.OSQP_SOLVED_INACCURATE, st.OSQP_MAX_ITER_REACHED,
+                            st.OSQP_TIME_LIMIT_REACHED)
+        x = np.array(res.x) if usable and res.x is not None and math.isfinite(float(res.x @ res.x)) else None
         return SolveOutcome(x, str(res.info.status), infeasible, int(res.info.iter))
 
 
@@ -157,9 +160,19 @@ class QpsolversBackend:
         return SolveOutcome(np.asarray(x), "solved", False, 0)
 
 
+def daqp_available() -> bool:
+    """Whether the ``daqp`` package can be imported."""
+    import importlib.util
+
+    return importlib.util.find_spec("daqp") is not None
+
+
 def make_backend(solver: str, n: int, m: int, eps: float = 1e-9) -> OsqpBackend | DaqpBackend | QpsolversBackend:
     """``"osqp"`` → persistent :class:`OsqpBackend`; ``"daqp"`` → :class:`DaqpBackend`;
-    ``"qpsolvers:<name>"`` or any other qpsolvers name → :class:`QpsolversBackend`."""
+    ``"auto"`` → DAQP when installed, else OSQP; ``"qpsolvers:<name>"`` or any other
+    qpsolvers name → :class:`QpsolversBackend`."""
+    if solver == "auto":
+        solver = "daqp" if daqp_available() else "osqp"
     if solver == "osqp":
         return OsqpBackend(n, m, eps=eps)
     if solver == "daqp":

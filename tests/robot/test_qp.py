@@ -11,10 +11,12 @@ from hypothesis import strategies as st
 from robot.constraints import viable_velocity_bound
 from robot.errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from robot.limits import JointLimits
+from robot.solvers import daqp_available
 from robot.qp import QPConfig, QPController, QPStatus
 from robot.superlimb import SuperLimbParams, build_pinocchio_model
 
 TOL = 1e-6
+SOLVERS = ["daqp", "osqp"] if daqp_available() else ["osqp"]
 PARAMS = SuperLimbParams()
 LIM = JointLimits.from_superlimb(PARAMS)
 
@@ -33,7 +35,7 @@ def _viable(q: np.ndarray, v: np.ndarray, dt: float, lim: JointLimits = LIM) -> 
     return bool(inside and np.all(v <= np.maximum(up, 0)) and np.all(-v <= np.maximum(down, 0)))
 
 
-@pytest.fixture(scope="module", params=["daqp", "osqp"])
+@pytest.fixture(scope="module", params=SOLVERS)
 def controller(request) -> QPController:
     return QPController.for_superlimb(config=QPConfig(solver=request.param))
 
@@ -43,7 +45,7 @@ def controller(request) -> QPController:
 def test_random_states_and_references_respect_every_limit(seed, kp, far) -> None:
     """Random viable state, random reference (possibly unreachable), 25 closed-loop steps."""
     rng = np.random.default_rng(seed)
-    for solver in ("daqp", "osqp"):
+    for solver in SOLVERS:
         ctl = QPController.for_superlimb(config=QPConfig(solver=solver, tip_kp=kp, tip_kd=2 * np.sqrt(kp)))
         q = rng.uniform(LIM.q_min, LIM.q_max)
         v = rng.uniform(-LIM.v_max, LIM.v_max)
@@ -214,6 +216,7 @@ def test_misuse_raises_typed_errors() -> None:
 
 
 def test_solvers_agree() -> None:
+    pytest.importorskip("daqp")
     a = QPController.for_superlimb(config=QPConfig(solver="daqp"))
     b = QPController.for_superlimb(config=QPConfig(solver="osqp"))
     c = QPController.for_superlimb(config=QPConfig(solver="qpsolvers:daqp"))
