@@ -319,7 +319,10 @@ class QPController:
             if a_r is not None:
                 slack = float(s.max())
                 a, tau, done = self._finalize(state, a_r, lo - s, hi + s)
-            if done:
+            if done and slack <= 1e-9:  # the primary answer was only inaccurate, nothing had to give
+                slack = 0.0
+                reasons.append(f"primary QP inaccurate ({out.status}): answer of the slack QP, zero slack")
+            elif done:
                 if status in (QPStatus.OK, QPStatus.RECOVERING):
                     status = QPStatus.RELAXED
                 reasons.append(f"box and torque limits conflict ({out.status}): box relaxed by {slack:.3g} rad/s²")
