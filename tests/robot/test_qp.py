@@ -147,7 +147,6 @@ def test_over_speed_start_recovers() -> None:
 def test_singular_outstretched_pose() -> None:
     """Knife tip on the upper-arm line (max reach): no exception, reported, limits hold."""
     ctl = QPController.for_superlimb()
-    model, data, fid = build_pinocchio_model(PARAMS)
     grid = np.linspace(LIM.q_min[2], LIM.q_max[2], 20001)
     manip = [ctl.step(np.array([0.0, 0.2, e]), np.zeros(3)).manipulability for e in grid[::100]]
     e_sing = grid[::100][int(np.argmin(manip))]
