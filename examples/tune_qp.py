@@ -9,7 +9,7 @@ acceleration exactly through the inverse dynamics).
 
 Columns: RMS / max tip error [mm]; the smallest margin to the position
 limits [rad], to the velocity limits [rad/s] and to the torque limits as a
-fraction of τ_max (negative would be a violation); how many steps were not
+fraction of τ_max (−0.00 is a saturated torque; below −1e-6 would be a violation); how many steps were not
 ``ok``; the median step time [µs].
 
 Usage: ``python examples/tune_qp.py [--seconds 6] [--raw] [--solver auto]``.
