@@ -76,6 +76,10 @@ class Features:
     nb: np.ndarray
     nbx: np.ndarray | None
     nx: np.ndarray | None
+    nx_lo: np.ndarray | None
+    nx_hi: np.ndarray | None
+    nw_lo: np.ndarray | None
+    nw_hi: np.ndarray | None
     col_z: np.ndarray
     col_x: np.ndarray | None
     scale_x: float
@@ -205,7 +209,7 @@ def build_features(X: np.ndarray, Y: np.ndarray, idx: np.ndarray, *, leaf_size: 
     col_z[:, dy + 2 + K] = na
     col_z[:, dy + 3 + K] = 1.0
 
-    xs = nx = col_x = nbx = None
+    xs = nx = col_x = nbx = nx_lo = nx_hi = nw_lo = nw_hi = None
     c_x = margin_constant(d + dy + 4, unit_roundoff)
     if full_screen:
         col_x = np.empty((n, dy + 2 + d + 2), dtype=np.float32)
@@ -220,6 +224,8 @@ def build_features(X: np.ndarray, Y: np.ndarray, idx: np.ndarray, *, leaf_size: 
         nxx = np.maximum(nxx, _NORM_FLOOR)
         nx = ((1.0 - c_x) * nxx).astype(np.float32)
         nbx = ((1.0 + c_x) * nw).astype(np.float32)
+        nx_lo, nx_hi = nx, ((1.0 + c_x) * nxx).astype(np.float32)
+        nw_lo, nw_hi = ((1.0 - c_x) * nw).astype(np.float32), nbx
         col_x[:, :dy] = ws
         col_x[:, dy] = nbx
         col_x[:, dy + 1] = 1.0
@@ -227,7 +233,8 @@ def build_features(X: np.ndarray, Y: np.ndarray, idx: np.ndarray, *, leaf_size: 
         col_x[:, dy + 3 + d] = 1.0
         xs = col_x[:, dy + 2:dy + 2 + d]
     return Features(perm=idx[perm], leaf_start=leaf_start, z=z, w=w, zs=zs, ws=ws, xs=xs,
-                    na=na, nb=nb, nbx=nbx, nx=nx, col_z=col_z, col_x=col_x, scale_x=sx,
+                    na=na, nb=nb, nbx=nbx, nx=nx, nx_lo=nx_lo, nx_hi=nx_hi,
+                    nw_lo=nw_lo, nw_hi=nw_hi, col_z=col_z, col_x=col_x, scale_x=sx,
                     scale_y=sy, delta_z=delta_z, delta_y=delta_y, c_z=c_z, c_x=c_x)
 
 

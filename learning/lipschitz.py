@@ -195,7 +195,7 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
         from tqdm.auto import tqdm
         bar = tqdm(total=N, unit="pt", desc="Lipschitz quotients")
     pool = ThreadPoolExecutor(max_workers=n_jobs) if n_jobs > 1 else None
-    limit = _blas_single_thread() if (pool is not None and backend == "numpy") else nullcontext()
+    limit = _blas_single_thread() if backend == "numpy" else nullcontext()
     try:
         with limit:
             for idx in group_idx:
