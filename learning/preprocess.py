@@ -275,10 +275,16 @@ def window_lags(window_s: float, rate_hz: float) -> int:
     return max(1, int(round(window_s * rate_hz)))
 
 
-def causal_windows(demos: Demonstrations, window_s: float, *, rate_hz: float | None = None) -> WindowedData:
+def causal_windows(demos: Demonstrations, window_s: float, *, rate_hz: float | None = None,
+                   rms: bool = False) -> WindowedData:
     """Causal sliding windows of ``obs`` that never cross a trial boundary.
 
     ``L = window_lags(window_s, rate)`` with ``rate = rate_hz or demos.rate_hz``.
+    With ``rms=True`` the window is divided by √L, so that ‖x_i − x_j‖ is the RMS
+    over lags of the per-sample distance ‖o_{i−l} − o_{j−l}‖: distances, and so
+    Lipschitz quotients, keep the scale of one sample whatever the window length
+    (without it a longer window inflates every distance by √L and deflates every
+    quotient, which would bias a comparison of window lengths).
     The first L−1 samples of each trial have no full window and are dropped; a
     trial with fewer than L samples is skipped with a :class:`UserWarning`.
 
@@ -318,8 +324,11 @@ def causal_windows(demos: Demonstrations, window_s: float, *, rate_hz: float | N
             raise ValueError(f"no trial is long enough for a {window_s} s window ({L} samples at "
                              f"{rate} Hz); {msg}")
         warnings.warn(msg, UserWarning, stacklevel=2)
+    X = np.concatenate(Xs)
+    if rms:
+        X /= math.sqrt(L)
     return WindowedData(
-        X=np.concatenate(Xs), Y=np.concatenate(Ys), trial=np.concatenate(trial),
+        X=X, Y=np.concatenate(Ys), trial=np.concatenate(trial),
         subject=np.concatenate(subject),
         mode=np.concatenate(mode) if mode and len(mode) == len(Xs) else None,
         voluntary=np.concatenate(vol) if vol and len(vol) == len(Xs) else None,
@@ -354,7 +363,7 @@ class Preprocessor:
 
 
 def preprocess(demos: Demonstrations, *, target_hz: float = 10.0, window_s: float = 1.0,
-               scope: Literal["channel", "sensor"] = "channel",
+               scope: Literal["channel", "sensor"] = "channel", rms: bool = False,
                standardizer: Preprocessor | None = None) -> tuple[WindowedData, Preprocessor]:
     """Downsample → standardise ``obs`` and ``act`` → causal windows.
 
@@ -362,7 +371,7 @@ def preprocess(demos: Demonstrations, *, target_hz: float = 10.0, window_s: floa
     the downsampled ``demos`` (pass training trials only); a fitted
     :class:`Preprocessor` passed in is reused as it is (its scalers; ``target_hz``
     and ``window_s`` still come from the arguments). The voluntary channel is
-    downsampled but not standardised.
+    downsampled but not standardised. ``rms`` is passed to :func:`causal_windows`.
 
     Returns:
         ``(windows, preprocessor)``; ``preprocessor.transform(test_demos)`` applies
@@ -377,7 +386,7 @@ def preprocess(demos: Demonstrations, *, target_hz: float = 10.0, window_s: floa
         if not isinstance(standardizer, Preprocessor):
             raise TypeError(f"standardizer must be a fitted Preprocessor, got {type(standardizer).__name__}")
         pre = standardizer
-    return causal_windows(pre.standardize(low), window_s), pre
+    return causal_windows(pre.standardize(low), window_s, rms=rms), pre
 
 
 # ------------------------------------------------------------------- splits
