@@ -1,0 +1,331 @@
+"""The predictability analysis of Song & Asada, end to end, on any data set.
+
+1. preprocessing: downsample, standardise (fitted on the data), causal windows
+   normalised by √L (:func:`learning.preprocess.causal_windows` with ``rms=True``);
+2. point-wise quotients q_i without modes; K at percentiles 50…100;
+3. HMM task modes fitted on the per-sample observations (not the windows: see
+   :mod:`learning.modes`); quotients within modes; the same within random
+   segmentations of equal group sizes; one-sided Mann–Whitney test;
+4. the voluntary share per trial at each K, without and with modes, with the
+   paired one-sided Wilcoxon test over trials;
+5. a search for missing information: every (window length, number of modes)
+   candidate ranked by how far its modes lower the quotients *beyond* what a
+   random segmentation of the same group sizes does.
+
+:func:`analyze` returns an :class:`AnalysisResult` with the JSON-ready ``report``
+(keys in DESIGN.md / issue 4) and the arrays the plots need. Plotting and files
+live in :mod:`mpcshare.report` (matplotlib is not a dependency of ``learning``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+from scipy import stats
+
+from .data import Demonstrations
+from .lipschitz import pointwise_quotients
+from .modes import TaskModes, mode_agreement, mode_ari
+from .predictability import (compare_segmentation, compare_voluntary_shares, random_segmentation,
+                             threshold_from_percentile, voluntary_share)
+from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample
+
+__all__ = ["AnalysisConfig", "AnalysisResult", "analyze", "SIGNIFICANCE"]
+
+SIGNIFICANCE = 1e-3  # p-value below which the report claims that modes lower the quotients
+
+
+@dataclass(frozen=True)
+class AnalysisConfig:
+    """Settings of :func:`analyze` (defaults: the paper's, see README).
+
+    Attributes:
+        target_hz: rate after anti-aliased downsampling [Hz].
+        window_s: causal window of observations [s].
+        scope: standardisation, "sensor" (unit RMS magnitude per 3-channel sensor,
+            as the paper) or "channel" (z-score).
+        n_modes: HMM task modes.
+        K: thresholds for the voluntary share (the paper: 5 and 10).
+        percentiles: percentiles of q reported as candidate K.
+        n_random: random segmentations compared against the HMM.
+        random_method: "permutation" (random groups of equal sizes) or "contiguous".
+        search_windows, search_modes: the candidate grid of the search (empty: no search).
+        search_random: random segmentations per search candidate.
+        hmm_restarts: EM restarts of each HMM fit.
+        seed: seed of everything random.
+    """
+
+    target_hz: float = 10.0
+    window_s: float = 1.0
+    scope: str = "sensor"
+    n_modes: int = 4
+    K: tuple[float, ...] = (5.0, 10.0)
+    percentiles: tuple[float, ...] = (50.0, 60.0, 70.0, 80.0, 90.0, 95.0, 99.0, 100.0)
+    n_random: int = 20
+    random_method: str = "permutation"
+    search_windows: tuple[float, ...] = (0.5, 1.0, 2.0)
+    search_modes: tuple[int, ...] = (2, 3, 4, 5, 6)
+    search_random: int = 3
+    hmm_restarts: int = 5
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not self.target_hz > 0:
+            raise ValueError(f"target_hz must be > 0, got {self.target_hz}")
+        if not self.window_s >= 0:
+            raise ValueError(f"window_s must be >= 0, got {self.window_s}")
+        if self.scope not in ("sensor", "channel"):
+            raise ValueError(f"scope must be 'sensor' or 'channel', got {self.scope!r}")
+        if self.n_modes < 1:
+            raise ValueError(f"n_modes must be >= 1, got {self.n_modes}")
+        if not self.K or any(not k > 0 for k in self.K):
+            raise ValueError(f"K must be a non-empty list of positive thresholds, got {self.K}")
+        if self.n_random < 1:
+            raise ValueError(f"n_random must be >= 1, got {self.n_random}")
+        if any(m < 1 for m in self.search_modes):
+            raise ValueError(f"search_modes must be >= 1, got {self.search_modes}")
+
+
+@dataclass
+class AnalysisResult:
+    """What :func:`analyze` found: the report and the arrays behind it.
+
+    Attributes:
+        report: JSON-ready dict (see module docstring).
+        windows: the preprocessed data at ``config.window_s``.
+        q: (N,) quotients without modes; q_modes: (N,) within HMM modes;
+        q_random: (n_random, N) within random segmentations.
+        modes: (N,) HMM mode of each window row (Viterbi).
+        true_modes: (N,) ground-truth labels or None.
+        mode_model: the fitted :class:`TaskModes`.
+        shares: {K: (trial ids, shares without modes, shares with modes)}.
+    """
+
+    report: dict[str, Any]
+    config: AnalysisConfig
+    windows: WindowedData
+    q: np.ndarray
+    q_modes: np.ndarray
+    q_random: np.ndarray
+    modes: np.ndarray
+    true_modes: np.ndarray | None
+    mode_model: TaskModes
+    shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+
+def _finite_stats(q: np.ndarray) -> dict[str, float]:
+    """p50, p90, p99 and max of quotients; an infinite value is reported as None (JSON null)."""
+    return {"p50": _json_float(np.percentile(q, 50)), "p90": _json_float(np.percentile(q, 90)),
+            "p99": _json_float(np.percentile(q, 99)), "max": _json_float(np.max(q)),
+            "n_inf": int(np.isinf(q).sum())}
+
+
+def _paired_less(a: np.ndarray, b: np.ndarray) -> dict[str, float]:
+    """One-sided Wilcoxon signed-rank test a < b over paired trials, with the
+    matched-pairs rank-biserial effect size (R⁺ − R⁻)/(R⁺ + R⁻) of a − b."""
+    d = a - b
+    nz = d[d != 0]
+    if len(nz) == 0:
+        return {"statistic": 0.0, "p_value": 1.0, "effect_size": 0.0}
+    res = stats.wilcoxon(a, b, alternative="less")
+    ranks = stats.rankdata(np.abs(nz))
+    eff = float((ranks[nz > 0].sum() - ranks[nz < 0].sum()) / ranks.sum())
+    return {"statistic": float(res.statistic), "p_value": float(res.pvalue), "effect_size": eff}
+
+
+def _json_float(x: float) -> float | None:
+    return None if not math.isfinite(x) else float(x)
+
+
+class _Steps:
+    """A step-level progress bar (tqdm) with timings for the report."""
+
+    def __init__(self, total: int, enabled: bool) -> None:
+        self.bar = None
+        if enabled:
+            from tqdm.auto import tqdm
+            self.bar = tqdm(total=total, desc="analysis", unit="step")
+        self.timings: dict[str, float] = {}
+        self._t = time.perf_counter()
+
+    def done(self, name: str) -> None:
+        now = time.perf_counter()
+        self.timings[name] = round(now - self._t, 3)
+        self._t = now
+        if self.bar is not None:
+            self.bar.set_postfix_str(f"{name} done")
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _per_sample_features(std: Demonstrations) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked standardised observations and trial lengths (the HMM's input)."""
+    return np.concatenate([tr.obs for tr in std.trials]), np.array([len(tr) for tr in std.trials])
+
+
+def _fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: AnalysisConfig
+               ) -> tuple[TaskModes, np.ndarray]:
+    model = TaskModes(n_modes=n_modes, n_restarts=config.hmm_restarts, seed=config.seed).fit(Z, lengths)
+    return model, model.predict(Z, lengths)
+
+
+def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
+            fitted: dict[int, tuple[TaskModes, np.ndarray]], quotient: Callable[..., np.ndarray],
+            ) -> list[dict[str, Any]]:
+    """Rank (window, n_modes) candidates by log10(median q_random / median q_modes)."""
+    K0 = config.K[0]
+    rows = []
+    rng = np.random.default_rng(config.seed + 1)
+    for n_modes in config.search_modes:
+        if n_modes not in fitted:
+            fitted[n_modes] = _fit_modes(Z, lengths, n_modes, config)
+    for window in config.search_windows:
+        w = causal_windows(std, window, rms=True)
+        q0 = quotient(w.X, w.Y)
+        share0 = float(np.mean(list(voluntary_share(q0, w.trial, K0).values())))
+        for n_modes in config.search_modes:
+            model, labels = fitted[n_modes]
+            g = labels[w.source_index]
+            qm = quotient(w.X, w.Y, g)
+            qr = np.stack([quotient(w.X, w.Y, random_segmentation(g, rng, config.random_method))
+                           for _ in range(config.search_random)])
+            med_m, med_r = float(np.median(qm)), float(np.median(qr))
+            share_m = float(np.mean(list(voluntary_share(qm, w.trial, K0).values())))
+            share_r = float(np.mean([np.mean(list(voluntary_share(r, w.trial, K0).values())) for r in qr]))
+            gain = math.log10(med_r / med_m) if med_m > 0 and med_r > 0 else 0.0
+            rows.append({
+                "window_s": float(window), "n_modes": int(n_modes),
+                "median_q_without_modes": float(np.median(q0)),
+                "median_q_modes": med_m, "median_q_random": med_r,
+                "gain_beyond_random_log10": gain,
+                f"voluntary_share_K{K0:g}": {"without_modes": share0, "with_modes": share_m,
+                                             "random": share_r},
+                "hmm_bic": float(model.bic(Z, lengths)),
+            })
+    rows.sort(key=lambda r: -r["gain_beyond_random_log10"])
+    for rank, r in enumerate(rows, 1):
+        r["rank"] = rank
+    return rows
+
+
+def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
+            progress: bool = False) -> AnalysisResult:
+    """Run the whole predictability analysis (see module docstring).
+
+    Args:
+        demos: the demonstrations (any rate ≥ ``config.target_hz``).
+        config: settings; defaults are the paper's.
+        progress: show progress bars (steps, and the quotient engine's).
+
+    Raises:
+        ValueError: data too short for the window, or settings that cannot work.
+    """
+    config = config or AnalysisConfig()
+    if demos.rate_hz < config.target_hz:
+        raise ValueError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
+                         f"{config.target_hz:g} Hz; lower --rate")
+    n_search = len(config.search_windows) * len(config.search_modes)
+    steps = _Steps(6 if n_search else 5, progress)
+
+    # 1. preprocessing
+    low = downsample(demos, config.target_hz) if demos.rate_hz != config.target_hz else demos
+    pre = Preprocessor(obs=Standardizer(config.scope, field="obs").fit(low),
+                       act=Standardizer(config.scope, field="act").fit(low),
+                       target_hz=config.target_hz, window_s=config.window_s)
+    std = pre.standardize(low)
+    w = causal_windows(std, config.window_s, rms=True)
+    steps.done("preprocess")
+
+    # 2. quotients without modes
+    q = pointwise_quotients(w.X, w.Y, progress=progress)
+    K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
+    steps.done("quotients")
+
+    # 3. HMM modes, quotients within modes and within random segmentations
+    Z, lengths = _per_sample_features(std)
+    fitted: dict[int, tuple[TaskModes, np.ndarray]] = {}
+    fitted[config.n_modes] = _fit_modes(Z, lengths, config.n_modes, config)
+    model, labels = fitted[config.n_modes]
+    modes = labels[w.source_index]
+    true = w.mode if w.mode is not None and np.any(w.mode >= 0) else None
+    agreement = ari = None
+    if true is not None:
+        agreement = float(mode_agreement(modes, true)[0])
+        ari = float(mode_ari(modes, true))
+    steps.done("modes")
+    comp = compare_segmentation(w.X, w.Y, modes, n_random=config.n_random, seed=config.seed,
+                                method=config.random_method)
+    q_modes, q_random = comp.q_segmentation, comp.q_random
+    steps.done("segmentation test")
+
+    # 4. voluntary share per trial: without modes, within HMM modes, within random
+    #    segmentations. Quotients within any grouping can only fall (fewer partners),
+    #    so the paired test that means something is HMM modes against random groups
+    #    of the same sizes ("p_value"); the test against no modes is reported too.
+    share_report: dict[str, Any] = {}
+    shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    for t in compare_voluntary_shares(q_modes, q, w.trial, config.K, alternative="less"):
+        ids = t.trials
+        rand = np.mean([[voluntary_share(r, w.trial, t.K)[i] for i in ids] for r in q_random], axis=0)
+        vs_random = _paired_less(t.shares_a, rand)
+        shares[t.K] = (ids, t.shares_b, t.shares_a)
+        mean_without, mean_with = float(np.mean(t.shares_b)), float(np.mean(t.shares_a))
+        share_report[f"{t.K:g}"] = {
+            "without_modes": mean_without, "with_modes": mean_with, "random": float(np.mean(rand)),
+            "fold_reduction": _json_float(mean_without / mean_with) if mean_with > 0 else None,
+            **vs_random,
+            "test": "wilcoxon signed-rank over trials, one-sided: share within HMM modes < share "
+                    "within random segmentations of equal group sizes",
+            "p_value_vs_without_modes": float(t.p_value),
+            "n_trials": int(len(ids)),
+        }
+    steps.done("voluntary share")
+
+    # 5. search for missing information
+    candidates = _search(std, Z, lengths, config, fitted, pointwise_quotients) if n_search else []
+    if n_search:
+        steps.done("search")
+    steps.close()
+
+    test = comp.test
+    report: dict[str, Any] = {
+        "n_samples": int(len(w)),
+        "n_trials": int(len(np.unique(w.trial))),
+        "input_dim": int(w.X.shape[1]),
+        "output_dim": int(w.Y.shape[1]),
+        "rate_hz": float(config.target_hz),
+        "window_s": float(config.window_s),
+        "lags": int(w.lags),
+        "scope": config.scope,
+        "quotients": {**_finite_stats(q), "K_by_percentile": K_by_percentile},
+        "quotients_with_modes": _finite_stats(q_modes),
+        "modes": {
+            "n_modes": int(config.n_modes), "agreement": agreement, "ari": ari,
+            "occupancy": [float(np.mean(modes == k)) for k in range(config.n_modes)],
+            "converged": bool(model.converged_), "loglik": float(model.loglik_),
+            "bic": float(model.bic(Z, lengths)),
+        },
+        "segmentation_test": {
+            "test": "mann-whitney U, one-sided (HMM quotients smaller)",
+            "statistic": float(test.statistic), "p_value": float(test.p_value),
+            "effect_size": float(test.effect_size), "effect_size_name": "Cliff's delta",
+            "hmm_median_q": float(test.median_a), "random_median_q": float(test.median_b),
+            "n_random": int(config.n_random), "random_method": config.random_method,
+            "significant": bool(test.p_value < SIGNIFICANCE and test.median_a < test.median_b),
+            "alpha": SIGNIFICANCE,
+        },
+        "voluntary_share": share_report,
+        "candidates": candidates,
+        "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(config).items()},
+        "timings_s": steps.timings,
+    }
+    return AnalysisResult(report=report, config=config, windows=w, q=q, q_modes=q_modes,
+                          q_random=q_random, modes=modes, true_modes=true, mode_model=model,
+                          shares=shares)
