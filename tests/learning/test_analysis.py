@@ -1,0 +1,91 @@
+"""The end-to-end predictability analysis (learning.analysis)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from learning.analysis import AnalysisConfig, analyze
+from sim.demonstrator import GeneratorConfig, generate_demonstrations
+
+FAST = dict(n_random=3, search_windows=(), search_modes=())
+
+
+@pytest.fixture(scope="module")
+def result():
+    demos = generate_demonstrations(2, 5, seed=1)
+    return analyze(demos, AnalysisConfig(**FAST))
+
+
+def test_report_has_the_documented_keys(result):
+    r = result.report
+    for key in ("n_samples", "input_dim", "output_dim", "window_s", "quotients", "modes",
+                "segmentation_test", "voluntary_share", "candidates"):
+        assert key in r
+    assert {"p50", "p90", "p99", "max", "K_by_percentile"} <= set(r["quotients"])
+    assert {"n_modes", "agreement", "ari"} <= set(r["modes"])
+    assert {"statistic", "p_value", "effect_size", "hmm_median_q", "random_median_q"} <= \
+        set(r["segmentation_test"])
+    assert set(r["voluntary_share"]) == {"5", "10"}
+    for v in r["voluntary_share"].values():
+        assert {"without_modes", "with_modes", "p_value"} <= set(v)
+    assert r["input_dim"] == 9 * 10 and r["output_dim"] == 9
+    json.dumps(r, allow_nan=False)  # strictly JSON
+
+
+def test_modes_found_and_they_explain_confounding(result):
+    r = result.report
+    assert r["modes"]["agreement"] > 0.93
+    t = r["segmentation_test"]
+    assert t["significant"] and t["hmm_median_q"] < t["random_median_q"]
+    v = r["voluntary_share"]["5"]
+    assert v["with_modes"] < v["random"] < v["without_modes"] + 1e-12
+    assert v["fold_reduction"] > 2.5
+
+
+def test_quotients_within_modes_never_exceed_quotients_without(result):
+    assert np.all(result.q_modes <= result.q + 1e-12)
+    assert np.all(result.q_random <= result.q[None, :] + 1e-12)
+
+
+def test_no_mode_structure_claims_no_gain():
+    demos = generate_demonstrations(2, 4, seed=2, config=GeneratorConfig(single_regime=True))
+    r = analyze(demos, AnalysisConfig(**FAST)).report
+    assert not r["segmentation_test"]["significant"]
+    assert r["voluntary_share"]["5"]["p_value"] > 0.05
+
+
+def test_search_ranks_candidates():
+    demos = generate_demonstrations(1, 4, seed=0)
+    r = analyze(demos, AnalysisConfig(n_random=2, search_windows=(0.5, 1.0), search_modes=(1, 4),
+                                      hmm_restarts=1)).report
+    c = r["candidates"]
+    assert len(c) == 4 and [x["rank"] for x in c] == [1, 2, 3, 4]
+    gains = [x["gain_beyond_random_log10"] for x in c]
+    assert gains == sorted(gains, reverse=True)
+    # one mode is no segmentation at all: it cannot beat 4 real modes
+    assert c[0]["n_modes"] == 4
+    assert all(abs(x["gain_beyond_random_log10"]) < 1e-12 for x in c if x["n_modes"] == 1)
+
+
+def test_same_seed_same_report():
+    demos = generate_demonstrations(1, 3, seed=5)
+    a = analyze(demos, AnalysisConfig(**FAST)).report
+    b = analyze(demos, AnalysisConfig(**FAST)).report
+    a.pop("timings_s"), b.pop("timings_s")
+    assert a == b
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(scope="global"), "scope"), (dict(n_modes=0), "n_modes"), (dict(K=()), "K"),
+    (dict(K=(0.0,)), "K"), (dict(n_random=0), "n_random"), (dict(target_hz=0), "target_hz"),
+])
+def test_bad_settings(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        AnalysisConfig(**kwargs)
+
+
+def test_rate_below_analysis_rate_is_refused():
+    demos = generate_demonstrations(1, 1, seed=0, config=GeneratorConfig(rate_hz=5.0))
+    with pytest.raises(ValueError, match="below the analysis rate"):
+        analyze(demos, AnalysisConfig(**FAST))

@@ -1,0 +1,68 @@
+"""The core subcommands: inspect and analyze (exit codes, messages, outputs)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from learning.data import save
+from mpcshare.cli import main
+from sim.demonstrator import generate_demonstrations
+
+
+@pytest.fixture(scope="module")
+def data_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("data") / "demos.npz"
+    save(generate_demonstrations(2, 3, seed=0), path)
+    return path
+
+
+def test_inspect_prints_a_summary(data_file, capsys):
+    assert main(["inspect", str(data_file)]) == 0
+    out = capsys.readouterr().out
+    assert "usable" in out and "trials:" in out and "100 Hz" in out and "fork_x" in out
+    assert "modes:" in out
+
+
+def test_inspect_json(data_file, capsys):
+    assert main(["inspect", str(data_file), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["n_samples"] == 2 * 3 * 60 * 100 and s["subjects"] == [0, 1]
+
+
+def test_inspect_names_the_problem_and_fails(tmp_path, capsys):
+    bad = tmp_path / "bad.npz"
+    obs = np.zeros((10, 2))
+    obs[4, 1] = np.nan
+    np.savez(bad, obs=obs, act=np.zeros((10, 1)), trial=np.zeros(10, dtype=int), rate_hz=100.0)
+    assert main(["inspect", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert "bad.npz" in err and "obs" in err and "row 4" in err
+
+
+def test_inspect_missing_file(tmp_path, capsys):
+    assert main(["inspect", str(tmp_path / "nope.npz")]) == 1
+    assert "nope.npz" in capsys.readouterr().err
+
+
+def test_usage_error_exits_2():
+    with pytest.raises(SystemExit) as e:
+        main(["analyze"])
+    assert e.value.code == 2
+
+
+def test_analyze_writes_report_and_plots(data_file, tmp_path, capsys):
+    out = tmp_path / "report"
+    code = main(["analyze", str(data_file), "--out", str(out), "--n-random", "2",
+                 "--search-windows", "1", "--search-modes", "4"])
+    assert code == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["modes"]["agreement"] > 0.9
+    assert report["segmentation_test"]["p_value"] < 1e-3
+    assert len(report["candidates"]) == 1
+    md = (out / "report.md").read_text()
+    assert "Voluntary share" in md and "Mann-Whitney" in md
+    for png in ("quotients_trial.png", "quotient_hist.png", "segmentation.png", "voluntary_share.png",
+                "candidates.png"):
+        assert (out / png).stat().st_size > 10_000, png
+    assert "voluntary share at K = 5" in capsys.readouterr().out

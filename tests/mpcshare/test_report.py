@@ -1,0 +1,27 @@
+"""Report writing: atomic JSON, formatting, plots of demonstrations."""
+
+import json
+
+import pytest
+
+from mpcshare.report import fmt, plot_demonstrations, write_json_atomic
+from sim.demonstrator import MODE_NAMES, generate_demonstrations
+
+
+def test_json_is_atomic_and_strict(tmp_path):
+    path = tmp_path / "r.json"
+    write_json_atomic({"a": 1}, path)
+    with pytest.raises(ValueError):
+        write_json_atomic({"a": float("inf")}, path)  # not JSON: refused
+    assert json.loads(path.read_text()) == {"a": 1}  # the old file is intact
+    assert [p.name for p in tmp_path.iterdir()] == ["r.json"]  # no temporary left behind
+
+
+def test_fmt():
+    assert fmt(None) == "inf" and fmt(3.14159) == "3.14"
+
+
+def test_plot_demonstrations(tmp_path):
+    d = generate_demonstrations(1, 0.5, seed=0)
+    plot_demonstrations(d, tmp_path / "t.png", mode_names=MODE_NAMES)
+    assert (tmp_path / "t.png").stat().st_size > 10_000
