@@ -178,14 +178,21 @@ def _fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: Analysi
 
 def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
             fitted: dict[int, tuple[TaskModes, np.ndarray]], quotient: Callable[..., np.ndarray],
-            ) -> list[dict[str, Any]]:
+            progress: bool = False) -> list[dict[str, Any]]:
     """Rank (window, n_modes) candidates by log10(median q_random / median q_modes)."""
     K0 = config.K[0]
     rows = []
     rng = np.random.default_rng(config.seed + 1)
-    for n_modes in config.search_modes:
-        if n_modes not in fitted:
-            fitted[n_modes] = _fit_modes(Z, lengths, n_modes, config)
+    todo = [n for n in config.search_modes if n not in fitted]
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(todo) + len(config.search_windows) * len(config.search_modes),
+                   desc="search", unit="fit", leave=False)
+    for n_modes in todo:
+        fitted[n_modes] = _fit_modes(Z, lengths, n_modes, config)
+        if bar is not None:
+            bar.update(1)
     for window in config.search_windows:
         w = causal_windows(std, window, rms=True)
         q0 = quotient(w.X, w.Y)
@@ -209,6 +216,10 @@ def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: Ana
                                              "random": share_r},
                 "hmm_bic": float(model.bic(Z, lengths)),
             })
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
     rows.sort(key=lambda r: -r["gain_beyond_random_log10"])
     for rank, r in enumerate(rows, 1):
         r["rank"] = rank
@@ -289,7 +300,8 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     steps.done("voluntary share")
 
     # 5. search for missing information
-    candidates = _search(std, Z, lengths, config, fitted, pointwise_quotients) if n_search else []
+    candidates = (_search(std, Z, lengths, config, fitted, pointwise_quotients, progress)
+                  if n_search else [])
     if n_search:
         steps.done("search")
     steps.close()
