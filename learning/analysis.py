@@ -25,13 +25,12 @@ from dataclasses import asdict, dataclass, field
 from typing import Any, Callable
 
 import numpy as np
-from scipy import stats
 
 from .data import Demonstrations
 from .lipschitz import pointwise_quotients
 from .modes import TaskModes, mode_agreement, mode_ari
-from .predictability import (compare_segmentation, compare_voluntary_shares, random_segmentation,
-                             threshold_from_percentile, voluntary_share)
+from .predictability import (compare_segmentation, compare_voluntary_shares, paired_wilcoxon,
+                             random_segmentation, threshold_from_percentile, voluntary_share)
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "analyze", "SIGNIFICANCE"]
@@ -122,19 +121,6 @@ def _finite_stats(q: np.ndarray) -> dict[str, float]:
     return {"p50": _json_float(np.percentile(q, 50)), "p90": _json_float(np.percentile(q, 90)),
             "p99": _json_float(np.percentile(q, 99)), "max": _json_float(np.max(q)),
             "n_inf": int(np.isinf(q).sum())}
-
-
-def _paired_less(a: np.ndarray, b: np.ndarray) -> dict[str, float]:
-    """One-sided Wilcoxon signed-rank test a < b over paired trials, with the
-    matched-pairs rank-biserial effect size (R⁺ − R⁻)/(R⁺ + R⁻) of a − b."""
-    d = a - b
-    nz = d[d != 0]
-    if len(nz) == 0:
-        return {"statistic": 0.0, "p_value": 1.0, "effect_size": 0.0}
-    res = stats.wilcoxon(a, b, alternative="less")
-    ranks = stats.rankdata(np.abs(nz))
-    eff = float((ranks[nz > 0].sum() - ranks[nz < 0].sum()) / ranks.sum())
-    return {"statistic": float(res.statistic), "p_value": float(res.pvalue), "effect_size": eff}
 
 
 def _json_float(x: float) -> float | None:
@@ -285,13 +271,13 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     for t in compare_voluntary_shares(q_modes, q, w.trial, config.K, alternative="less"):
         ids = t.trials
         rand = np.mean([[voluntary_share(r, w.trial, t.K)[i] for i in ids] for r in q_random], axis=0)
-        vs_random = _paired_less(t.shares_a, rand)
+        stat, p, eff = paired_wilcoxon(t.shares_a, rand, alternative="less")
         shares[t.K] = (ids, t.shares_b, t.shares_a)
         mean_without, mean_with = float(np.mean(t.shares_b)), float(np.mean(t.shares_a))
         share_report[f"{t.K:g}"] = {
             "without_modes": mean_without, "with_modes": mean_with, "random": float(np.mean(rand)),
             "fold_reduction": _json_float(mean_without / mean_with) if mean_with > 0 else None,
-            **vs_random,
+            "statistic": stat, "p_value": p, "effect_size": eff,
             "test": "wilcoxon signed-rank over trials, one-sided: share within HMM modes < share "
                     "within random segmentations of equal group sizes",
             "p_value_vs_without_modes": float(t.p_value),

@@ -30,7 +30,7 @@ from .lipschitz import check_inputs, pointwise_quotients
 __all__ = [
     "threshold_from_percentile", "voluntary_mask", "split_reactive_voluntary", "voluntary_share",
     "random_segmentation", "RankTest", "compare_quotients", "SegmentationComparison",
-    "compare_segmentation", "PairedShareTest", "compare_voluntary_shares", "lipschitz_index",
+    "compare_segmentation", "PairedShareTest", "paired_wilcoxon", "compare_voluntary_shares", "lipschitz_index",
     "narx_regressors", "OrderSelection", "select_order",
 ]
 
@@ -200,6 +200,27 @@ class PairedShareTest:
     test: str = "wilcoxon"
 
 
+def paired_wilcoxon(a, b, alternative: Literal["less", "greater", "two-sided"] = "less"
+                    ) -> tuple[float, float, float]:
+    """Wilcoxon signed-rank test of paired samples a vs b: (statistic, p-value, effect size).
+
+    The effect size is the matched-pairs rank-biserial correlation (R⁺ − R⁻)/(R⁺ + R⁻)
+    of the differences a − b (negative: a smaller). All-zero differences give (0, 1, 0).
+    """
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    if a.shape != b.shape or a.ndim != 1:
+        raise ValueError(f"a and b must be 1-D of equal length, got {a.shape} and {b.shape}")
+    d = a - b
+    nz = d[d != 0]
+    if len(nz) == 0:
+        return 0.0, 1.0, 0.0
+    res = stats.wilcoxon(a, b, alternative=alternative, zero_method="wilcox")
+    ranks = stats.rankdata(np.abs(nz))
+    eff = float((ranks[nz > 0].sum() - ranks[nz < 0].sum()) / ranks.sum())
+    return float(res.statistic), float(res.pvalue), eff
+
+
 def compare_voluntary_shares(q_a, q_b, trial, K: float | Iterable[float] = (5.0, 10.0),
                              alternative: Literal["less", "greater", "two-sided"] = "less"
                              ) -> list[PairedShareTest]:
@@ -220,15 +241,7 @@ def compare_voluntary_shares(q_a, q_b, trial, K: float | Iterable[float] = (5.0,
         ids = np.array(list(sa.keys()))
         a = np.array([sa[t] for t in sa])
         b = np.array([sb[t] for t in sa])
-        d = a - b
-        nz = d[d != 0]
-        if len(nz) == 0:
-            stat, p, eff = 0.0, 1.0, 0.0
-        else:
-            res = stats.wilcoxon(a, b, alternative=alternative, zero_method="wilcox")
-            stat, p = float(res.statistic), float(res.pvalue)
-            ranks = stats.rankdata(np.abs(nz))
-            eff = float((ranks[nz > 0].sum() - ranks[nz < 0].sum()) / ranks.sum())
+        stat, p, eff = paired_wilcoxon(a, b, alternative)
         out.append(PairedShareTest(K=k, statistic=stat, p_value=p, effect_size=eff, trials=ids,
                                    shares_a=a, shares_b=b, median_a=float(np.median(a)),
                                    median_b=float(np.median(b)), alternative=alternative))

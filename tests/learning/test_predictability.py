@@ -142,3 +142,19 @@ def test_select_order_recovers_known_system(seed):
     assert (res.n_y, res.n_u) == (2, 1)
     assert res.index[2, 1] < 0.1 * res.index[1, 1]  # the knee is sharp
     assert res.index.shape == (4, 4) and np.isnan(res.index[0, 0])
+
+
+def test_paired_wilcoxon_matches_scipy_and_handles_ties():
+    from scipy import stats as sps
+
+    from learning.predictability import paired_wilcoxon
+
+    a = np.array([0.1, 0.2, 0.15, 0.05, 0.3, 0.12])
+    b = np.array([0.4, 0.5, 0.35, 0.2, 0.45, 0.1])
+    stat, p, eff = paired_wilcoxon(a, b, "less")
+    ref = sps.wilcoxon(a, b, alternative="less")
+    assert stat == pytest.approx(ref.statistic) and p == pytest.approx(ref.pvalue)
+    assert -1.0 <= eff < 0.0
+    assert paired_wilcoxon(a, a) == (0.0, 1.0, 0.0)
+    with pytest.raises(ValueError, match="equal length"):
+        paired_wilcoxon(a, b[:-1])
