@@ -28,7 +28,7 @@ import numpy as np
 
 from .data import Demonstrations
 from .lipschitz import pointwise_quotients
-from .modes import TaskModes, mode_agreement, mode_ari
+from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
 from .predictability import (compare_segmentation, compare_voluntary_shares, paired_wilcoxon,
                              random_segmentation, threshold_from_percentile, voluntary_share)
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample
@@ -55,6 +55,9 @@ class AnalysisConfig:
         search_windows, search_modes: the candidate grid of the search (empty: no search).
         search_random: random segmentations per search candidate.
         hmm_restarts: EM restarts of each HMM fit.
+        select_modes: also choose the number of modes by held-out log-likelihood over
+            trials (3-fold by trial; BIC as a second opinion) among ``search_modes``
+            (2…6 if empty); reported as ``mode_selection``, costs about a minute.
         seed: seed of everything random.
     """
 
@@ -70,6 +73,7 @@ class AnalysisConfig:
     search_modes: tuple[int, ...] = (2, 3, 4, 5, 6)
     search_random: int = 3
     hmm_restarts: int = 5
+    select_modes: bool = False
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -229,7 +233,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         raise ValueError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
                          f"{config.target_hz:g} Hz; lower --rate")
     n_search = len(config.search_windows) * len(config.search_modes)
-    steps = _Steps(6 if n_search else 5, progress)
+    steps = _Steps(5 + bool(n_search) + config.select_modes, progress)
 
     # 1. preprocessing
     low = downsample(demos, config.target_hz) if demos.rate_hz != config.target_hz else demos
@@ -290,6 +294,12 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
                   if n_search else [])
     if n_search:
         steps.done("search")
+    selection = None
+    if config.select_modes:
+        sel = select_n_modes(Z, lengths, candidates=config.search_modes or range(2, 7), cv=3,
+                             seed=config.seed, n_restarts=min(config.hmm_restarts, 2), progress=progress)
+        selection = sel.to_dict()
+        steps.done("mode selection")
     steps.close()
 
     test = comp.test
@@ -321,6 +331,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         },
         "voluntary_share": share_report,
         "candidates": candidates,
+        "mode_selection": selection,
         "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(config).items()},
         "timings_s": steps.timings,
     }

@@ -113,6 +113,8 @@ def add_analysis_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--search-modes", type=int, nargs="*", default=[2, 3, 4, 5, 6],
                    help="numbers of modes for the search for missing information")
     g.add_argument("--no-search", action="store_true", help="skip the search for missing information")
+    g.add_argument("--select-modes", action="store_true",
+                   help="also choose the number of modes by held-out likelihood over trials (+BIC)")
     g.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
 
 
@@ -124,7 +126,8 @@ def analysis_config(args: argparse.Namespace):
         target_hz=args.rate, window_s=args.window, scope=args.scope, n_modes=args.modes,
         K=tuple(args.K), n_random=args.n_random,
         search_windows=() if args.no_search else tuple(args.search_windows),
-        search_modes=() if args.no_search else tuple(args.search_modes), seed=args.seed)
+        search_modes=() if args.no_search else tuple(args.search_modes),
+        select_modes=args.select_modes, seed=args.seed)
 
 
 def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,

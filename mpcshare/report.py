@@ -147,12 +147,13 @@ def _plot_histogram(r: AnalysisResult, path: Path) -> None:
                        max(_log_q(r.q).max(), _log_q(r.q_modes).max()), 80)
     ax.hist(_log_q(r.q), bins=bins, alpha=0.55, label="without modes")
     ax.hist(_log_q(r.q_modes), bins=bins, alpha=0.55, label="within HMM modes")
-    for K in r.config.K:
+    top = ax.get_ylim()[1]
+    for i, K in enumerate(r.config.K):
         x = math.log10(K)
         ax.axvline(x, ls="--", color="tab:red", lw=1)
-        ax.text(x, ax.get_ylim()[1] * 0.95,
+        ax.text(x, top * (0.97 - 0.07 * i),
                 f" K={K:g}: {100 * np.mean(r.q <= K):.0f}% / {100 * np.mean(r.q_modes <= K):.0f}% ≤ K",
-                fontsize=8, color="tab:red", va="top")
+                fontsize=8, color="tab:red", va="top", bbox=dict(fc="white", ec="none", alpha=0.8, pad=1))
     ax.set_xlabel("log10 q")
     ax.set_ylabel("points")
     ax.set_title("point-wise Lipschitz quotients (share of points satisfying each K: without / with modes)",
@@ -280,6 +281,14 @@ def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
                          f"{c['median_q_without_modes']:.3g} / {c['median_q_modes']:.3g} / "
                          f"{c['median_q_random']:.3g} | {c['gain_beyond_random_log10']:.3f} |")
         lines += ["", "![candidates](candidates.png)", ""]
+    sel = report.get("mode_selection")
+    if sel:
+        lines += ["## Number of modes by held-out likelihood", "",
+                  "| modes | held-out log-lik per sample | BIC |", "|---|---|---|",
+                  *[f"| {k} | {ll:.4g} | {b:.5g} |" for k, ll, b in
+                    zip(sel["candidates"], sel["heldout_loglik"], sel["bic"])], "",
+                  f"Chosen: {sel['n_modes']} ({sel['rule']} rule, {sel['n_folds']}-fold by trial); "
+                  f"held-out maximum {sel['n_modes_max']}, BIC minimum {sel['n_modes_bic']}.", ""]
     lines += ["", "Timings [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report["timings_s"].items()), ""]
     return "\n".join(lines)
 

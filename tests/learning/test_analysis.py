@@ -89,3 +89,13 @@ def test_rate_below_analysis_rate_is_refused():
     demos = generate_demonstrations(1, 1, seed=0, config=GeneratorConfig(rate_hz=5.0))
     with pytest.raises(ValueError, match="below the analysis rate"):
         analyze(demos, AnalysisConfig(**FAST))
+
+
+def test_optional_mode_selection_is_reported():
+    demos = generate_demonstrations(2, 3, seed=0)
+    r = analyze(demos, AnalysisConfig(n_random=2, search_windows=(), search_modes=(3, 4),
+                                      select_modes=True, hmm_restarts=2)).report
+    sel = r["mode_selection"]
+    assert sel["candidates"] == [3, 4] and sel["n_modes"] in (3, 4)
+    assert len(sel["heldout_loglik"]) == 2 and len(sel["bic"]) == 2
+    json.dumps(r, allow_nan=False)
