@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -27,12 +28,14 @@ class CommandError(RuntimeError):
     """A subcommand cannot go on; the message is printed and the exit status is 1."""
 
 
+@dataclass(frozen=True)
 class Command:
     """A subcommand: its name, one-line help, how it adds its arguments, and what it runs."""
 
-    def __init__(self, name: str, help: str, add_arguments: Callable[[argparse.ArgumentParser], None],
-                 run: Callable[[argparse.Namespace], int]) -> None:
-        self.name, self.help, self.add_arguments, self.run = name, help, add_arguments, run
+    name: str
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], int]
 
 
 def load_or_fail(path: str) -> Demonstrations:

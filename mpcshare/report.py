@@ -27,6 +27,7 @@ import numpy as np  # noqa: E402
 
 from learning.analysis import AnalysisResult  # noqa: E402
 from learning.data import Demonstrations  # noqa: E402
+from learning.modes import match_modes  # noqa: E402
 
 __all__ = ["plot_demonstrations", "write_analysis_report", "write_json_atomic", "fmt"]
 
@@ -133,7 +134,12 @@ def _plot_trial_quotients(r: AnalysisResult, path: Path, mode_names: Sequence[st
     axes[2].legend(loc="upper left", fontsize=7)
     for ax in axes:
         _mode_bands(ax, t, r.modes[idx])
-    _mode_legend(axes[0], r.modes[idx], None, "HMM mode")
+    names = None
+    if r.true_modes is not None and mode_names is not None:  # name HMM modes by their best match
+        match = match_modes(r.modes, r.true_modes)
+        names = [f"{k} ≈ {mode_names[match[k]]}" if match.get(k, -1) >= 0 else str(k)
+                 for k in range(r.config.n_modes)]
+    _mode_legend(axes[0], r.modes[idx], names, "HMM mode")
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(f"trial {tid}: signals and point-wise Lipschitz quotients (background: HMM modes)")
     fig.tight_layout()
