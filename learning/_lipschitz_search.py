@@ -21,6 +21,7 @@ on the schedule. ``Kernel`` isolates the array library: numpy here, torch in
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,7 +29,42 @@ import numpy as np
 from ._lipschitz_bounds import Features, leaf_boxes, leaf_upper_ratios, row_features, thresholds
 from ._lipschitz_exact import pair_ratios, update_best
 
-__all__ = ["NumpyKernel", "SearchStats", "search_leaf", "LeafContext"]
+__all__ = ["NumpyKernel", "SearchStats", "search_leaf", "LeafContext", "nearest_leaves",
+           "symmetric_pass", "survivors"]
+
+_SEG = 64  # columns per segment of the survivor reduction (see ``survivors``)
+
+try:  # torch's segmented max is ~3× faster than numpy's compare + flatnonzero
+    import torch as _torch
+except ImportError:  # pragma: no cover - torch is a dependency of learning
+    _torch = None
+
+
+def survivors(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(row, col) positions of the entries ``S ≥ 0`` of a float32 (a × c) matrix.
+
+    Survivors are rare (≪ 1 %), so the rows are cut into segments of ``_SEG``
+    columns, the maximum of each segment is taken (torch's reduction, an exact
+    operation) and only segments whose maximum is ≥ 0 are examined. NaN never
+    survives, as with ``S >= 0``.
+    """
+    a, c = S.shape
+    g = _SEG
+    ns = c // g
+    if _torch is None or ns == 0 or S.strides[1] != S.itemsize:
+        return np.divmod(np.flatnonzero(S >= 0.0), c)
+    cg = ns * g
+    head = S[:, :cg].reshape(a, ns, g)  # a view: only the last axis is split
+    hit = _torch.from_numpy(S)[:, :cg].unflatten(1, (ns, g)).amax(dim=2) >= 0.0
+    hit = _torch.nonzero(hit.view(-1)).view(-1).numpy()
+    hr, hs = np.divmod(hit, ns)
+    k, off = np.nonzero(head[hr, hs] >= 0.0)
+    ri, cj = hr[k], hs[k] * g + off
+    if cg != c:  # ragged tail: examined directly
+        rt, ct = np.nonzero(S[:, cg:] >= 0.0)
+        ri, cj = np.concatenate([ri, rt]), np.concatenate([cj, ct + cg])
+    return ri, cj
+
 
 
 @dataclass
@@ -67,8 +103,23 @@ class NumpyKernel:
         else:
             R = row_features(f.ws[rows], f.nb[rows], f.zs[rows], f.na[rows], T)
             S = R @ f.col_z[cols].T
-        flat = np.flatnonzero(S >= 0.0)  # 1-D nonzero is ~15× faster than 2-D
-        return np.divmod(flat, len(cols))
+        return survivors(S)
+
+    def sym_prepare(self, order: np.ndarray) -> None:
+        """Copy the z-screen features into the order of the symmetric pass."""
+        f = self.f
+        self.o_col = np.ascontiguousarray(f.col_z[order])
+        self.o_ws, self.o_nb = f.ws[order], f.nb[order]
+        self.o_zs, self.o_na = f.zs[order], f.na[order]
+
+    def sym_screen(self, s: int, e: int, T: np.ndarray, c0: int, c1: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Survivors (positions within [s, e) × [c0, c1) of the pass order) of the z screen."""
+        R = row_features(self.o_ws[s:e], self.o_nb[s:e], self.o_zs[s:e], self.o_na[s:e], T)
+        return survivors(R @ self.o_col[c0:c1].T)
+
+    def sym_release(self) -> None:
+        self.o_col = self.o_ws = self.o_nb = self.o_zs = self.o_na = None
 
     def tight(self, rows: np.ndarray, cols: np.ndarray, L: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -117,29 +168,51 @@ class LeafContext:
     partner: np.ndarray
     full_fraction: float = 0.005  # survivors/screened above which the full-d screen pays off
     boxes: tuple = field(default=None)
+    lb: np.ndarray | None = None  # shared lower bounds of q (leaf order), ≥ q, ≤ true q
+
 
     def __post_init__(self) -> None:
         if self.boxes is None:
             self.boxes = leaf_boxes(self.f)
 
 
-def search_leaf(ctx: LeafContext, a: int) -> SearchStats:
-    """Complete the quotients of the rows of leaf ``a`` (see module doc)."""
+def nearest_leaves(ctx: LeafContext, a: int, m: int) -> np.ndarray:
+    """The ``m`` leaves whose z centroids are nearest to that of leaf ``a`` (a first), nearest first."""
+    zc = ctx.boxes[4]
+    dc = ((zc - zc[a]) ** 2).sum(axis=1)
+    m = min(m, len(dc))
+    near = np.argpartition(dc, m - 1)[:m] if m < len(dc) else np.arange(len(dc))
+    return near[np.lexsort((near, dc[near]))]
+
+
+def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> SearchStats:
+    """Complete the quotients of the rows of leaf ``a`` (see module doc).
+
+    With ``leaves`` given, only those leaves are searched, in that order (a
+    warm-up that raises the lower bounds; q stays the exact maximum over the
+    pairs evaluated). Lower bounds found on the way go to ``ctx.lb`` if set.
+    """
     f, q, partner, kern = ctx.f, ctx.q, ctx.partner, ctx.kernel
     st = SearchStats()
     s0, e0 = int(f.leaf_start[a]), int(f.leaf_start[a + 1])
     rows_all = np.arange(s0, e0)
     # Local lower bounds: ≥ the exact maxima found so far, ≤ the true q_i.
     L = q[s0:e0].copy()
+    if ctx.lb is not None:
+        np.maximum(L, ctx.lb[s0:e0], out=L)
     zlo, zhi, wlo, whi, zc = ctx.boxes
-    ub = leaf_upper_ratios(a, zlo, zhi, wlo, whi, f.delta_z, f.delta_y)
-    cand = np.nonzero(ub >= L.min())[0]
-    if len(cand) == 0:
-        return st
-    # Decreasing bound, then nearest centroid first (tightens L early).
-    dc = ((zc[cand] - zc[a]) ** 2).sum(axis=1)
-    cand = cand[np.lexsort((dc, -ub[cand]))]
-    cub = ub[cand]
+    if leaves is None:
+        ub = leaf_upper_ratios(a, zlo, zhi, wlo, whi, f.delta_z, f.delta_y)
+        cand = np.nonzero(ub >= L.min())[0]
+        if len(cand) == 0:
+            return st
+        # Decreasing bound, then nearest centroid first (tightens L early).
+        dc = ((zc[cand] - zc[a]) ** 2).sum(axis=1)
+        cand = cand[np.lexsort((dc, -ub[cand]))]
+        cub = ub[cand]
+    else:
+        cand = np.asarray(leaves)
+        cub = np.full(len(cand), np.inf)
     sizes = np.diff(f.leaf_start)[cand]
     has_full = f.xs is not None
     use_z = True
@@ -191,4 +264,91 @@ def search_leaf(ctx: LeafContext, a: int) -> SearchStats:
         st.pairs_exact += len(r)
         update_best(q, partner, gi, f.perm[gj], r)
         np.maximum(L, q[s0:e0], out=L)
+    if ctx.lb is not None:
+        np.maximum(ctx.lb[s0:e0], L, out=ctx.lb[s0:e0])
     return st
+
+
+def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int = 2048,
+                   batch: int = 2048) -> SearchStats:
+    """Screen every unordered pair once, crediting a surviving pair to both points.
+
+    Orientation: a pair (i, j) cannot reach q_i nor q_j when
+    ``ub‖Δy‖² < min(T_i, T_j)·lb‖Δx‖²`` (T ≤ L² of the point; pruning with the
+    smaller threshold is conservative for both). The points are sorted by their
+    lower bound ``ctx.lb`` (ascending) and cut into row tiles; tile A is screened
+    against itself (a full square with each row's own threshold; both orders of
+    each pair are seen) and against every later point, with the row thresholds
+    ``min(T_i, min_{j in chunk} T_j)`` — since later points have larger bounds
+    this is nearly always T_i. Survivors are recomputed exactly and update both
+    points under a lock (the other thread may own either point); thresholds are
+    re-read from the shared bounds before every chunk, so they only tighten.
+    The set of maxima does not depend on the schedule: every pair that attains
+    q_i survives whatever the bounds were (see ``_lipschitz_bounds``), so q and the
+    partner (smallest index among the maximisers) are the same as the one-sided search.
+    """
+    f, q, partner, kern, lb = ctx.f, ctx.q, ctx.partner, ctx.kernel, ctx.lb
+    n = len(f.perm)
+    order = np.argsort(lb, kind="stable")
+    kern.sym_prepare(order)
+    lock = threading.Lock()
+    sx, sy = f.scale_x, f.scale_y
+
+    def credit(gi: np.ndarray, gj: np.ndarray, r: np.ndarray, both: bool) -> None:
+        with lock:
+            update_best(q, partner, gi, f.perm[gj], r)
+            if both:
+                update_best(q, partner, gj, f.perm[gi], r)
+            lb[gi] = np.maximum(lb[gi], q[gi])
+            if both:
+                lb[gj] = np.maximum(lb[gj], q[gj])
+
+    def task(s: int) -> tuple[SearchStats, int]:
+        st = SearchStats()
+        e = min(s + tile, n)
+        rows = order[s:e]
+        spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
+        pend: list[tuple[np.ndarray, np.ndarray, bool]] = []
+        n_pend = 0
+
+        def flush() -> None:
+            # Survivors are evaluated in batches (per-call overhead), then credited.
+            for diag in (True, False):
+                sel = [(gi, gj) for gi, gj, dg in pend if dg == diag]
+                if not sel:
+                    continue
+                gi = np.concatenate([a for a, _ in sel])
+                gj = np.concatenate([b for _, b in sel])
+                r = kern.exact(f.perm[gi], f.perm[gj])
+                st.pairs_exact += len(r)
+                credit(gi, gj, r, not diag)
+            pend.clear()
+
+        for c0, c1 in spans:
+            T = thresholds(lb[rows], sx, sy)
+            diag = c0 == s
+            if not diag:
+                np.minimum(T, thresholds(np.array([lb[order[c0:c1]].min()]), sx, sy)[0], out=T)
+            ri, cj = kern.sym_screen(s, e, T, c0, c1)
+            st.pairs_screened += (e - s) * (c1 - c0)
+            if len(ri) == 0:
+                continue
+            pend.append((rows[ri], order[c0 + cj], diag))
+            n_pend += len(ri)
+            if n_pend >= batch:
+                flush()
+                n_pend = 0
+        flush()
+        return st, (e - s) * (e - s - 1) // 2 + (e - s) * (n - e)
+
+    total = SearchStats()
+    starts = list(range(0, n, tile))
+    try:
+        results = map(task, starts) if pool is None else pool.map(task, starts)
+        for st, work in results:
+            total.add(st)
+            if bar is not None:
+                bar.update(work)
+    finally:
+        kern.sym_release()
+    return total

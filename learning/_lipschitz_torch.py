@@ -74,6 +74,20 @@ class TorchKernel:
             S = R @ self.col_z[c].T
         return self._where(S >= 0.0, len(cols))
 
+    def sym_prepare(self, order: np.ndarray) -> None:
+        """z-screen features in the order of the symmetric pass (see ``symmetric_pass``)."""
+        o = self._idx(order)
+        self.o_col = self.col_z[o].contiguous()
+        self.o_ws, self.o_nb, self.o_zs, self.o_na = self.ws[o], self.nb[o], self.zs[o], self.na[o]
+
+    def sym_screen(self, s: int, e: int, T: np.ndarray, c0: int, c1: int):
+        Tt = torch.from_numpy(T).to(self.dev)
+        R = self._rowfeat(self.o_ws[s:e], self.o_nb[s:e], self.o_zs[s:e], self.o_na[s:e], Tt)
+        return self._where(R @ self.o_col[c0:c1].T >= 0.0, c1 - c0)
+
+    def sym_release(self) -> None:
+        self.o_col = self.o_ws = self.o_nb = self.o_zs = self.o_na = None
+
     def tight(self, rows, cols, L):
         f = self.f
         r, c = self._idx(rows), self._idx(cols)

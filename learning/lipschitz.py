@@ -27,12 +27,17 @@ import numpy as np
 
 from ._lipschitz_bounds import F32_UNIT_ROUNDOFF, build_features
 from ._lipschitz_exact import dense_exact, pair_ratios, update_best
-from ._lipschitz_search import LeafContext, NumpyKernel, SearchStats, search_leaf
+from ._lipschitz_search import (LeafContext, NumpyKernel, SearchStats, nearest_leaves,
+                                search_leaf, symmetric_pass)
 
 __all__ = ["pointwise_quotients", "check_inputs", "last_search_stats"]
 
 _SMALL_GROUP = 512  # groups up to this size are done densely (all pairs, exactly)
 _TIME_NEIGHBOURS = 2  # initial bounds from rows k±1, k±2 of the same group
+_SYMMETRIC = True  # screen each unordered pair once (symmetric_pass); False: per-leaf search
+_WARMUP_LEAVES = 1  # symmetric path: each leaf first searches its nearest leaves (raises bounds)
+_SYM_TILE = 256  # rows per tile of the symmetric pass
+_SYM_CHUNK = 2048  # columns per screened chunk of the symmetric pass
 _last_stats: dict = {}
 
 
@@ -108,6 +113,25 @@ def _blas_single_thread():
         return nullcontext()
 
 
+class _torch_single_thread:
+    """Context: torch intra-op threads = 1 while our own threads run (restored on exit)."""
+
+    def __enter__(self):
+        try:
+            import torch
+        except ImportError:  # pragma: no cover
+            self._torch = None
+            return self
+        self._torch, self._n = torch, torch.get_num_threads()
+        torch.set_num_threads(1)
+        return self
+
+    def __exit__(self, *exc):
+        if self._torch is not None:
+            self._torch.set_num_threads(self._n)
+        return False
+
+
 def _time_neighbour_init(X, Y, idx, q, partner, lags: int) -> None:
     """Exact quotients of rows k and k+s (s = 1..lags) of a group: cheap, strong initial bounds.
 
@@ -164,7 +188,8 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
         n_jobs: threads (default: all available cores; forced to 1 on a GPU).
         backend: "numpy", "torch" (CPU or CUDA), or "auto" (torch if CUDA is available).
         device: torch device for the torch backend (default: CUDA if available).
-        progress: show a tqdm progress bar (points completed).
+        progress: show a tqdm progress bar (pairs done; ``leave=False``, so it
+            disappears when done and does not clutter an outer bar).
         n_components: principal components in the lower bound (default ≤ 16).
 
     Returns:
@@ -193,11 +218,14 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
     bar = None
     if progress:
         from tqdm.auto import tqdm
-        bar = tqdm(total=N, unit="pt", desc="Lipschitz quotients")
+        bar = tqdm(total=n_pairs, unit="pair", unit_scale=True, desc="Lipschitz quotients",
+                   leave=False)
     pool = ThreadPoolExecutor(max_workers=n_jobs) if n_jobs > 1 else None
     limit = _blas_single_thread() if backend == "numpy" else nullcontext()
+    # torch's CPU reductions (survivor search) run inside our threads: one intra-op thread each.
+    tlimit = _torch_single_thread() if backend == "numpy" or str(dev) == "cpu" else nullcontext()
     try:
-        with limit:
+        with limit, tlimit:
             for idx in group_idx:
                 _one_group(X, Y, idx, q, partner, block=block, n_components=n_components,
                            backend=backend, device=dev, u=u, pool=pool, bar=bar, stats=stats)
@@ -216,15 +244,16 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
 def _one_group(X, Y, idx, q, partner, *, block, n_components, backend, device, u, pool, bar,
                stats: SearchStats) -> None:
     n = len(idx)
+    n_pairs = n * (n - 1) // 2
     if n <= _SMALL_GROUP:
         dense_exact(X, Y, idx, q, partner)
         stats.pairs_exact += n * (n - 1)
         if bar is not None:
-            bar.update(n)
+            bar.update(n_pairs)
         return
     if (Y[idx] == Y[idx[0]]).all():  # constant output: every quotient is 0 or skipped
         if bar is not None:
-            bar.update(n)
+            bar.update(n_pairs)
         return
     _time_neighbour_init(X, Y, idx, q, partner, _TIME_NEIGHBOURS)
     f = build_features(X, Y, idx, leaf_size=block, n_components=n_components,
@@ -234,19 +263,20 @@ def _one_group(X, Y, idx, q, partner, *, block, n_components, backend, device, u
     ctx = LeafContext(f=f, kernel=_make_kernel(backend, device, f, X, Y), q=qp, partner=pp)
     n_leaves = len(f.leaf_start) - 1
     sizes = np.diff(f.leaf_start)
+    run = map if pool is None else pool.map
 
-    def task(a: int) -> SearchStats:
-        return search_leaf(ctx, a)
-
-    if pool is None:
-        for a in range(n_leaves):
-            stats.add(task(a))
-            if bar is not None:
-                bar.update(int(sizes[a]))
+    if _SYMMETRIC:
+        # 1. warm-up: each leaf against its nearest leaves (one-sided) raises the bounds;
+        # 2. every unordered pair screened once against those bounds.
+        ctx.lb = qp.copy()
+        m = _WARMUP_LEAVES
+        for st in run(lambda a: search_leaf(ctx, a, nearest_leaves(ctx, a, m)), range(n_leaves)):
+            stats.add(st)
+        stats.add(symmetric_pass(ctx, pool, bar, tile=_SYM_TILE, chunk=_SYM_CHUNK))
     else:
-        for a, st in enumerate(pool.map(task, range(n_leaves))):
+        for a, st in enumerate(run(lambda a: search_leaf(ctx, a), range(n_leaves))):
             stats.add(st)
             if bar is not None:
-                bar.update(int(sizes[a]))
+                bar.update(int(sizes[a]) * (n - 1) // 2)
     q[f.perm] = qp
     partner[f.perm] = pp

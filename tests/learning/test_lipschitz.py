@@ -263,3 +263,49 @@ def test_property_search_path_exact(seed, n, d, dup, scale, offset):
         X[n - k:] = X[src] + rng.normal(size=(k, d)) * scale * 1e-7
     q = pointwise_quotients(X, Y, backend="numpy", block=64)
     assert_exact(q, brute_force(X, Y))
+
+
+def test_survivors_matches_dense_compare():
+    """The segmented survivor search finds exactly the entries S ≥ 0 (any width)."""
+    from learning._lipschitz_search import survivors
+    rng = np.random.default_rng(11)
+    for a, c in [(5, 64), (7, 200), (3, 10), (16, 1000)]:
+        S = rng.normal(size=(a, c)).astype(np.float32) - 2.5
+        S[0, -1] = 0.0
+        S[-1, 0] = -0.0  # -0.0 >= 0 holds
+        ri, cj = survivors(S)
+        ref_r, ref_c = np.nonzero(S >= 0)
+        got = sorted(zip(ri.tolist(), cj.tolist()))
+        assert got == sorted(zip(ref_r.tolist(), ref_c.tolist()))
+
+
+@pytest.mark.parametrize("tile,chunk", [(64, 128), (100, 192)])
+def test_symmetric_pass_equals_one_sided(monkeypatch, tile, chunk):
+    """Each unordered pair screened once (both points credited) = the one-sided search,
+    including the partner convention (smallest index among tied maximisers)."""
+    import learning.lipschitz as lip
+    X, Y = smooth_windows(1500, 9)
+    rng = np.random.default_rng(9)
+    # Exact ties: duplicated rows make several partners attain the same maximum.
+    X = np.concatenate([X, X[:200], X[100:300] + 1e-9 * rng.normal(size=(200, X.shape[1]))])
+    Y = np.concatenate([Y, Y[:200] + 0.01, Y[100:300]])
+    monkeypatch.setattr(lip, "_SYM_TILE", tile)
+    monkeypatch.setattr(lip, "_SYM_CHUNK", chunk)
+    monkeypatch.setattr(lip, "_SYMMETRIC", True)
+    qs, ps = pointwise_quotients(X, Y, return_partner=True, backend="numpy", block=64, n_jobs=2)
+    monkeypatch.setattr(lip, "_SYMMETRIC", False)
+    q1, p1 = pointwise_quotients(X, Y, return_partner=True, backend="numpy", block=64, n_jobs=1)
+    assert np.array_equal(qs, q1) and np.array_equal(ps, p1)
+    assert_exact(qs, brute_force(X, Y))
+    assert_partner(X, Y, qs, ps)
+    # smallest maximiser: no j < partner attains q (checked on a sample of rows)
+    for i in rng.choice(len(X), 60, replace=False):
+        if ps[i] <= 0:
+            continue
+        j = np.arange(ps[i])
+        j = j[j != i]
+        dx = np.sqrt(((X[j] - X[i]) ** 2).sum(1))
+        dy = np.sqrt(((Y[j] - Y[i]) ** 2).sum(1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = dy / dx
+        assert not np.any(r == qs[i])
