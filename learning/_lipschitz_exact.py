@@ -63,7 +63,9 @@ def update_best(q: np.ndarray, partner: np.ndarray, rows: np.ndarray, cols_orig:
     quotients of 0 never set a partner (a point whose best quotient is 0 has
     partner -1).
     """
-    keep = r > 0  # NaN compares False; 0 cannot raise q above its initial 0
+    # Only r ≥ the current q can change anything (r == q may bring a smaller partner);
+    # NaN compares False; 0 cannot raise q above its initial 0.
+    keep = (r > 0) & (r >= q[rows])
     if not keep.all():
         rows, cols_orig, r = rows[keep], cols_orig[keep], r[keep]
     if len(r) == 0:

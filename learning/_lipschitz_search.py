@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._lipschitz_bounds import Features, leaf_boxes, leaf_upper_ratios, row_features, thresholds
+from ._lipschitz_bounds import (Features, leaf_boxes, leaf_upper_ratios, row_features,
+                                threshold_scalar, thresholds)
 from ._lipschitz_exact import pair_ratios, update_best
 
 __all__ = ["NumpyKernel", "SearchStats", "search_leaf", "LeafContext", "nearest_leaves",
@@ -328,7 +329,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
             T = thresholds(lb[rows], sx, sy)
             diag = c0 == s
             if not diag:
-                np.minimum(T, thresholds(np.array([lb[order[c0:c1]].min()]), sx, sy)[0], out=T)
+                np.minimum(T, threshold_scalar(lb[order[c0:c1]].min(), sx, sy), out=T)
             ri, cj = kern.sym_screen(s, e, T, c0, c1)
             st.pairs_screened += (e - s) * (c1 - c0)
             if len(ri) == 0:

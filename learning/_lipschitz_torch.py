@@ -54,10 +54,10 @@ class TorchKernel:
         return torch.from_numpy(np.ascontiguousarray(a, dtype=np.int64)).to(self.dev)
 
     def _rowfeat(self, ws, nb, xs, na, T):
-        # [−2ŵ, 1, b, 2Tẑ, −T, −Ta], see _lipschitz_bounds.row_features.
+        # [−2ŵ, 1, 2Tẑ, −T, b − Ta], see _lipschitz_bounds.row_features.
         one = torch.ones_like(nb)[:, None]
-        return torch.cat([-2.0 * ws, one, nb[:, None], (2.0 * T)[:, None] * xs, -T[:, None],
-                          (-T * na)[:, None]], dim=1)
+        const = (nb.double() - T.double() * na.double()).float()[:, None]
+        return torch.cat([-2.0 * ws, one, (2.0 * T)[:, None] * xs, -T[:, None], const], dim=1)
 
     def _where(self, mask: torch.Tensor, ncols: int) -> tuple[np.ndarray, np.ndarray]:
         flat = torch.nonzero(mask.reshape(-1)).reshape(-1).cpu().numpy()

@@ -37,7 +37,7 @@ _TIME_NEIGHBOURS = 2  # initial bounds from rows k±1, k±2 of the same group
 _SYMMETRIC = True  # screen each unordered pair once (symmetric_pass); False: per-leaf search
 _WARMUP_LEAVES = 1  # symmetric path: each leaf first searches its nearest leaves (raises bounds)
 _SYM_TILE = 256  # rows per tile of the symmetric pass
-_SYM_CHUNK = 2048  # columns per screened chunk of the symmetric pass
+_SYM_CHUNK = 4096  # columns per screened chunk of the symmetric pass
 _last_stats: dict = {}
 
 
@@ -105,11 +105,15 @@ def _default_jobs() -> int:
 
 
 def _blas_single_thread():
-    """Context limiting BLAS to one thread while our own threads run (no oversubscription)."""
+    """Context limiting BLAS to one thread while our own threads run (no oversubscription).
+
+    threadpoolctl directly: going through sklearn imports sklearn and scipy on
+    the first call (about a second).
+    """
     try:
-        from sklearn.utils.fixes import _get_threadpool_controller
-        return _get_threadpool_controller().limit(limits=1, user_api="blas")
-    except Exception:  # pragma: no cover - private sklearn helper moved
+        from threadpoolctl import threadpool_limits
+        return threadpool_limits(limits=1, user_api="blas")
+    except Exception:  # pragma: no cover - threadpoolctl missing
         return nullcontext()
 
 
@@ -190,7 +194,7 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
         device: torch device for the torch backend (default: CUDA if available).
         progress: show a tqdm progress bar (pairs done; ``leave=False``, so it
             disappears when done and does not clutter an outer bar).
-        n_components: principal components in the lower bound (default ≤ 16).
+        n_components: principal components in the lower bound (default ≤ 12).
 
     Returns:
         q (N,) float64, or (q, partner) with partner (N,) int64.
