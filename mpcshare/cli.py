@@ -182,6 +182,9 @@ def build_parser(commands: Sequence[Command]) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mpcshare",
         description="Shared control from demonstrations: analyse, simulate, report.")
+    from mpcshare import __version__
+
+    parser.add_argument("--version", action="version", version=f"mpcshare {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for c in commands:
         p = sub.add_parser(c.name, help=c.help, description=c.help)
