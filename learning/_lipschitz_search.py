@@ -119,6 +119,43 @@ class NumpyKernel:
         R = row_features(self.o_ws[s:e], self.o_nb[s:e], self.o_zs[s:e], self.o_na[s:e], T)
         return survivors(R @ self.o_col[c0:c1].T)
 
+    def sym_tight(self, rows: np.ndarray, cols: np.ndarray, Lr: np.ndarray, Lc: np.ndarray,
+                  cap: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Full-dimensional two-sided float32 screen of rows × cols (leaf-order indices).
+
+        For data where the z screen keeps too many pairs (i.i.d.-like). Returns
+        the survivors (positions) of ``ub‖Δy‖² ≥ T'_i·lb‖Δx‖²`` with T'_i the
+        row threshold capped by ``cap`` (a threshold valid for every column), and
+        the raised lower bounds of the rows and of the columns,
+        max(L, max sqrt(lb‖Δy‖² / ub‖Δx‖²)) — provable lower bounds of q.
+        """
+        f = self.f
+        xr, xc = f.xs[rows], f.xs[cols]
+        G = xr @ xc.T
+        G *= -2.0
+        xub = G + f.nx_hi[rows][:, None]
+        xub += f.nx_hi[cols][None, :]
+        G += f.nx_lo[rows][:, None]
+        G += f.nx_lo[cols][None, :]  # lower bound of ‖Δx̂‖²
+        Gy = f.ws[rows] @ f.ws[cols].T
+        Gy *= -2.0
+        ylb = Gy + f.nw_lo[rows][:, None]
+        ylb += f.nw_lo[cols][None, :]
+        Gy += f.nw_hi[rows][:, None]
+        Gy += f.nw_hi[cols][None, :]  # upper bound of ‖Δŵ‖²
+        ylb /= xub  # lower bound of the squared scaled ratio (xub > 0 by the norm floor)
+        conv = f.scale_x / f.scale_y
+        lift = lambda best: np.sqrt(np.maximum(best.astype(np.float64), 0.0)) * conv * (1.0 - 1e-5)
+        Lr = np.maximum(Lr, lift(ylb.max(axis=1)))
+        Lc = np.maximum(Lc, lift(ylb.max(axis=0)))
+        T = thresholds(Lr, f.scale_x, f.scale_y)
+        if cap is not None:
+            np.minimum(T, threshold_scalar(min(cap, Lc.min()), f.scale_x, f.scale_y), out=T)
+        G *= T[:, None]
+        Gy -= G
+        ri, cj = survivors(Gy)
+        return ri, cj, Lr, Lc
+
     def sym_release(self) -> None:
         self.o_col = self.o_ws = self.o_nb = self.o_zs = self.o_na = None
 
@@ -271,7 +308,7 @@ def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> S
 
 
 def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int = 2048,
-                   batch: int = 2048) -> SearchStats:
+                   batch: int = 2048, sym_full_fraction: float = 0.05) -> SearchStats:
     """Screen every unordered pair once, crediting a surviving pair to both points.
 
     Orientation: a pair (i, j) cannot reach q_i nor q_j when
@@ -294,6 +331,13 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
     kern.sym_prepare(order)
     lock = threading.Lock()
     sx, sy = f.scale_x, f.scale_y
+
+    full = [f.xs is None]  # [z screen useless → full-d screen]; one flag for all tiles
+    has_full = f.xs is not None
+
+    def raise_lb(idx: np.ndarray, L: np.ndarray) -> None:
+        with lock:
+            lb[idx] = np.maximum(lb[idx], L)
 
     def credit(gi: np.ndarray, gj: np.ndarray, r: np.ndarray, both: bool) -> None:
         with lock:
@@ -326,12 +370,24 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
             pend.clear()
 
         for c0, c1 in spans:
-            T = thresholds(lb[rows], sx, sy)
             diag = c0 == s
-            if not diag:
-                np.minimum(T, threshold_scalar(lb[order[c0:c1]].min(), sx, sy), out=T)
-            ri, cj = kern.sym_screen(s, e, T, c0, c1)
-            st.pairs_screened += (e - s) * (c1 - c0)
+            cols = order[c0:c1]
+            n_ac = (e - s) * (c1 - c0)
+            if not full[0] or not has_full:
+                T = thresholds(lb[rows], sx, sy)
+                if not diag:
+                    np.minimum(T, threshold_scalar(lb[cols].min(), sx, sy), out=T)
+                ri, cj = kern.sym_screen(s, e, T, c0, c1)
+                st.pairs_screened += n_ac
+                if has_full and len(ri) > sym_full_fraction * n_ac and n_ac >= 1 << 16:
+                    full[0] = True  # i.i.d.-like data: the z screen keeps too much
+            if full[0] and has_full:
+                ri, cj, Lr, Lc = kern.sym_tight(rows, cols, lb[rows], lb[cols],
+                                                None if diag else np.inf)
+                st.pairs_full_screened += n_ac
+                raise_lb(rows, Lr)
+                if not diag:
+                    raise_lb(cols, Lc)
             if len(ri) == 0:
                 continue
             pend.append((rows[ri], order[c0 + cj], diag))

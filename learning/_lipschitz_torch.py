@@ -85,6 +85,27 @@ class TorchKernel:
         R = self._rowfeat(self.o_ws[s:e], self.o_nb[s:e], self.o_zs[s:e], self.o_na[s:e], Tt)
         return self._where(R @ self.o_col[c0:c1].T >= 0.0, c1 - c0)
 
+    def sym_tight(self, rows, cols, Lr, Lc, cap):
+        """See ``NumpyKernel.sym_tight``."""
+        f = self.f
+        r, c = self._idx(rows), self._idx(cols)
+        G = -2.0 * (self.xs[r] @ self.xs[c].T)
+        xub = G + self.nx_hi[r][:, None] + self.nx_hi[c][None, :]
+        xlb = G + self.nx_lo[r][:, None] + self.nx_lo[c][None, :]
+        Gy = -2.0 * (self.ws[r] @ self.ws[c].T)
+        ylb = (Gy + self.nw_lo[r][:, None] + self.nw_lo[c][None, :]) / xub
+        yub = Gy + self.nw_hi[r][:, None] + self.nw_hi[c][None, :]
+        conv = f.scale_x / f.scale_y
+        lift = lambda best: np.sqrt(np.maximum(best.double().cpu().numpy(), 0.0)) * conv * (1.0 - 1e-5)
+        Lr = np.maximum(Lr, lift(ylb.amax(dim=1)))
+        Lc = np.maximum(Lc, lift(ylb.amax(dim=0)))
+        T = thresholds(Lr, f.scale_x, f.scale_y)
+        if cap is not None:
+            np.minimum(T, thresholds(np.array([min(cap, Lc.min())]), f.scale_x, f.scale_y)[0], out=T)
+        Tt = torch.from_numpy(T).to(self.dev)
+        ri, cj = self._where(yub >= Tt[:, None] * xlb, len(cols))
+        return ri, cj, Lr, Lc
+
     def sym_release(self) -> None:
         self.o_col = self.o_ws = self.o_nb = self.o_zs = self.o_na = None
 

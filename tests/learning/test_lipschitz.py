@@ -309,3 +309,23 @@ def test_symmetric_pass_equals_one_sided(monkeypatch, tile, chunk):
         with np.errstate(divide="ignore", invalid="ignore"):
             r = dy / dx
         assert not np.any(r == qs[i])
+
+
+@pytest.mark.parametrize("backend", ["numpy", "torch"])
+def test_symmetric_full_d_mode_iid(monkeypatch, backend):
+    """i.i.d. data switches the symmetric pass to the full-d two-sided screen; still exact."""
+    if backend == "torch":
+        pytest.importorskip("torch")
+    import learning.lipschitz as lip
+    monkeypatch.setattr(lip, "_SYM_TILE", 128)
+    monkeypatch.setattr(lip, "_SYM_CHUNK", 512)
+    rng = np.random.default_rng(12)
+    X = rng.normal(size=(1400, 40))
+    X = np.concatenate([X, X[:100] + 1e-9 * rng.normal(size=(100, 40))])
+    Y = rng.normal(size=(1500, 2))
+    q, p = pointwise_quotients(X, Y, return_partner=True, backend=backend, device="cpu"
+                               if backend == "torch" else None, n_jobs=2)
+    s = last_search_stats()
+    assert s["pairs_full_screened"] > 0.3 * s["n_pairs"]
+    assert_exact(q, brute_force(X, Y))
+    assert_partner(X, Y, q, p)
