@@ -31,7 +31,7 @@ from ._lipschitz_bounds import (Features, leaf_boxes, leaf_upper_ratios, row_fea
 from ._lipschitz_exact import pair_ratios, update_best
 
 __all__ = ["NumpyKernel", "SearchStats", "search_leaf", "LeafContext", "nearest_leaves",
-           "symmetric_pass", "survivors"]
+           "symmetric_pass", "survivors", "warm_leaf"]
 
 _SEG = 64  # columns per segment of the survivor reduction (see ``survivors``)
 
@@ -304,6 +304,25 @@ def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> S
         np.maximum(L, q[s0:e0], out=L)
     if ctx.lb is not None:
         np.maximum(ctx.lb[s0:e0], L, out=ctx.lb[s0:e0])
+    return st
+
+
+def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> SearchStats:
+    """Raise the lower bounds ``ctx.lb`` of leaf ``a``'s rows from its ``m`` nearest leaves.
+
+    Only the full-dimensional two-sided float32 bounds are used (no exact
+    evaluation): max_j sqrt(lb‖Δy‖²/ub‖Δx‖²) is a provable lower bound of q_i,
+    and the symmetric pass evaluates every pair that matters exactly anyway.
+    """
+    f, lb = ctx.f, ctx.lb
+    st = SearchStats()
+    rows = np.arange(f.leaf_start[a], f.leaf_start[a + 1])
+    near = nearest_leaves(ctx, a, m) if m > 1 else np.array([a])
+    cols = np.concatenate([np.arange(f.leaf_start[b], f.leaf_start[b + 1]) for b in near])
+    _, _, Lr, _ = ctx.kernel.sym_tight(rows, cols, lb[rows], lb[cols], None)
+    np.maximum(lb[rows], Lr, out=Lr)
+    lb[rows] = Lr  # rows of leaf a are written only by this task
+    st.pairs_full_screened += len(rows) * len(cols)
     return st
 
 

@@ -28,14 +28,14 @@ import numpy as np
 from ._lipschitz_bounds import F32_UNIT_ROUNDOFF, build_features
 from ._lipschitz_exact import dense_exact, pair_ratios, update_best
 from ._lipschitz_search import (LeafContext, NumpyKernel, SearchStats, nearest_leaves,
-                                search_leaf, symmetric_pass)
+                                search_leaf, symmetric_pass, warm_leaf)
 
 __all__ = ["pointwise_quotients", "check_inputs", "last_search_stats"]
 
 _SMALL_GROUP = 512  # groups up to this size are done densely (all pairs, exactly)
 _TIME_NEIGHBOURS = 2  # initial bounds from rows k±1, k±2 of the same group
 _SYMMETRIC = True  # screen each unordered pair once (symmetric_pass); False: per-leaf search
-_WARMUP_LEAVES = 1  # symmetric path: each leaf first searches its nearest leaves (raises bounds)
+_WARMUP_LEAVES = 8  # symmetric path: bounds first raised from the nearest leaves (1 = own leaf)
 _SYM_TILE = 256  # rows per tile of the symmetric pass
 _SYM_CHUNK = 4096  # columns per screened chunk of the symmetric pass
 _last_stats: dict = {}
@@ -274,7 +274,9 @@ def _one_group(X, Y, idx, q, partner, *, block, n_components, backend, device, u
         # 2. every unordered pair screened once against those bounds.
         ctx.lb = qp.copy()
         m = _WARMUP_LEAVES
-        for st in run(lambda a: search_leaf(ctx, a, nearest_leaves(ctx, a, m)), range(n_leaves)):
+        warm = (lambda a: warm_leaf(ctx, a, m)) if f.xs is not None else \
+            (lambda a: search_leaf(ctx, a, nearest_leaves(ctx, a, m)))
+        for st in run(warm, range(n_leaves)):
             stats.add(st)
         stats.add(symmetric_pass(ctx, pool, bar, tile=_SYM_TILE, chunk=_SYM_CHUNK))
     else:
