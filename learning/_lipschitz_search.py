@@ -33,39 +33,23 @@ from ._lipschitz_exact import pair_ratios, update_best
 __all__ = ["NumpyKernel", "SearchStats", "search_leaf", "LeafContext", "nearest_leaves",
            "symmetric_pass", "survivors", "warm_leaf"]
 
-_SEG = 64  # columns per segment of the survivor reduction (see ``survivors``)
-
-try:  # torch's segmented max is ~3× faster than numpy's compare + flatnonzero
-    import torch as _torch
-except ImportError:  # pragma: no cover - torch is a dependency of learning
-    _torch = None
+_tls = threading.local()  # per-thread boolean buffer of ``survivors``
 
 
 def survivors(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(row, col) positions of the entries ``S ≥ 0`` of a float32 (a × c) matrix.
 
-    Survivors are rare (≪ 1 %), so the rows are cut into segments of ``_SEG``
-    columns, the maximum of each segment is taken (torch's reduction, an exact
-    operation) and only segments whose maximum is ≥ 0 are examined. NaN never
-    survives, as with ``S >= 0``.
+    Survivors are rare (≪ 1 %): a compare into a reused per-thread boolean
+    buffer and numpy's boolean ``flatnonzero`` (a counting fast path) cost about
+    0.2 ns per entry — cheaper than a segmented max (measured). NaN never survives.
     """
     a, c = S.shape
-    g = _SEG
-    ns = c // g
-    if _torch is None or ns == 0 or S.strides[1] != S.itemsize:
-        return np.divmod(np.flatnonzero(S >= 0.0), c)
-    cg = ns * g
-    head = S[:, :cg].reshape(a, ns, g)  # a view: only the last axis is split
-    hit = _torch.from_numpy(S)[:, :cg].unflatten(1, (ns, g)).amax(dim=2) >= 0.0
-    hit = _torch.nonzero(hit.view(-1)).view(-1).numpy()
-    hr, hs = np.divmod(hit, ns)
-    k, off = np.nonzero(head[hr, hs] >= 0.0)
-    ri, cj = hr[k], hs[k] * g + off
-    if cg != c:  # ragged tail: examined directly
-        rt, ct = np.nonzero(S[:, cg:] >= 0.0)
-        ri, cj = np.concatenate([ri, rt]), np.concatenate([cj, ct + cg])
-    return ri, cj
-
+    buf = getattr(_tls, "buf", None)
+    if buf is None or buf.size < S.size:
+        buf = _tls.buf = np.empty(S.size, dtype=bool)
+    B = buf[:S.size].reshape(a, c)
+    np.greater_equal(S, 0.0, out=B)
+    return np.divmod(np.flatnonzero(B), c)
 
 
 @dataclass
@@ -104,7 +88,7 @@ class NumpyKernel:
         else:
             R = row_features(f.ws[rows], f.nb[rows], f.zs[rows], f.na[rows], T)
             S = R @ f.col_z[cols].T
-        return survivors(S)
+        return survivors(np.ascontiguousarray(S))
 
     def sym_prepare(self, order: np.ndarray) -> None:
         """Copy the z-screen features into the order of the symmetric pass."""

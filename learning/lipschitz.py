@@ -156,6 +156,15 @@ def _make_kernel(backend: str, device, f, X, Y):
     return TorchKernel(f, X, Y, device=device)
 
 
+def _may_have_gpu() -> bool:
+    """False only when, on Linux, no NVIDIA or ROCm device node exists (CUDA cannot work)."""
+    import sys
+    if "torch" in sys.modules or not sys.platform.startswith("linux"):
+        return True
+    return any(os.path.exists(p) for p in ("/dev/nvidiactl", "/dev/nvidia0", "/proc/driver/nvidia",
+                                            "/dev/kfd", "/dev/dxg"))
+
+
 def _resolve_backend(backend: str, device) -> tuple[str, object, float]:
     """(backend, device, unit roundoff of its float32 products)."""
     if backend not in ("auto", "numpy", "torch"):
@@ -163,6 +172,8 @@ def _resolve_backend(backend: str, device) -> tuple[str, object, float]:
     if backend == "auto":
         if device is not None and str(device) != "cpu":
             backend = "torch"
+        elif not _may_have_gpu():
+            backend = "numpy"  # no GPU device node: skip importing torch (about a second)
         else:
             try:
                 import torch
@@ -226,8 +237,8 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
                    leave=False)
     pool = ThreadPoolExecutor(max_workers=n_jobs) if n_jobs > 1 else None
     limit = _blas_single_thread() if backend == "numpy" else nullcontext()
-    # torch's CPU reductions (survivor search) run inside our threads: one intra-op thread each.
-    tlimit = _torch_single_thread() if backend == "numpy" or str(dev) == "cpu" else nullcontext()
+    # torch on the CPU runs inside our threads: one intra-op thread each.
+    tlimit = _torch_single_thread() if backend == "torch" and str(dev) == "cpu" else nullcontext()
     try:
         with limit, tlimit:
             for idx in group_idx:
