@@ -6,7 +6,8 @@ Prints one JSON object: the project's time, the brute force's time on the same
 data in the same process (for large N measured on a subset of rows and
 extrapolated linearly in the number of rows, flagged in the JSON), their ratio,
 the fraction of pairs the project evaluated exactly, peak memory (ru_maxrss of the process after the data and after
-the project's run; tracemalloc is not used, its hooks slow the search several-fold), and the
+the project's run, and the process RSS sampled every 20 ms during the project's run, input
+data included; tracemalloc is not used, its hooks slow the search several-fold), and the
 largest relative difference to a float64 direct-difference reference on a
 sample of rows.
 
@@ -26,6 +27,7 @@ import math
 import os
 import resource
 import sys
+import threading
 import time
 
 import numpy as np
@@ -93,12 +95,51 @@ def iid_data(n: int, d: int, dy: int, seed: int) -> tuple[np.ndarray, np.ndarray
     return rng.normal(size=(n, d)), rng.normal(size=(n, dy))
 
 
-def brute_force_f32(X: np.ndarray, Y: np.ndarray, rows: np.ndarray, block: int = 512
+class RssPeak:
+    """Peak resident set size [MB] of this process while the context is open (sampled).
+
+    ru_maxrss is a lifetime peak (it includes the data generation); this samples
+    /proc/self/statm every ``dt`` seconds in a thread.
+    """
+
+    def __init__(self, dt: float = 0.02) -> None:
+        self.dt, self.peak_mb = dt, 0.0
+        self._stop = threading.Event()
+        self._page = os.sysconf("SC_PAGE_SIZE")
+
+    def _sample(self) -> None:
+        try:
+            with open("/proc/self/statm") as fh:
+                rss = int(fh.read().split()[1]) * self._page / 2 ** 20
+            self.peak_mb = max(self.peak_mb, rss)
+        except OSError:  # pragma: no cover - not Linux
+            pass
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.dt):
+            self._sample()
+
+    def __enter__(self) -> "RssPeak":
+        self._sample()
+        self._t = threading.Thread(target=self._run, daemon=True)
+        self._t.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._t.join()
+        self._sample()
+
+
+def brute_force_f32(X: np.ndarray, Y: np.ndarray, rows: np.ndarray, block: int | None = None
                     ) -> np.ndarray:
     """Plain blocked float32 brute force: q_i for the given rows against all points.
 
     ‖a−b‖² = ‖a‖² + ‖b‖² − 2a·b in float32 (fast, inexact for close pairs).
+    Blocks of 512 rows, fewer for large N so a (block × N) matrix stays ≤ 256 MB.
     """
+    if block is None:
+        block = int(max(16, min(512, (1 << 26) // len(X))))
     X32 = X.astype(np.float32)
     Y32 = Y.astype(np.float32)
     nx = (X32 * X32).sum(1)
@@ -154,17 +195,21 @@ def main(argv: list[str] | None = None) -> dict:
             else windowed_data(a.n, a.d, a.dy, a.seed, latent=a.latent, noise=a.noise))
     rss_data = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
-    t0 = time.perf_counter()
-    c0 = time.process_time()
-    q = pointwise_quotients(X, Y, block=a.block, n_jobs=a.n_jobs, progress=a.progress,
-                           n_components=a.n_components)
-    t_project = time.perf_counter() - t0
-    cpu_project = time.process_time() - c0
+    rss_before = RssPeak()
+    rss_before._sample()
+    rss_before = rss_before.peak_mb
+    with RssPeak() as rss_run:
+        t0 = time.perf_counter()
+        c0 = time.process_time()
+        q = pointwise_quotients(X, Y, block=a.block, n_jobs=a.n_jobs, progress=a.progress,
+                               n_components=a.n_components)
+        t_project = time.perf_counter() - t0
+        cpu_project = time.process_time() - c0
     stats = last_search_stats()
     rss_project = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
     rng = np.random.default_rng(a.seed + 1)
-    n_brute = a.brute_rows or min(a.n, 20000)
+    n_brute = a.brute_rows or min(a.n, 20000 if a.n <= 200000 else 2000)
     brute_rows = np.sort(rng.choice(a.n, size=n_brute, replace=False))
     t0 = time.perf_counter()
     c0 = time.process_time()
@@ -204,6 +249,8 @@ def main(argv: list[str] | None = None) -> dict:
         "fraction_pairs_screened_full_d": stats["pairs_full_screened"] / (2 * n_pairs),
         "peak_rss_mb_after_data": round(rss_data, 1),
         "peak_rss_mb_after_project": round(rss_project, 1),
+        "peak_rss_mb_during_project": round(rss_run.peak_mb, 1),
+        "rss_mb_before_project": round(rss_before, 1),
         "ref_rows": int(len(ref_rows)),
         "max_rel_diff_vs_float64": float(np.max(rel)),
         "max_rel_diff_bruteforce_f32_vs_float64": rel32,

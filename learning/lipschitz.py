@@ -6,14 +6,16 @@ Euclidean norms; pairs identical in both x and y are skipped; identical x with
 different y give ``inf``; a point with no partner gets 0. The result equals a
 float64 direct-difference computation (every quotient that can be the maximum
 is recomputed by direct differences), while almost all pairs are discarded by
-conservative bounds: a principal-component lower bound on ‖Δx‖ with boxes of a
-k-d split to skip whole leaves, and a float32 matrix-product screen with a
-proven rounding margin (see ``_lipschitz_bounds`` and ``_lipschitz_search``).
+conservative bounds: a float32 matrix-product screen on a principal-component
+lower bound of ‖Δx‖ with a proven rounding margin (``_lipschitz_bounds``),
+applied once per unordered pair against lower bounds of both points' quotients
+(``_lipschitz_search.symmetric_pass``).
 
-Memory is O(N·(d + block)) — the float32 copy of X plus a few (block × chunk)
-screening matrices; time is near-linear on data of low intrinsic dimension
-(windowed time series) and falls back to a blocked product (the brute-force
-cost) on i.i.d. data, where no bound can prune.
+Memory is O(N·(d + block)) — the float32 copy of X plus a few (tile × chunk)
+screening matrices per thread; time is N²/2 × (one short float32 product) plus
+the exact recomputation of the few survivors on windowed time series, and about
+half a blocked brute force on i.i.d. data, where no bound can prune (measured
+figures: ``benchmarks/bench_lipschitz.py``).
 """
 
 from __future__ import annotations
