@@ -43,6 +43,8 @@ from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from .atomic import atomic_open, default_dir_mode
+
 __all__ = [
     "DataFormatError",
     "Trial",
@@ -587,18 +589,8 @@ def save_npz(demos: Demonstrations, path: PathLike) -> None:
     p = Path(path)
     demos.validate()
     arrays = _npz_arrays(demos)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, p)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_open(p, "wb") as f:
+        np.savez(f, **arrays)
 
 
 # ---------------------------------------------------------------------- CSV
@@ -789,6 +781,7 @@ def save_csv_folder(demos: Demonstrations, path: PathLike) -> None:
     p.parent.mkdir(parents=True, exist_ok=True)
     with_subject = any(tr.subject != -1 for tr in demos.trials)
     tmp = tempfile.mkdtemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    os.chmod(tmp, default_dir_mode())  # mkdtemp gives 0700; the result is an ordinary folder
     old: str | None = None
     try:
         for tr in demos.trials:

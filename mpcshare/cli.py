@@ -60,7 +60,7 @@ def format_summary(demos: Demonstrations, mode_names: Sequence[str] | None = Non
         + ", ".join(f"{k}: {v / 60:.1f} min" for k, v in s["duration_s_per_subject"].items()) + ")",
         f"obs ({len(s['obs_names'])}):  " + ", ".join(s["obs_names"]),
         f"act ({len(s['act_names'])}):  " + ", ".join(s["act_names"]),
-        f"voluntary: " + (", ".join(s["vol_names"]) if demos.has_voluntary else "none"),
+        "voluntary: " + (", ".join(s["vol_names"]) if demos.has_voluntary else "none"),
     ]
     if s["mode_counts"] is None:
         lines.append("modes:     no labels")

@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -26,6 +24,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from learning.analysis import AnalysisResult  # noqa: E402
+from learning.atomic import atomic_open  # noqa: E402
 from learning.data import Demonstrations  # noqa: E402
 from learning.modes import match_modes  # noqa: E402
 
@@ -36,16 +35,8 @@ _MODE_COLOURS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860
 
 def write_json_atomic(obj: Any, path: Path) -> None:
     """Write JSON to ``path`` through a temporary file and a rename (never half-written)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(obj, f, indent=2, allow_nan=False)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_open(path, "w") as f:
+        json.dump(obj, f, indent=2, allow_nan=False)
 
 
 def _mode_bands(ax, t: np.ndarray, labels: np.ndarray, alpha: float = 0.15) -> None:
@@ -311,8 +302,6 @@ def write_analysis_report(result: AnalysisResult, out: Path, *,
     if result.report["candidates"]:
         _plot_candidates(result, out / "candidates.png")
     md = _markdown(result.report, mode_names)
-    fd, tmp = tempfile.mkstemp(dir=out, prefix=".report.md.", suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
+    with atomic_open(out / "report.md", "w") as f:
         f.write(md)
-    os.replace(tmp, out / "report.md")
     write_json_atomic(result.report, out / "report.json")

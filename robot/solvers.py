@@ -5,12 +5,11 @@ Problem (x ∈ Rⁿˣ):   minimise ½·xᵀP·x + cᵀx   s.t.   lb ≤ x ≤ ub
 * :class:`OsqpBackend` uses the ``osqp`` API directly: qpsolvers builds a new
   OSQP workspace on every call and cannot keep it, so the workspace is set up
   once (fixed dense sparsity pattern) and then only updated (``Px``, ``Ax``,
-  ``q``, ``l``, ``u``) and warm-started every step; solution polishing makes
-  active constraints hold to machine precision.
-  Polishing is off: OSQP 1.x prints "Polishing not needed" to stdout on every
-  solve without an active set, whatever ``verbose`` says; instead ``eps`` is
-  tight (1e-9, termination checked every iteration) and the controller clips
-  to the box and verifies the torque limits afterwards.
+  ``q``, ``l``, ``u``) and warm-started every step. Solution polishing is off
+  (OSQP 1.x prints "Polishing not needed" to stdout on every solve without an
+  active set, whatever ``verbose`` says); instead ``eps`` is tight (1e-9,
+  termination checked every iteration) and the controller clips to the box and
+  verifies the torque limits afterwards, so limits hold to 1e-6.
 * :class:`DaqpBackend` calls DAQP (a dense active-set solver: exact on the
   active constraints, ≈ 5 µs here) directly; through qpsolvers the same solve
   costs ≈ 40 µs more in argument conversion, which is most of the 150 µs budget.

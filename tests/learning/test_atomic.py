@@ -1,0 +1,58 @@
+import os
+import stat
+
+import numpy as np
+import pytest
+
+from learning.atomic import atomic_open, default_dir_mode, default_file_mode
+from learning.data import Demonstrations, Trial, load, save
+
+
+@pytest.fixture
+def umask_022():
+    old = os.umask(0o022)
+    yield
+    os.umask(old)
+
+
+def _mode(path) -> int:
+    return stat.S_IMODE(os.stat(path).st_mode)
+
+
+def test_written_file_has_ordinary_permissions(tmp_path, umask_022):
+    p = tmp_path / "a.json"
+    with atomic_open(p) as f:
+        f.write("{}")
+    assert p.read_text() == "{}"
+    assert _mode(p) == 0o644 == default_file_mode()
+    assert default_dir_mode() == 0o755
+    assert [x.name for x in tmp_path.iterdir()] == ["a.json"]  # no temporary left
+
+
+def test_failure_keeps_previous_file_and_leaves_no_temporary(tmp_path):
+    p = tmp_path / "a.bin"
+    p.write_bytes(b"old")
+    with pytest.raises(RuntimeError, match="boom"):
+        with atomic_open(p, "wb") as f:
+            f.write(b"half")
+            raise RuntimeError("boom")
+    assert p.read_bytes() == b"old"
+    assert [x.name for x in tmp_path.iterdir()] == ["a.bin"]
+
+
+def test_bad_mode_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="mode must be"):
+        with atomic_open(tmp_path / "x", "a"):
+            pass
+
+
+def test_saved_data_sets_are_readable_by_others(tmp_path, umask_022):
+    tr = Trial(obs=np.arange(6.0).reshape(3, 2), act=np.ones((3, 1)), t=np.arange(3) / 100.0,
+               trial_id=0)
+    demos = Demonstrations([tr], rate_hz=100.0)
+    save(demos, tmp_path / "d.npz")
+    save(demos, tmp_path / "csv")
+    assert _mode(tmp_path / "d.npz") == 0o644
+    assert _mode(tmp_path / "csv") == 0o755
+    assert _mode(tmp_path / "csv" / "trial_000.csv") == 0o644
+    assert len(load(tmp_path / "d.npz")) == len(load(tmp_path / "csv")) == 1
