@@ -155,7 +155,7 @@ def _analyze(args: argparse.Namespace) -> int:
 
 def print_headline(report: dict) -> None:
     q = report["quotients"]
-    from mpcshare.report import fmt
+    from mpcshare.report import fmt, fmt_p
 
     print(f"quotients without modes: median {fmt(q['p50'])}, p90 {fmt(q['p90'])}, max {fmt(q['max'])}")
     m = report["modes"]
@@ -164,10 +164,10 @@ def print_headline(report: dict) -> None:
               f"ARI {m['ari']:.3f}")
     t = report["segmentation_test"]
     print(f"HMM vs random segmentation: median q {t['hmm_median_q']:.2f} vs {t['random_median_q']:.2f}, "
-          f"p = {t['p_value']:.2g}")
+          f"{fmt_p(t['p_value'])}")
     for K, v in report["voluntary_share"].items():
         print(f"voluntary share at K = {K}: {100 * v['without_modes']:.1f} % without modes, "
-              f"{100 * v['with_modes']:.1f} % with modes (paired p = {v['p_value']:.2g})")
+              f"{100 * v['with_modes']:.1f} % with modes (paired {fmt_p(v['p_value'])})")
 
 
 CORE_COMMANDS: tuple[Command, ...] = (

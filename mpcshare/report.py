@@ -28,7 +28,7 @@ from learning.atomic import atomic_open  # noqa: E402
 from learning.data import Demonstrations  # noqa: E402
 from learning.modes import match_modes  # noqa: E402
 
-__all__ = ["plot_demonstrations", "write_analysis_report", "write_json_atomic", "fmt"]
+__all__ = ["plot_demonstrations", "write_analysis_report", "write_json_atomic", "fmt", "fmt_p"]
 
 _MODE_COLOURS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860", "#DA8BC3", "#8C8C8C")
 
@@ -169,7 +169,7 @@ def _plot_segmentation(r: AnalysisResult, path: Path) -> None:
         ax.plot(x, np.arange(1, len(x) + 1) / len(x), label=label)
     t = r.report["segmentation_test"]
     ax.set_title(f"HMM vs random segmentation of equal group sizes: median q {t['hmm_median_q']:.2f} vs "
-                 f"{t['random_median_q']:.2f}, one-sided Mann-Whitney p = {t['p_value']:.2g}", fontsize=9)
+                 f"{t['random_median_q']:.2f}, one-sided Mann-Whitney {fmt_p(t['p_value'])}", fontsize=9)
     ax.set_xlabel("log10 q")
     ax.set_ylabel("cumulative share of points")
     ax.legend()
@@ -215,6 +215,15 @@ def fmt(x: float | None) -> str:
     return "inf" if x is None else f"{x:.3g}"
 
 
+def fmt_p(p: float, digits: int = 2) -> str:
+    """A p-value for people: ``"p = 3.1e-05"``; an underflowed 0 as ``"p < 1e-300"``.
+
+    scipy returns exactly 0 when the p-value is below the smallest float64; "p = 0"
+    would claim certainty.
+    """
+    return "p < 1e-300" if p == 0 else f"p = {p:.{digits}g}"
+
+
 def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
     q = report["quotients"]
     m = report["modes"]
@@ -251,7 +260,7 @@ def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
         "",
         f"{verdict}: median q within HMM modes {t['hmm_median_q']:.3g} vs {t['random_median_q']:.3g} within "
         f"{t['n_random']} random segmentations of equal group sizes ({t['random_method']}); one-sided "
-        f"Mann-Whitney U = {t['statistic']:.4g}, p = {t['p_value']:.3g}, Cliff's delta {t['effect_size']:.3f} "
+        f"Mann-Whitney U = {t['statistic']:.4g}, {fmt_p(t['p_value'], 3)}, Cliff's delta {t['effect_size']:.3f} "
         f"(claimed when p < {t['alpha']:g}).",
         "",
         "![segmentation](segmentation.png)",
@@ -264,7 +273,7 @@ def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
     for K, v in report["voluntary_share"].items():
         fold = f"{v['fold_reduction']:.2f}×" if v["fold_reduction"] is not None else "–"
         lines.append(f"| {K} | {100 * v['without_modes']:.1f} % | {100 * v['with_modes']:.1f} % | "
-                     f"{100 * v['random']:.1f} % | {fold} | {v['p_value']:.2g} |")
+                     f"{100 * v['random']:.1f} % | {fold} | {fmt_p(v['p_value']).removeprefix('p = ')} |")
     lines += ["", "Shares are means over trials; the test is a one-sided Wilcoxon signed-rank test over "
               "trials. (Within any grouping quotients can only fall, so the reference is a random "
               "segmentation with the same group sizes, not the data without modes.)", "",

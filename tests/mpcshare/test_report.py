@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from mpcshare.report import fmt, plot_demonstrations, write_json_atomic
+from mpcshare.report import fmt, fmt_p, plot_demonstrations, write_json_atomic
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 
@@ -19,6 +19,12 @@ def test_json_is_atomic_and_strict(tmp_path):
 
 def test_fmt():
     assert fmt(None) == "inf" and fmt(3.14159) == "3.14"
+
+
+def test_fmt_p_does_not_print_an_underflowed_zero():
+    assert fmt_p(0.0) == "p < 1e-300"
+    assert fmt_p(3.14e-5) == "p = 3.1e-05"
+    assert fmt_p(0.5, 3) == "p = 0.5"
 
 
 def test_plot_demonstrations(tmp_path):
