@@ -31,9 +31,13 @@ from .lipschitz import pointwise_quotients
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
 from .predictability import (compare_segmentation, compare_voluntary_shares, paired_wilcoxon,
                              random_segmentation, threshold_from_percentile, voluntary_share)
-from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample
+from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
 
-__all__ = ["AnalysisConfig", "AnalysisResult", "analyze", "SIGNIFICANCE"]
+__all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]
+
+
+class AnalysisError(ValueError):
+    """The data cannot be analysed with these settings (the message says which and why)."""
 
 SIGNIFICANCE = 1e-3  # p-value below which the report claims that modes lower the quotients
 
@@ -134,13 +138,13 @@ def _json_float(x: float) -> float | None:
 class _Steps:
     """A step-level progress bar (tqdm) with timings for the report."""
 
-    def __init__(self, total: int, enabled: bool) -> None:
+    def __init__(self, total: int, enabled: bool, start: float | None = None) -> None:
         self.bar = None
         if enabled:
             from tqdm.auto import tqdm
             self.bar = tqdm(total=total, desc="analysis", unit="step")
         self.timings: dict[str, float] = {}
-        self._t = time.perf_counter()
+        self._t = time.perf_counter() if start is None else start
 
     def done(self, name: str) -> None:
         now = time.perf_counter()
@@ -164,6 +168,18 @@ def _fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: Analysi
                ) -> tuple[TaskModes, np.ndarray]:
     model = TaskModes(n_modes=n_modes, n_restarts=config.hmm_restarts, seed=config.seed).fit(Z, lengths)
     return model, model.predict(Z, lengths)
+
+
+def _check_windows(std: Demonstrations, config: AnalysisConfig) -> None:
+    """Every window (analysis and search) must fit in the longest trial: checked
+    before any long work starts, not when the search reaches that window."""
+    longest = max(len(tr) for tr in std.trials)
+    for name, window in [("window", config.window_s)] + [("search window", w) for w in config.search_windows]:
+        L = window_lags(window, std.rate_hz)
+        if L > longest:
+            raise AnalysisError(
+                f"{name} {window:g} s ({L} samples at {std.rate_hz:g} Hz) is longer than the longest "
+                f"trial ({longest} samples = {longest / std.rate_hz:g} s); use a shorter window")
 
 
 def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
@@ -226,22 +242,29 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         progress: show progress bars (steps, and the quotient engine's).
 
     Raises:
-        ValueError: data too short for the window, or settings that cannot work.
+        AnalysisError: the data cannot be analysed with these settings (rate
+            below ``target_hz``, a trial too short to downsample, no trial as
+            long as the window or a search window).
     """
     config = config or AnalysisConfig()
     if demos.rate_hz < config.target_hz:
-        raise ValueError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
-                         f"{config.target_hz:g} Hz; lower --rate")
+        raise AnalysisError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
+                            f"{config.target_hz:g} Hz; lower --rate")
     n_search = len(config.search_windows) * len(config.search_modes)
-    steps = _Steps(5 + bool(n_search) + config.select_modes, progress)
+    t_start = time.perf_counter()
 
-    # 1. preprocessing
-    low = downsample(demos, config.target_hz) if demos.rate_hz != config.target_hz else demos
+    # 1. preprocessing (and every check on the data, before the progress bar starts)
+    try:
+        low = downsample(demos, config.target_hz) if demos.rate_hz != config.target_hz else demos
+    except ValueError as exc:  # a trial too short to keep 2 samples
+        raise AnalysisError(str(exc)) from exc
     pre = Preprocessor(obs=Standardizer(config.scope, field="obs").fit(low),
                        act=Standardizer(config.scope, field="act").fit(low),
                        target_hz=config.target_hz, window_s=config.window_s)
     std = pre.standardize(low)
+    _check_windows(std, config)
     w = causal_windows(std, config.window_s, rms=True)
+    steps = _Steps(5 + bool(n_search) + config.select_modes, progress, start=t_start)
     steps.done("preprocess")
 
     # 2. quotients without modes

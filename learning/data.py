@@ -551,6 +551,11 @@ def load_npz(path: PathLike) -> Demonstrations:
     p = str(path)
     if not os.path.isfile(p):
         raise DataFormatError("no such file", path=p)
+    if not zipfile.is_zipfile(p):
+        with open(p, "rb") as f:
+            single = f.read(6) == b"\x93NUMPY"
+        raise DataFormatError("not an NPZ archive (a single .npy array?)" if single else
+                              "not an NPZ archive (not a zip file; expected numpy.savez output)", path=p)
     try:
         npz = np.load(p, allow_pickle=False)
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,11 +23,58 @@ from typing import Callable, Sequence
 from learning.data import DataFormatError, Demonstrations, load
 
 __all__ = ["Command", "CORE_COMMANDS", "main", "format_summary", "load_or_fail", "CommandError",
-           "add_analysis_arguments", "run_analysis", "print_headline"]
+           "add_analysis_arguments", "run_analysis", "print_headline", "prepare_output_folder",
+           "positive_int", "positive_float", "nonnegative_float"]
 
 
 class CommandError(RuntimeError):
     """A subcommand cannot go on; the message is printed and the exit status is 1."""
+
+
+# ------------------------------------------------------- argument types
+# argparse turns an ArgumentTypeError into "argument --x: <message>" and exit status 2.
+
+def _number(text: str, kind: type, ok, what: str):
+    try:
+        value = kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+    if (isinstance(value, float) and not math.isfinite(value)) or not ok(value):
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer ≥ 1."""
+    return _number(text, int, lambda v: v >= 1, "an integer >= 1")
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    return _number(text, float, lambda v: v > 0, "a number > 0")
+
+
+def nonnegative_float(text: str) -> float:
+    """argparse type: a finite number ≥ 0."""
+    return _number(text, float, lambda v: v >= 0, "a number >= 0")
+
+
+def prepare_output_folder(path: str | Path) -> Path:
+    """Create the output folder (and parents) or raise :class:`CommandError` saying why.
+
+    Checked before any long work starts, so that a typo in ``--out`` does not
+    cost a whole analysis.
+    """
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise CommandError(f"--out {out}: exists and is not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CommandError(f"--out {out}: cannot create the folder ({exc.strerror or exc})") from exc
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise CommandError(f"--out {out}: folder is not writable")
+    return out
 
 
 @dataclass(frozen=True)
@@ -102,18 +151,18 @@ def _analyze_args(p: argparse.ArgumentParser) -> None:
 def add_analysis_arguments(p: argparse.ArgumentParser) -> None:
     """Options of the predictability analysis (shared by ``analyze`` and ``demo``)."""
     g = p.add_argument_group("analysis")
-    g.add_argument("--rate", type=float, default=10.0, help="rate after downsampling [Hz] (default 10)")
-    g.add_argument("--window", type=float, default=1.0, help="causal window [s] (default 1)")
+    g.add_argument("--rate", type=positive_float, default=10.0, help="rate after downsampling [Hz] (default 10)")
+    g.add_argument("--window", type=nonnegative_float, default=1.0, help="causal window [s] (default 1)")
     g.add_argument("--scope", choices=["sensor", "channel"], default="sensor",
                    help="standardise per sensor to unit RMS magnitude (the paper) or per channel")
-    g.add_argument("--modes", type=int, default=4, help="number of HMM task modes (default 4)")
-    g.add_argument("-K", "--K", dest="K", type=float, nargs="+", default=[5.0, 10.0],
+    g.add_argument("--modes", type=positive_int, default=4, help="number of HMM task modes (default 4)")
+    g.add_argument("-K", "--K", dest="K", type=positive_float, nargs="+", default=[5.0, 10.0],
                    help="thresholds K for the voluntary share (default 5 10)")
-    g.add_argument("--n-random", type=int, default=20,
+    g.add_argument("--n-random", type=positive_int, default=20,
                    help="random segmentations to compare the HMM against (default 20)")
-    g.add_argument("--search-windows", type=float, nargs="*", default=[0.5, 1.0, 2.0],
+    g.add_argument("--search-windows", type=nonnegative_float, nargs="*", default=[0.5, 1.0, 2.0],
                    help="window lengths [s] for the search for missing information")
-    g.add_argument("--search-modes", type=int, nargs="*", default=[2, 3, 4, 5, 6],
+    g.add_argument("--search-modes", type=positive_int, nargs="*", default=[2, 3, 4, 5, 6],
                    help="numbers of modes for the search for missing information")
     g.add_argument("--no-search", action="store_true", help="skip the search for missing information")
     g.add_argument("--select-modes", action="store_true",
@@ -135,18 +184,25 @@ def analysis_config(args: argparse.Namespace):
 
 def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
                  mode_names: Sequence[str] | None = None) -> dict:
-    """Run the analysis with progress output and write report.json, report.md and plots."""
-    from learning.analysis import analyze
+    """Run the analysis with progress output and write report.json, report.md and plots.
+
+    Raises :class:`CommandError` when the data cannot be analysed with these
+    settings (``learning.analysis.AnalysisError``: rate, trials shorter than the window).
+    """
+    from learning.analysis import AnalysisError, analyze
     from mpcshare.report import write_analysis_report
 
-    result = analyze(demos, analysis_config(args), progress=True)
+    try:
+        result = analyze(demos, analysis_config(args), progress=True)
+    except AnalysisError as exc:
+        raise CommandError(f"cannot analyse the data: {exc}") from exc
     write_analysis_report(result, out, mode_names=mode_names)
     return result.report
 
 
 def _analyze(args: argparse.Namespace) -> int:
+    out = prepare_output_folder(args.out)
     demos = load_or_fail(args.data)
-    out = Path(args.out)
     report = run_analysis(demos, args, out)
     print_headline(report)
     print(f"report: {out / 'report.md'}")

@@ -1,11 +1,13 @@
 """The end-to-end predictability analysis (learning.analysis)."""
 
 import json
+import time
 
 import numpy as np
 import pytest
 
-from learning.analysis import AnalysisConfig, analyze
+from learning.analysis import AnalysisConfig, AnalysisError, analyze
+from learning.data import Trial
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 FAST = dict(n_random=3, search_windows=(), search_modes=())
@@ -87,8 +89,29 @@ def test_bad_settings(kwargs, match):
 
 def test_rate_below_analysis_rate_is_refused():
     demos = generate_demonstrations(1, 1, seed=0, config=GeneratorConfig(rate_hz=5.0))
-    with pytest.raises(ValueError, match="below the analysis rate"):
+    with pytest.raises(AnalysisError, match="below the analysis rate"):
         analyze(demos, AnalysisConfig(**FAST))
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(window_s=30.0), "window 30 s"),
+    (dict(search_windows=(1.0, 30.0), search_modes=(2,)), "search window 30 s"),
+])
+def test_window_longer_than_every_trial_is_refused_before_any_work(kwargs, name):
+    demos = generate_demonstrations(1, 0.3, seed=0)  # one 18 s trial
+    t0 = time.perf_counter()
+    with pytest.raises(AnalysisError, match=f"{name} .300 samples at 10 Hz. is longer than the "
+                                            f"longest trial .180 samples"):
+        analyze(demos, AnalysisConfig(**{**FAST, **kwargs}))
+    assert time.perf_counter() - t0 < 2.0  # refused up front, not when the search got there
+
+
+def test_trial_too_short_to_downsample_is_an_analysis_error():
+    demos = generate_demonstrations(1, 0.3, seed=0)
+    tr = demos.trials[0]
+    short = Trial(obs=tr.obs[:5], act=tr.act[:5], t=tr.t[:5], trial_id=0)
+    with pytest.raises(AnalysisError, match="trial 0 has 5 samples"):
+        analyze(demos.with_trials([short]), AnalysisConfig(**FAST))
 
 
 def test_optional_mode_selection_is_reported():

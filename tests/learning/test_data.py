@@ -302,9 +302,17 @@ def test_npz_object_array_refused(tmp_path: Path) -> None:
 def test_npz_not_a_zip(tmp_path: Path) -> None:
     p = tmp_path / "junk.npz"
     p.write_bytes(b"not a zip file at all")
-    with pytest.raises(DataFormatError, match="not a readable NPZ") as exc:
+    with pytest.raises(DataFormatError, match="not an NPZ archive .not a zip file") as exc:
         load(p)
     check_error(exc, p, None, None)
+
+
+def test_npz_that_is_a_single_npy_array(tmp_path: Path) -> None:
+    p = tmp_path / "one.npz"
+    with open(p, "wb") as f:
+        np.save(f, np.zeros(3))
+    with pytest.raises(DataFormatError, match="single .npy array"):
+        load(p)
 
 
 def test_load_missing_and_unknown_format(tmp_path: Path) -> None:

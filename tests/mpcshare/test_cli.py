@@ -66,3 +66,27 @@ def test_analyze_writes_report_and_plots(data_file, tmp_path, capsys):
                 "candidates.png"):
         assert (out / png).stat().st_size > 10_000, png
     assert "voluntary share at K = 5" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args", [["--modes", "0"], ["--window", "-1"], ["-K", "-5"], ["--rate", "inf"],
+                                  ["--n-random", "1.5"], ["--search-modes", "0"]])
+def test_bad_option_values_are_usage_errors(data_file, tmp_path, capsys, args):
+    with pytest.raises(SystemExit) as e:
+        main(["analyze", str(data_file), "--out", str(tmp_path / "r"), *args])
+    assert e.value.code == 2
+    assert "argument " + args[0].split("=")[0] in capsys.readouterr().err
+
+
+def test_output_path_checked_before_loading(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    # the data do not exist either: the output is checked first, before any work
+    assert main(["analyze", str(tmp_path / "nope.npz"), "--out", str(tmp_path / "file")]) == 1
+    err = capsys.readouterr().err
+    assert "--out" in err and "exists and is not a folder" in err and "nope.npz" not in err
+
+
+def test_data_that_cannot_be_analysed_give_one_message(data_file, tmp_path, capsys):
+    assert main(["analyze", str(data_file), "--out", str(tmp_path / "r"), "--rate", "1000"]) == 1
+    err = capsys.readouterr().err
+    assert "cannot analyse the data" in err and "below the analysis rate" in err
+    assert "Traceback" not in err

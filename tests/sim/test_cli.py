@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 
 from learning.data import load
 from sim.cli import main
@@ -26,9 +27,27 @@ def test_generate_csv_folder_same_data_as_npz(tmp_path):
         np.testing.assert_array_equal(x.mode, y.mode)
 
 
-def test_generate_rejects_bad_arguments(tmp_path, capsys):
-    assert main(["generate", "--subjects", "0", "--out", str(tmp_path / "x.npz")]) == 1
-    assert "--subjects" in capsys.readouterr().err
+@pytest.mark.parametrize("args", [["--subjects", "0"], ["--minutes", "-1"], ["--rate", "nan"],
+                                  ["--minutes", "ten"]])
+def test_generate_rejects_bad_arguments_as_usage_errors(tmp_path, capsys, args):
+    with pytest.raises(SystemExit) as e:
+        main(["generate", *args, "--out", str(tmp_path / "x.npz")])
+    assert e.value.code == 2
+    assert f"argument {args[0]}" in capsys.readouterr().err
+    assert not (tmp_path / "x.npz").exists()
+
+
+def test_generate_will_not_replace_a_folder_of_other_files(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("mine")
+    assert main(["generate", "--minutes", "0.1", "--out", str(tmp_path)]) == 1
+    assert "cannot write" in capsys.readouterr().err
+    assert (tmp_path / "notes.txt").read_text() == "mine"
+
+
+def test_demo_refuses_an_output_path_that_is_a_file(tmp_path, capsys):
+    (tmp_path / "f").write_text("x")
+    assert main(["demo", "--out", str(tmp_path / "f")]) == 1
+    assert "exists and is not a folder" in capsys.readouterr().err
 
 
 def test_demo_writes_summary_plots_and_report(tmp_path):
