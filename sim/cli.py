@@ -8,10 +8,8 @@ analysis and its report), all into one output folder.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
-from pathlib import Path
 from typing import Sequence
 
 from learning.atomic import atomic_open
