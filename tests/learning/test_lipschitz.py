@@ -329,3 +329,22 @@ def test_symmetric_full_d_mode_iid(monkeypatch, backend):
     assert s["pairs_full_screened"] > 0.3 * s["n_pairs"]
     assert_exact(q, brute_force(X, Y))
     assert_partner(X, Y, q, p)
+
+
+def test_symmetric_pass_chooses_the_screen_per_chunk(monkeypatch):
+    """Low-rank smooth points and i.i.d. points in one group: chunks of the same pass
+    use the z screen where it prunes and the full-d screen where it does not; exact."""
+    import learning.lipschitz as lip
+    monkeypatch.setattr(lip, "_SYM_TILE", 128)
+    monkeypatch.setattr(lip, "_SYM_CHUNK", 512)
+    rng = np.random.default_rng(3)
+    t = np.linspace(0, 20, 1500)[:, None]
+    smooth = np.sin(t * rng.uniform(0.2, 2.0, size=(1, 40)) + rng.uniform(0, 6, size=(1, 40)))
+    X = np.concatenate([smooth, 0.3 * rng.normal(size=(1500, 40))])
+    Y = np.concatenate([np.sin(t * np.array([[0.7, 1.3]])), rng.normal(size=(1500, 2))])
+    q, p = pointwise_quotients(X, Y, return_partner=True, n_jobs=2)
+    s = last_search_stats()
+    assert s["pairs_screened"] > 0.2 * s["n_pairs"]
+    assert s["pairs_full_screened"] > 0.2 * s["n_pairs"]
+    assert_exact(q, brute_force(X, Y))
+    assert_partner(X, Y, q, p)
