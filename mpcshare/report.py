@@ -28,7 +28,7 @@ from learning.atomic import atomic_open  # noqa: E402
 from learning.data import Demonstrations  # noqa: E402
 from learning.modes import match_modes  # noqa: E402
 
-__all__ = ["plot_demonstrations", "write_analysis_report", "write_json_atomic", "fmt", "fmt_p"]
+__all__ = ["plot_demonstrations", "write_analysis_report", "write_json_atomic", "fmt", "fmt_p", "fmt_p_value"]
 
 _MODE_COLOURS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860", "#DA8BC3", "#8C8C8C")
 
@@ -215,13 +215,19 @@ def fmt(x: float | None) -> str:
     return "inf" if x is None else f"{x:.3g}"
 
 
-def fmt_p(p: float, digits: int = 2) -> str:
-    """A p-value for people: ``"p = 3.1e-05"``; an underflowed 0 as ``"p < 1e-300"``.
+def fmt_p_value(p: float, digits: int = 2) -> str:
+    """A p-value for a table cell: ``"3.1e-05"``; an underflowed 0 as ``"< 1e-300"``.
 
-    scipy returns exactly 0 when the p-value is below the smallest float64; "p = 0"
+    scipy returns exactly 0 when the p-value is below the smallest float64; "0"
     would claim certainty.
     """
-    return "p < 1e-300" if p == 0 else f"p = {p:.{digits}g}"
+    return "< 1e-300" if p == 0 else f"{p:.{digits}g}"
+
+
+def fmt_p(p: float, digits: int = 2) -> str:
+    """A p-value in a sentence: ``"p = 3.1e-05"``, or ``"p < 1e-300"`` (see ``fmt_p_value``)."""
+    value = fmt_p_value(p, digits)
+    return f"p {value}" if value.startswith("<") else f"p = {value}"
 
 
 def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
@@ -273,7 +279,7 @@ def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
     for K, v in report["voluntary_share"].items():
         fold = f"{v['fold_reduction']:.2f}×" if v["fold_reduction"] is not None else "–"
         lines.append(f"| {K} | {100 * v['without_modes']:.1f} % | {100 * v['with_modes']:.1f} % | "
-                     f"{100 * v['random']:.1f} % | {fold} | {fmt_p(v['p_value']).removeprefix('p = ')} |")
+                     f"{100 * v['random']:.1f} % | {fold} | {fmt_p_value(v['p_value'])} |")
     lines += ["", "Shares are means over trials; the test is a one-sided Wilcoxon signed-rank test over "
               "trials. (Within any grouping quotients can only fall, so the reference is a random "
               "segmentation with the same group sizes, not the data without modes.)", "",

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from mpcshare.report import fmt, fmt_p, plot_demonstrations, write_json_atomic
+from mpcshare.report import fmt, fmt_p, fmt_p_value, plot_demonstrations, write_json_atomic
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 
@@ -25,6 +25,7 @@ def test_fmt_p_does_not_print_an_underflowed_zero():
     assert fmt_p(0.0) == "p < 1e-300"
     assert fmt_p(3.14e-5) == "p = 3.1e-05"
     assert fmt_p(0.5, 3) == "p = 0.5"
+    assert fmt_p_value(0.0) == "< 1e-300" and fmt_p_value(3.14e-5) == "3.1e-05"
 
 
 def test_plot_demonstrations(tmp_path):
