@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
@@ -563,8 +563,16 @@ def to_mjcf(params: SuperLimbParams | None = None, extra_worldbody_xml: str = ""
 # --------------------------------------------------------------------------
 
 
-def build_pinocchio_model(params: SuperLimbParams | None = None):
-    """Pinocchio ``(model, data, tool_frame_id)`` built from :func:`to_urdf`.
+class PinocchioModel(NamedTuple):
+    """What :func:`build_pinocchio_model` returns: the model, a ``data`` for it, the tool frame id."""
+
+    model: Any
+    data: Any
+    frame_id: int
+
+
+def build_pinocchio_model(params: SuperLimbParams | None = None) -> PinocchioModel:
+    """Pinocchio ``PinocchioModel(model, data, frame_id)`` built from :func:`to_urdf` (frame: the tool).
 
     Sets ``model.armature`` (reflected rotor inertia [kg·m²]), the velocity
     [rad/s] and effort [N·m] limits, and gravity (0, 0, −g) [m/s²].
@@ -579,7 +587,7 @@ def build_pinocchio_model(params: SuperLimbParams | None = None):
     arm[idx] = p.armature
     model.armature = arm
     data = model.createData()
-    return model, data, model.getFrameId(TOOL_FRAME)
+    return PinocchioModel(model, data, int(model.getFrameId(TOOL_FRAME)))
 
 
 def write_assets(params: SuperLimbParams | None = None, directory: Path = ASSETS_DIR) -> list[Path]:

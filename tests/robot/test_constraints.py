@@ -122,7 +122,7 @@ def test_torque_rows_match_inverse_dynamics(seed) -> None:
     h = rng.normal(size=n)
     tau_max = rng.uniform(0.5, 5.0, n)
     lim = JointLimits(-np.ones(n), np.ones(n), np.ones(n), np.ones(n) * 100, np.ones(n), tau_max)
-    G, hh = TorqueLimit(lim).rows(_state(np.zeros(n), np.zeros(n), M=M, h=h))
+    G, hh = TorqueLimit(lim).compute_qp_inequalities(_state(np.zeros(n), np.zeros(n), M=M, h=h))
     for _ in range(20):
         a = rng.normal(scale=2.0, size=n)
         inside = bool(np.all(G @ a <= hh))
@@ -134,7 +134,7 @@ def test_box_rows_and_bounds_agree() -> None:
     s = _state([0.2, -0.3], [1.0, -2.5])
     for c in (AccelerationLimit(lim), VelocityLimit(lim), PositionLimit(lim)):
         lo, hi = c.bounds(s)
-        G, h = c.rows(s)
+        G, h = c.compute_qp_inequalities(s)
         assert G.shape == (4, 2) and c.num_rows(2) == 4
         np.testing.assert_allclose(G @ hi, np.concatenate([hi, -hi]))
         assert np.all(G @ lo <= h + 1e-12) and np.all(G @ hi <= h + 1e-12)
