@@ -28,13 +28,18 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .analysis_report import (AnalysisReport, Candidate, ModesSummary, QuotientStats, SegmentationTest,
-                              VoluntaryShare)
+from .analysis_report import AnalysisReport, Candidate, ModesSummary, QuotientStats, SegmentationTest, VoluntaryShare
 from .data import Demonstrations
 from .lipschitz import pointwise_quotients
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
-from .predictability import (compare_segmentation, compare_voluntary_shares, paired_wilcoxon,
-                             random_segmentation, threshold_from_percentile, voluntary_share)
+from .predictability import (
+    compare_segmentation,
+    compare_voluntary_shares,
+    paired_wilcoxon,
+    random_segmentation,
+    threshold_from_percentile,
+    voluntary_share,
+)
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]

@@ -14,9 +14,16 @@ import argparse
 import sys
 from typing import Sequence
 
-from .commands.base import (Command, CommandError, load_or_fail, nonnegative_float, positive_float, positive_int,
-                            prepare_output_folder)
 from .commands.analysis import ANALYZE_COMMAND
+from .commands.base import (
+    Command,
+    CommandError,
+    load_or_fail,
+    nonnegative_float,
+    positive_float,
+    positive_int,
+    prepare_output_folder,
+)
 from .commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from .commands.demo import DEMO_COMMAND
 

@@ -153,7 +153,7 @@ class QPController:
     @classmethod
     def for_superlimb(cls, params=None, config: QPConfig | None = None) -> "QPController":
         """Controller on the SuperLimb's ``knife_tip`` with its derived limits."""
-        from .superlimb import SuperLimbParams, TOOL_FRAME, build_pinocchio_model
+        from .superlimb import TOOL_FRAME, SuperLimbParams, build_pinocchio_model
 
         p = params or SuperLimbParams()
         model, _, _ = build_pinocchio_model(p)

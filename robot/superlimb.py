@@ -401,7 +401,8 @@ def _urdf_link(link: LinkParams) -> str:
         f'    <inertial>\n'
         f'      <origin xyz="{_v(i.com)}" rpy="0 0 0"/>\n'
         f'      <mass value="{_f(i.mass)}"/>\n'
-        f'      <inertia ixx="{_f(ixx)}" ixy="{_f(ixy)}" ixz="{_f(ixz)}" iyy="{_f(iyy)}" iyz="{_f(iyz)}" izz="{_f(izz)}"/>\n'
+        f'      <inertia ixx="{_f(ixx)}" ixy="{_f(ixy)}" ixz="{_f(ixz)}" '
+        f'iyy="{_f(iyy)}" iyz="{_f(iyz)}" izz="{_f(izz)}"/>\n'
         f'    </inertial>\n'
         f'    <visual>\n'
         f'      <origin xyz="{_v(mid)}" rpy="0 {_f(pitch)} {_f(yaw)}"/>\n'
@@ -438,7 +439,8 @@ def to_urdf(params: SuperLimbParams | None = None) -> str:
             f'    <parent link="{parent}"/>\n    <child link="{child}"/>\n'
             f'    <origin xyz="{_v(j.origin_xyz)}" rpy="{_v(j.origin_rpy)}"/>\n'
             f'    <axis xyz="{_v(j.axis)}"/>\n'
-            f'    <limit lower="{_f(j.lower)}" upper="{_f(j.upper)}" velocity="{_f(j.velocity_limit)}" effort="{_f(j.torque_limit)}"/>\n'
+            f'    <limit lower="{_f(j.lower)}" upper="{_f(j.upper)}" '
+            f'velocity="{_f(j.velocity_limit)}" effort="{_f(j.torque_limit)}"/>\n'
             f'    <dynamics damping="0" friction="0"/>\n'
             f'  </joint>\n'
         )
@@ -472,7 +474,8 @@ def _mj_geom(link: LinkParams, contact: bool, rgba: str) -> str:
     col = "" if contact else ' contype="0" conaffinity="0"'
     a, b = np.array(link.geom_from), np.array(link.geom_to)
     if np.linalg.norm(b - a) < 1e-9:
-        return f'<geom name="{link.name}_geom" type="sphere" size="{_f(link.geom_radius)}" pos="{_v(a)}" rgba="{rgba}"{col}/>'
+        return (f'<geom name="{link.name}_geom" type="sphere" size="{_f(link.geom_radius)}" pos="{_v(a)}" '
+                f'rgba="{rgba}"{col}/>')
     return (f'<geom name="{link.name}_geom" type="capsule" fromto="{_v(tuple(a) + tuple(b))}" '
             f'size="{_f(link.geom_radius)}" rgba="{rgba}"{col}/>')
 

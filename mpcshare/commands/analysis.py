@@ -9,8 +9,15 @@ from typing import Sequence
 from learning.analysis_report import AnalysisReport
 from learning.data import Demonstrations
 
-from .base import (Command, CommandError, load_or_fail, nonnegative_float, positive_float, positive_int,
-                   prepare_output_folder)
+from .base import (
+    Command,
+    CommandError,
+    load_or_fail,
+    nonnegative_float,
+    positive_float,
+    positive_int,
+    prepare_output_folder,
+)
 from .data import DATA_HELP
 
 __all__ = ["ANALYZE_COMMAND", "add_analysis_arguments", "analysis_config", "run_analysis", "print_headline"]

@@ -7,8 +7,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robot.constraints import (AccelerationLimit, PositionLimit, TorqueLimit, VelocityLimit,
-                               intersect_by_priority, viable_velocity_bound)
+from robot.constraints import (
+    AccelerationLimit,
+    PositionLimit,
+    TorqueLimit,
+    VelocityLimit,
+    intersect_by_priority,
+    viable_velocity_bound,
+)
 from robot.limits import JointLimits
 from robot.state import ControlState
 

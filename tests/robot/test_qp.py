@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from robot.constraints import viable_velocity_bound
 from robot.errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from robot.limits import JointLimits
-from robot.solvers import daqp_available
 from robot.qp import QPConfig, QPController, QPStatus
+from robot.solvers import daqp_available
 from robot.superlimb import SuperLimbParams, build_pinocchio_model
 
 TOL = 1e-6

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from robot.errors import ControllerConfigError
-from robot.solvers import (DaqpBackend, OsqpBackend, QpsolversBackend, daqp_available, make_backend)
+from robot.solvers import DaqpBackend, OsqpBackend, QpsolversBackend, daqp_available, make_backend
 
 
 def _reference(P, c, lb, ub, G, h):

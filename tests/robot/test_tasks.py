@@ -7,8 +7,7 @@ import pytest
 
 from robot.errors import ControllerConfigError
 from robot.state import ControlState
-from robot.tasks import (AccelerationRegularization, DampingTask, Objective, PostureTask, Task,
-                         TipTrackingTask)
+from robot.tasks import AccelerationRegularization, DampingTask, Objective, PostureTask, Task, TipTrackingTask
 
 N = 3
 

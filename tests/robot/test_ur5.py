@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from robot.limits import JointLimits
-from robot.solvers import daqp_available
 from robot.qp import QPConfig, QPController, QPStatus
+from robot.solvers import daqp_available
 
 erd = pytest.importorskip("example_robot_data")
 TOL = 1e-6

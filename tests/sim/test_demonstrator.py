@@ -6,8 +6,16 @@ from scipy import signal
 
 from learning.lipschitz import pointwise_quotients
 from learning.preprocess import preprocess
-from sim.demonstrator import (ACT_NAMES, CUTTING, MODE_NAMES, OBS_NAMES, VOL_NAMES, GeneratorConfig,
-                              SubjectStyle, generate_demonstrations)
+from sim.demonstrator import (
+    ACT_NAMES,
+    CUTTING,
+    MODE_NAMES,
+    OBS_NAMES,
+    VOL_NAMES,
+    GeneratorConfig,
+    SubjectStyle,
+    generate_demonstrations,
+)
 
 
 @pytest.fixture(scope="module")
