@@ -252,12 +252,15 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     Raises:
         AnalysisError: the data cannot be analysed with these settings (rate
             below ``target_hz``, a trial too short to downsample, no trial as
-            long as the window or a search window).
+            long as the window or a search window, ``select_modes`` with one trial).
     """
     config = config or AnalysisConfig()
     if demos.rate_hz < config.target_hz:
         raise AnalysisError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
                             f"{config.target_hz:g} Hz; lower --rate")
+    if config.select_modes and len(demos.trials) < 2:
+        raise AnalysisError(f"choosing the number of modes (select_modes) holds out whole trials and needs "
+                            f"at least 2 trials, the data have {len(demos.trials)}")
     n_search = len(config.search_windows) * len(config.search_modes)
     t_start = time.perf_counter()
 

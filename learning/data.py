@@ -2,7 +2,7 @@
 
 A *trial* is one continuous demonstration; a :class:`Demonstrations` set is an
 ordered list of trials sharing channel names and sample rate. The on-disk
-formats (NPZ file, CSV folder) are described in ``shared/DESIGN.md``; loading
+formats (NPZ file, CSV folder) are described in ``docs/design.md``; loading
 validates everything and raises :class:`DataFormatError` naming file, field and
 row; saving is atomic.
 

@@ -134,3 +134,11 @@ def test_sim_imports_nothing_from_mpcshare():
             names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
                      [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else [])
             assert not any(n == "mpcshare" or n.startswith("mpcshare.") for n in names), path
+
+
+def test_select_modes_on_one_trial_is_one_message(tmp_path, capsys):
+    one = tmp_path / "one.npz"
+    save(generate_demonstrations(1, 0.5, seed=0), one)
+    assert main(["analyze", str(one), "--out", str(tmp_path / "r"), "--no-search", "--select-modes"]) == 1
+    err = capsys.readouterr().err
+    assert "needs at least 2 trials" in err and "Traceback" not in err
