@@ -115,8 +115,18 @@ class DaqpBackend:
 
     def solve(self, P: np.ndarray, c: np.ndarray, lb: np.ndarray, ub: np.ndarray,
               G: np.ndarray, h: np.ndarray) -> SolveOutcome:
-        """Bounds must be finite or ±1e30 (DAQP's infinity)."""
+        """Bounds must be finite or ±1e30 (DAQP's infinity).
+
+        DAQP's wrapper takes writable buffers only: read-only inputs (limits and
+        tasks return read-only arrays) are copied.
+        """
         n = self.n
+        if not P.flags.writeable:
+            P = P.copy()
+        if not c.flags.writeable:
+            c = c.copy()
+        if not G.flags.writeable:
+            G = G.copy()
         self._upper[:n] = ub
         self._upper[n:] = h
         self._lower[:n] = lb

@@ -69,6 +69,19 @@ def test_backend_matches_the_exact_solution_over_a_sequence(name: str) -> None:
     assert active >= 4  # the sequence exercises active constraints, not only interior optima
 
 
+@pytest.mark.parametrize("name", list(BACKENDS))
+def test_backend_accepts_read_only_inputs(name: str) -> None:
+    """Limits and tasks return read-only arrays; every back-end must take them as they are."""
+    if name == "daqp" and not daqp_available():
+        pytest.skip("daqp not installed")
+    problem = _problem(4)
+    for a in problem:
+        a.flags.writeable = False
+    out = BACKENDS[name](3, 4).solve(*problem)
+    assert out.x is not None, out.status
+    np.testing.assert_allclose(out.x, _reference(*problem), atol=TOL[name])
+
+
 def test_daqp_and_osqp_agree_with_infinite_bounds() -> None:
     if not daqp_available():
         pytest.skip("daqp not installed")
