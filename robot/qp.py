@@ -156,8 +156,7 @@ class QPController:
         from .superlimb import TOOL_FRAME, SuperLimbParams, build_pinocchio_model
 
         p = params or SuperLimbParams()
-        model, _, _ = build_pinocchio_model(p)
-        return cls(model, TOOL_FRAME, JointLimits.from_superlimb(p), config)
+        return cls(build_pinocchio_model(p).model, TOOL_FRAME, JointLimits.from_superlimb(p), config)
 
     @property
     def dt(self) -> float:

@@ -149,6 +149,25 @@ def test_box_rows_and_bounds_agree() -> None:
     np.testing.assert_allclose(s.v + lo * s.dt, -lim.v_max)
 
 
+def test_limits_return_named_read_only_rows() -> None:
+    from robot.constraints import Bounds, Constraint, Limit, default_constraints
+
+    lim = JointLimits([-1, -1], [1, 1], [2, 3], [20, 30], [10, 10], [5, 5])
+    s = _state([0.2, -0.3], [1.0, -2.5])
+    boxes, rows = default_constraints(lim)
+    for c in [*boxes, *rows]:
+        assert isinstance(c, Limit)
+        out = c.compute_qp_inequalities(s)
+        assert isinstance(out, Constraint) and out.G.shape == (4, 2) and out.h.shape == (4,)
+        with pytest.raises(ValueError):
+            out.G[0, 0] = 1.0
+    assert all(isinstance(b.bounds(s), Bounds) for b in boxes)
+    with pytest.raises(ValueError):  # limit arrays are read-only
+        lim.q_max[0] = 2.0
+    with pytest.raises(ValueError):
+        AccelerationLimit(lim).bounds(s).lo[0] = 0.0
+
+
 def test_limits_validation() -> None:
     from robot.errors import ControllerConfigError
 
