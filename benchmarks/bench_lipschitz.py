@@ -35,8 +35,7 @@ import time
 
 import numpy as np
 
-from learning._lipschitz_exact import pair_ratios
-from learning.lipschitz import last_search_stats, pointwise_quotients
+from learning.lipschitz import pair_ratios, pointwise_quotients
 
 
 def smooth_signals(rng: np.random.Generator, T: int, channels: int, rate_hz: float = 10.0,
@@ -228,11 +227,12 @@ def main(argv: list[str] | None = None) -> dict:
     with RssPeak() as rss_run:
         t0 = time.perf_counter()
         c0 = time.process_time()
-        q = pointwise_quotients(X, Y, block=a.block, n_jobs=a.n_jobs, progress=a.progress,
-                               n_components=a.n_components)
+        q, _, search_stats = pointwise_quotients(X, Y, block=a.block, n_jobs=a.n_jobs,
+                                                 progress=a.progress, n_components=a.n_components,
+                                                 return_stats=True)
         t_project = time.perf_counter() - t0
         cpu_project = time.process_time() - c0
-    stats = last_search_stats()
+    stats = search_stats.to_dict()
     rss_project = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
     rng = np.random.default_rng(a.seed + 1)

@@ -24,8 +24,7 @@ from typing import Iterable, Literal
 import numpy as np
 from scipy import stats
 
-from ._lipschitz_exact import pair_ratios
-from .lipschitz import check_inputs, pointwise_quotients
+from .lipschitz import check_inputs, pair_ratios, pointwise_quotients
 
 __all__ = [
     "threshold_from_percentile", "voluntary_mask", "split_reactive_voluntary", "voluntary_share",

@@ -1,6 +1,6 @@
 """Exact branch-and-bound search of point-wise Lipschitz quotients in one group.
 
-Default path (``pointwise_quotients`` with ``_SYMMETRIC``):
+Default path (``pointwise_quotients`` with ``SearchOptions(search="symmetric")``):
 
 1. ``warm_leaf``: each k-d leaf raises the lower bounds ``lb`` of its rows from
    its 8 nearest leaves with full-dimensional two-sided float32 bounds (no exact
@@ -15,8 +15,8 @@ Default path (``pointwise_quotients`` with ``_SYMMETRIC``):
    Tile-level bounds are not used there: on windowed data they skip almost
    nothing (measured: ≥ 95 % of 64-row × leaf blocks needed even with the final q).
 
-One-sided path (``search_leaf`` alone; also the warm-up for groups without full-d features).
-Per leaf A (rows of a k-d leaf in the feature space of ``_lipschitz_bounds``):
+One-sided path (``search="per_leaf"``: ``search_leaf`` alone; also the warm-up for groups without full-d features).
+Per leaf A (rows of a k-d leaf in the feature space of ``_bounds``):
 
 1. bound every leaf pair (A, B) by ``ub_AB ≥ ‖Δy‖/‖Δx‖`` from the boxes; visit
    the leaves B with ``ub_AB ≥ min_{i∈A} L_i`` in decreasing ``ub_AB``, where
@@ -26,13 +26,13 @@ Per leaf A (rows of a k-d leaf in the feature space of ``_lipschitz_bounds``):
    all their pairs with one float32 product (``S_ij ≥ 0``; conservative by
    construction); when many survive, screen again with the full-dimensional
    float32 product, which is much tighter;
-3. recompute the survivors exactly in float64 (``_lipschitz_exact``) and raise
+3. recompute the survivors exactly in float64 (``_exact``) and raise
    ``L``; the next chunk is screened against the raised bounds.
 
 Rows of A are written only by the task of A, so leaves run in parallel threads
 (numpy releases the GIL in products and ufuncs) and the result does not depend
 on the schedule. ``Kernel`` isolates the array library: numpy here, torch in
-``_lipschitz_torch``.
+``_torch``.
 """
 
 from __future__ import annotations
@@ -42,11 +42,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._lipschitz_bounds import (Features, leaf_boxes, leaf_upper_ratios, row_features,
+from ._bounds import (Features, leaf_boxes, leaf_upper_ratios, row_features,
                                 threshold_scalar, thresholds)
-from ._lipschitz_exact import pair_ratios, update_best
+from ._exact import pair_ratios, update_best
 
-__all__ = ["NumpyKernel", "SearchStats", "search_leaf", "LeafContext", "nearest_leaves",
+__all__ = ["NumpyKernel", "PairCounters", "search_leaf", "LeafContext", "nearest_leaves",
            "symmetric_pass", "survivors", "warm_leaf"]
 
 _tls = threading.local()  # per-thread boolean buffer of ``survivors``
@@ -69,14 +69,14 @@ def survivors(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass
-class SearchStats:
+class PairCounters:
     """Counters of one search (summed over leaves)."""
 
     pairs_screened: int = 0
     pairs_full_screened: int = 0
     pairs_exact: int = 0
 
-    def add(self, other: "SearchStats") -> None:
+    def add(self, other: "PairCounters") -> None:
         self.pairs_screened += other.pairs_screened
         self.pairs_full_screened += other.pairs_full_screened
         self.pairs_exact += other.pairs_exact
@@ -223,7 +223,7 @@ def nearest_leaves(ctx: LeafContext, a: int, m: int) -> np.ndarray:
     return near[np.lexsort((near, dc[near]))]
 
 
-def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> SearchStats:
+def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> PairCounters:
     """Complete the quotients of the rows of leaf ``a`` (see module doc).
 
     With ``leaves`` given, only those leaves are searched, in that order (a
@@ -231,7 +231,7 @@ def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> S
     pairs evaluated). Lower bounds found on the way go to ``ctx.lb`` if set.
     """
     f, q, partner, kern = ctx.f, ctx.q, ctx.partner, ctx.kernel
-    st = SearchStats()
+    st = PairCounters()
     s0, e0 = int(f.leaf_start[a]), int(f.leaf_start[a + 1])
     rows_all = np.arange(s0, e0)
     # Local lower bounds: ≥ the exact maxima found so far, ≤ the true q_i.
@@ -307,7 +307,7 @@ def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> S
     return st
 
 
-def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> SearchStats:
+def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> PairCounters:
     """Raise the lower bounds ``ctx.lb`` of leaf ``a``'s rows from its ``m`` nearest leaves.
 
     Only the full-dimensional two-sided float32 bounds are used (no exact
@@ -315,7 +315,7 @@ def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> SearchStats:
     and the symmetric pass evaluates every pair that matters exactly anyway.
     """
     f, lb = ctx.f, ctx.lb
-    st = SearchStats()
+    st = PairCounters()
     rows = np.arange(f.leaf_start[a], f.leaf_start[a + 1])
     near = nearest_leaves(ctx, a, m) if m > 1 else np.array([a])
     cols = np.concatenate([np.arange(f.leaf_start[b], f.leaf_start[b + 1]) for b in near])
@@ -327,7 +327,7 @@ def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> SearchStats:
 
 
 def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int = 2048,
-                   batch: int = 2048, sym_full_fraction: float = 0.02) -> SearchStats:
+                   batch: int = 2048, sym_full_fraction: float = 0.02) -> PairCounters:
     """Screen every unordered pair once, crediting a surviving pair to both points.
 
     Orientation: a pair (i, j) cannot reach q_i nor q_j when
@@ -341,7 +341,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
     points under a lock (the other thread may own either point); thresholds are
     re-read from the shared bounds before every chunk, so they only tighten.
     The set of maxima does not depend on the schedule: every pair that attains
-    q_i survives whatever the bounds were (see ``_lipschitz_bounds``), so q and the
+    q_i survives whatever the bounds were (see ``_bounds``), so q and the
     partner (smallest index among the maximisers) are the same as the one-sided search.
     """
     f, q, partner, kern, lb = ctx.f, ctx.q, ctx.partner, ctx.kernel, ctx.lb
@@ -366,8 +366,8 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
             if both:
                 lb[gj] = np.maximum(lb[gj], q[gj])
 
-    def task(s: int) -> tuple[SearchStats, int]:
-        st = SearchStats()
+    def task(s: int) -> tuple[PairCounters, int]:
+        st = PairCounters()
         e = min(s + tile, n)
         rows = order[s:e]
         spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
@@ -436,7 +436,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
         flush()
         return st, (e - s) * (e - s - 1) // 2 + (e - s) * (n - e)
 
-    total = SearchStats()
+    total = PairCounters()
     starts = list(range(0, n, tile))
     try:
         results = map(task, starts) if pool is None else pool.map(task, starts)
