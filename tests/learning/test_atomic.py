@@ -56,3 +56,28 @@ def test_saved_data_sets_are_readable_by_others(tmp_path, umask_022):
     assert _mode(tmp_path / "csv") == 0o755
     assert _mode(tmp_path / "csv" / "trial_000.csv") == 0o644
     assert len(load(tmp_path / "d.npz")) == len(load(tmp_path / "csv")) == 1
+
+
+@pytest.fixture
+def umask_077():
+    old = os.umask(0o077)
+    yield
+    os.umask(old)
+
+
+def test_kernel_applies_the_umask_and_it_is_never_changed(tmp_path, umask_077, monkeypatch):
+    """Files and folders get 0666/0777 less the umask from the kernel; nothing calls
+    os.umask (setting it to read it would race with other threads)."""
+    calls = []
+    real = os.umask
+    monkeypatch.setattr(os, "umask", lambda m: calls.append(m) or real(m))
+    with atomic_open(tmp_path / "a.txt") as f:
+        f.write("x")
+    tr = Trial(obs=np.zeros((3, 1)), act=np.ones((3, 1)), t=np.arange(3) / 100.0)
+    save(Demonstrations([tr], rate_hz=100.0), tmp_path / "csv")
+    assert default_file_mode() == 0o600 and default_dir_mode() == 0o700
+    monkeypatch.undo()
+    assert calls == []
+    assert _mode(tmp_path / "a.txt") == 0o600
+    assert _mode(tmp_path / "csv") == 0o700
+    assert _mode(tmp_path / "csv" / "trial_000.csv") == 0o600
