@@ -34,6 +34,7 @@ import threading
 import time
 
 import numpy as np
+from typing_extensions import Self
 
 from learning.lipschitz import pair_ratios, pointwise_quotients
 
@@ -138,7 +139,7 @@ class RssPeak:
         while not self._stop.wait(self.dt):
             self._sample()
 
-    def __enter__(self) -> "RssPeak":
+    def __enter__(self) -> Self:
         self._sample()
         self._t = threading.Thread(target=self._run, daemon=True)
         self._t.start()
@@ -278,7 +279,7 @@ def main(argv: list[str] | None = None) -> dict:
         "peak_rss_mb_after_project": round(rss_project, 1),
         "peak_rss_mb_during_project": round(rss_run.peak_mb, 1),
         "rss_mb_before_project": round(rss_before, 1),
-        "ref_rows": int(len(ref_rows)),
+        "ref_rows": len(ref_rows),
         "max_rel_diff_vs_float64": float(np.max(rel)),
         "max_rel_diff_bruteforce_f32_vs_float64": rel32,
         "q_median": float(np.median(q)),

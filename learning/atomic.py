@@ -15,11 +15,12 @@ from __future__ import annotations
 import os
 import secrets
 import tempfile
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import IO, Iterator
+from typing import IO
 
-__all__ = ["atomic_open", "make_temp_dir", "default_file_mode", "default_dir_mode"]
+__all__ = ["atomic_open", "default_dir_mode", "default_file_mode", "make_temp_dir"]
 
 _ATTEMPTS = 100  # random names tried before giving up (a clash is ~2⁻⁴⁸ each)
 

@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Literal, Sequence
+from typing import Literal
 
 import numpy as np
 from scipy import signal
@@ -26,13 +27,13 @@ from scipy import signal
 from .data import Demonstrations, Trial
 
 __all__ = [
-    "downsample",
+    "Preprocessor",
     "Standardizer",
     "WindowedData",
-    "window_lags",
     "causal_windows",
-    "Preprocessor",
+    "downsample",
     "preprocess",
+    "window_lags",
 ]
 
 
@@ -87,7 +88,7 @@ def downsample(demos: Demonstrations, target_hz: float = 10.0) -> Demonstrations
                          tr.t[-1] + (idx - last) / rate)
         near = np.minimum(np.rint(idx).astype(int), last)
 
-        def rs(x: np.ndarray) -> np.ndarray:
+        def rs(x: np.ndarray, n_out: int = n_out) -> np.ndarray:
             return signal.resample_poly(x, up, down, axis=0, padtype="line")[:n_out]
 
         out.append(Trial(obs=rs(tr.obs), act=rs(tr.act), t=t_new, trial_id=tr.trial_id,
@@ -165,7 +166,7 @@ class Standardizer:
                              f"{[g.tolist() for g in groups]}")
         return groups
 
-    def fit(self, x: Demonstrations | np.ndarray) -> "Standardizer":
+    def fit(self, x: Demonstrations | np.ndarray) -> Standardizer:
         """Fit mean and scale on ``x`` (the training trials only), (N, d) or a set."""
         a = self._data(x)
         if a.shape[0] == 0:
@@ -271,7 +272,7 @@ def window_lags(window_s: float, rate_hz: float) -> int:
         raise ValueError(f"window_s must be finite and ≥ 0, got {window_s!r}")
     if not (math.isfinite(rate_hz) and rate_hz > 0):
         raise ValueError(f"rate_hz must be finite and > 0, got {rate_hz!r}")
-    return max(1, int(round(window_s * rate_hz)))
+    return max(1, int(np.rint(window_s * rate_hz)))
 
 
 def causal_windows(demos: Demonstrations, window_s: float, *, rate_hz: float | None = None,

@@ -42,19 +42,19 @@ from .npz import NPZ_FIELDS, load_npz, save_npz
 from .splits import split_by_subject, split_by_trial
 
 __all__ = [
-    "DataFormatError",
-    "Trial",
-    "Demonstrations",
-    "load",
-    "save",
-    "load_npz",
-    "save_npz",
-    "load_csv_folder",
-    "save_csv_folder",
-    "split_by_trial",
-    "split_by_subject",
     "NPZ_FIELDS",
     "RATE_TOLERANCE",
+    "DataFormatError",
+    "Demonstrations",
+    "Trial",
+    "load",
+    "load_csv_folder",
+    "load_npz",
+    "save",
+    "save_csv_folder",
+    "save_npz",
+    "split_by_subject",
+    "split_by_trial",
 ]
 
 

@@ -9,6 +9,7 @@ the same rules, once; errors name the file, the CSV column and the data row.
 from __future__ import annotations
 
 import csv
+import itertools
 import os
 import re
 import shutil
@@ -22,7 +23,7 @@ from ..atomic import make_temp_dir
 from .checks import CHANNEL_PREFIX, DataFormatError, Origin
 from .model import Demonstrations, PathLike, Trial, from_stacked_arrays
 
-__all__ = ["load_csv_folder", "save_csv_folder", "CSV_NAME"]
+__all__ = ["CSV_NAME", "load_csv_folder", "save_csv_folder"]
 
 #: File names of a CSV folder: ``trial_<integer id>.csv``.
 CSV_NAME = re.compile(r"^trial_(-?\d+)\.csv$")
@@ -111,7 +112,7 @@ class _File:
     def channels(self, kind: str) -> np.ndarray | None:
         return self.data[:, self.cols[kind]] if self.cols[kind] else None
 
-    def check_same_columns(self, ref: "_File") -> None:
+    def check_same_columns(self, ref: _File) -> None:
         for kind, pre in CHANNEL_PREFIX.items():
             if self.names[kind] != ref.names[kind]:
                 raise DataFormatError(f"{pre}* columns {self.names[kind]} differ from {ref.names[kind]} "
@@ -135,7 +136,7 @@ def _trial_files(folder: str) -> list[tuple[int, str]]:
     if not files:
         raise DataFormatError("no trial_<id>.csv files", path=folder)
     files.sort()
-    for (a, fa), (b, fb) in zip(files, files[1:]):
+    for (a, fa), (b, fb) in itertools.pairwise(files):
         if a == b:
             raise DataFormatError(f"trial id {a} also given by {os.path.basename(fa)}", path=fb, field="trial")
     return files

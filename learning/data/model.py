@@ -6,14 +6,21 @@ sample rate. Sets are checked by the rules of :mod:`learning.data.checks`, once.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
-from .checks import DataFormatError, Origin, as_integer, check_set, check_shapes, rate_value
+from .checks import (
+    Origin,
+    as_integer,
+    check_set,
+    check_shapes,
+    rate_value,
+)
 
-__all__ = ["Trial", "Demonstrations", "from_stacked_arrays"]
+__all__ = ["Demonstrations", "Trial", "from_stacked_arrays"]
 
 PathLike = str | os.PathLike
 
@@ -147,7 +154,7 @@ class Demonstrations:
             out["voluntary"] = np.concatenate([tr.voluntary for tr in self.trials])
         return out
 
-    def select(self, trial_ids: Sequence[int]) -> "Demonstrations":
+    def select(self, trial_ids: Sequence[int]) -> Demonstrations:
         """A new set holding the trials with the given ids, in the given order."""
         by_id = {tr.trial_id: tr for tr in self.trials}
         missing = [i for i in trial_ids if i not in by_id]
@@ -155,12 +162,12 @@ class Demonstrations:
             raise KeyError(f"no trial with id {missing[0]} (have {sorted(by_id)})")
         return self.with_trials([by_id[i] for i in trial_ids])
 
-    def with_trials(self, trials: Sequence[Trial]) -> "Demonstrations":
+    def with_trials(self, trials: Sequence[Trial]) -> Demonstrations:
         """A new set with the given trials and this set's rate and channel names."""
         return Demonstrations(list(trials), self.rate_hz, list(self.obs_names),
                               list(self.act_names), list(self.vol_names))
 
-    def validate(self, path: PathLike | None = None) -> "Demonstrations":
+    def validate(self, path: PathLike | None = None) -> Demonstrations:
         """Check the whole set (:func:`learning.data.checks.check_set`); raise
         :class:`DataFormatError` on the first problem.
 
@@ -205,14 +212,14 @@ class Demonstrations:
     def from_stacked(cls, obs: Any, act: Any, trial: Any, *, t: Any = None, rate_hz: Any = None,
                      subject: Any = None, mode: Any = None, voluntary: Any = None,
                      obs_names: Any = None, act_names: Any = None, vol_names: Any = None,
-                     path: PathLike | None = None) -> "Demonstrations":
+                     path: PathLike | None = None) -> Demonstrations:
         """Build and validate a set from flat (NPZ-layout) arrays; see :mod:`learning.data`.
 
         Errors name ``path`` (if given), the field and the row of the flat arrays.
         """
-        arrays = dict(obs=obs, act=act, trial=trial, t=t, rate_hz=rate_hz, subject=subject,
-                      mode=mode, voluntary=voluntary, obs_names=obs_names, act_names=act_names,
-                      vol_names=vol_names)
+        arrays = {"obs": obs, "act": act, "trial": trial, "t": t, "rate_hz": rate_hz,
+                  "subject": subject, "mode": mode, "voluntary": voluntary, "obs_names": obs_names,
+                  "act_names": act_names, "vol_names": vol_names}
         return from_stacked_arrays(arrays, Origin(path=None if path is None else str(path)))
 
 
@@ -243,9 +250,12 @@ def from_stacked_arrays(arrays: dict[str, Any], origin: Origin) -> Demonstration
             raise origin.error("must be an array with one row per sample, got a scalar", kind)
         return a
 
+    for kind in ("obs", "act", "trial"):
+        if arrays.get(kind) is None:
+            raise origin.error("required field missing", kind)
     obs, act, trial = numeric("obs"), numeric("act"), numeric("trial")
     subject, mode, t, vol = numeric("subject"), numeric("mode"), numeric("t"), numeric("voluntary")
-    assert obs is not None and act is not None and trial is not None
+    assert obs is not None and act is not None and trial is not None  # for the type checker
     if obs.ndim != 2:
         raise origin.error(f"must be 2-D (T, d_o), got shape {obs.shape}", "obs")
     T = obs.shape[0]

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Iterable
+from collections.abc import Iterable
 
 import numpy as np
 
 from .model import Demonstrations
 
-__all__ = ["split_by_trial", "split_by_subject"]
+__all__ = ["split_by_subject", "split_by_trial"]
 
 
 def split_by_trial(demos: Demonstrations, test_fraction: float = 0.25,
@@ -24,7 +24,7 @@ def split_by_trial(demos: Demonstrations, test_fraction: float = 0.25,
         raise ValueError(f"test_fraction must be in (0, 1), got {test_fraction!r}")
     if n < 2:
         raise ValueError(f"need at least 2 trials to split by trial, got {n}; one side would be empty")
-    n_test = min(max(int(round(n * test_fraction)), 1), n - 1)
+    n_test = min(max(int(np.rint(n * test_fraction)), 1), n - 1)
     rng = np.random.default_rng(seed)
     test_pos = set(rng.permutation(n)[:n_test].tolist())
     ids = demos.trial_ids

@@ -14,14 +14,28 @@ Public API
   :func:`survivors` (positions of the entries ≥ 0 of a float32 screen).
 
 The engine lives in private modules: ``_bounds`` (conservative float32 bounds),
-``_exact`` (float64 pairs), ``_search`` (branch and bound, symmetric pass),
+``_exact`` (float64 pairs), ``_kernel`` (numpy screening), ``_search`` (branch and
+bound, symmetric pass),
 ``_torch`` (the torch kernel), ``_quotients`` (the driver).
 """
 
 from ._exact import pair_norms, pair_ratios
-from ._quotients import (QuotientResult, SearchOptions, SearchStats, check_inputs,
-                         pointwise_quotients)
-from ._search import survivors
+from ._kernel import survivors
+from ._quotients import (
+                         QuotientResult,
+                         SearchOptions,
+                         SearchStats,
+                         check_inputs,
+                         pointwise_quotients,
+)
 
-__all__ = ["pointwise_quotients", "check_inputs", "SearchOptions", "SearchStats", "QuotientResult",
-           "pair_ratios", "pair_norms", "survivors"]
+__all__ = [
+                         "QuotientResult",
+                         "SearchOptions",
+                         "SearchStats",
+                         "check_inputs",
+                         "pair_norms",
+                         "pair_ratios",
+                         "pointwise_quotients",
+                         "survivors",
+]

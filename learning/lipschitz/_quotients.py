@@ -31,10 +31,17 @@ from threadpoolctl import threadpool_limits
 
 from ._bounds import F32_UNIT_ROUNDOFF, build_features
 from ._exact import dense_exact, pair_ratios, update_best
-from ._search import (LeafContext, NumpyKernel, PairCounters, nearest_leaves, search_leaf,
-                      symmetric_pass, warm_leaf)
+from ._kernel import NumpyKernel
+from ._search import (
+    LeafContext,
+    PairCounters,
+    nearest_leaves,
+    search_leaf,
+    symmetric_pass,
+    warm_leaf,
+)
 
-__all__ = ["pointwise_quotients", "check_inputs", "SearchOptions", "SearchStats", "QuotientResult"]
+__all__ = ["QuotientResult", "SearchOptions", "SearchStats", "check_inputs", "pointwise_quotients"]
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,17 @@ from ._selection import ModeSelection, select_n_modes
 from ._task_modes import DegenerateModesWarning, TaskModes
 
 __all__ = [
-    "TaskModes", "ModeFilter", "HMMFilterParams", "ModeSelection", "select_n_modes",
-    "DegenerateModesWarning", "match_modes", "mode_agreement", "mode_ari", "relabel",
-    "check_sequences", "forward_filter_log", "RegularizedGaussianHMM",
+    "DegenerateModesWarning",
+    "HMMFilterParams",
+    "ModeFilter",
+    "ModeSelection",
+    "RegularizedGaussianHMM",
+    "TaskModes",
+    "check_sequences",
+    "forward_filter_log",
+    "match_modes",
+    "mode_agreement",
+    "mode_ari",
+    "relabel",
+    "select_n_modes",
 ]

@@ -22,8 +22,16 @@ from hmmlearn.hmm import GaussianHMM
 from scipy import linalg
 from threadpoolctl import threadpool_limits
 
-__all__ = ["RegularizedGaussianHMM", "AbsDeltaMonitor", "check_sequences", "one_thread", "n_hmm_parameters",
-           "quiet_hmmlearn", "split_sequences", "COV_TYPES"]
+__all__ = [
+    "COV_TYPES",
+    "AbsDeltaMonitor",
+    "RegularizedGaussianHMM",
+    "check_sequences",
+    "n_hmm_parameters",
+    "one_thread",
+    "quiet_hmmlearn",
+    "split_sequences",
+]
 
 COV_TYPES = ("full", "diag", "spherical", "tied")
 
@@ -51,9 +59,9 @@ def check_sequences(X: Any, lengths: Any = None, n_features: int | None = None
     lens = np.asarray(lengths)
     if lens.ndim != 1 or lens.size == 0:
         raise ValueError(f"lengths must be a non-empty 1-D sequence, got shape {lens.shape}")
-    if not np.issubdtype(lens.dtype, np.integer):
-        if not np.all(np.isfinite(lens)) or not np.all(lens == np.round(lens)):
-            raise ValueError("lengths must be integers")
+    if not np.issubdtype(lens.dtype, np.integer) and (
+            not np.all(np.isfinite(lens)) or not np.all(lens == np.round(lens))):
+        raise ValueError("lengths must be integers")
     lens = lens.astype(np.int64)
     if (lens <= 0).any():
         raise ValueError(f"lengths must be positive, got {lens[lens <= 0][0]} "

@@ -101,7 +101,7 @@ class HMMFilterParams:
         K = np.shape(self.startprob)[0] if np.ndim(self.startprob) == 1 else None
         means = _frozen("means", self.means, (K, None))
         K, D = means.shape
-        set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731
+        set_ = lambda name, value: object.__setattr__(self, name, value)
         set_("means", means)
         set_("startprob", _frozen("startprob", self.startprob, (K,)))
         set_("transmat", _frozen("transmat", self.transmat, (K, K)))
@@ -137,7 +137,7 @@ class HMMFilterParams:
         return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
 
     @classmethod
-    def from_dict(cls, arrays: dict[str, Any]) -> "HMMFilterParams":
+    def from_dict(cls, arrays: dict[str, Any]) -> HMMFilterParams:
         """Inverse of :meth:`to_dict`; unknown keys are an error naming them."""
         names = {f.name for f in fields(cls)}
         unknown = sorted(set(arrays) - names)

@@ -16,11 +16,19 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted
 
-from ._hmm import (COV_TYPES, RegularizedGaussianHMM, AbsDeltaMonitor, check_sequences,
-                   n_hmm_parameters, one_thread, quiet_hmmlearn, split_sequences)
+from ._hmm import (
+    COV_TYPES,
+    AbsDeltaMonitor,
+    RegularizedGaussianHMM,
+    check_sequences,
+    n_hmm_parameters,
+    one_thread,
+    quiet_hmmlearn,
+    split_sequences,
+)
 from ._online import HMMFilterParams, ModeFilter, forward_filter_log
 
-__all__ = ["TaskModes", "DegenerateModesWarning"]
+__all__ = ["DegenerateModesWarning", "TaskModes"]
 
 # A mode whose expected number of samples is below this fraction of N (and below 1
 # sample) is "empty": it is re-seeded once, then reported.
@@ -87,7 +95,7 @@ class TaskModes(BaseEstimator):
     """
 
     def __init__(self, n_modes: int = 4, covariance_type: str = "full",
-                 n_pca: int | float | None = None, n_restarts: int = 5, sticky: float = 10.0,
+                 n_pca: float | None = None, n_restarts: int = 5, sticky: float = 10.0,
                  n_iter: int = 200, tol: float = 1e-4, min_covar: float = 1e-3,
                  seed: int = 0) -> None:
         self.n_modes = n_modes
@@ -125,7 +133,7 @@ class TaskModes(BaseEstimator):
                                  f"got {self.n_pca!r}")
 
     @one_thread
-    def fit(self, X: np.ndarray, lengths: Sequence[int] | None = None) -> "TaskModes":
+    def fit(self, X: np.ndarray, lengths: Sequence[int] | None = None) -> TaskModes:
         """Fit scaler, PCA and the HMM on trials ``X`` (N, D) with ``lengths``."""
         self._check_params()
         X, lengths = check_sequences(X, lengths)

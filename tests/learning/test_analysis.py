@@ -10,7 +10,7 @@ from learning.analysis import AnalysisConfig, AnalysisError, analyze
 from learning.data import Trial
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
-FAST = dict(n_random=3, search_windows=(), search_modes=())
+FAST = {"n_random": 3, "search_windows": (), "search_modes": ()}
 
 
 @pytest.fixture(scope="module")
@@ -79,8 +79,8 @@ def test_same_seed_same_report():
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(scope="global"), "scope"), (dict(n_modes=0), "n_modes"), (dict(K=()), "K"),
-    (dict(K=(0.0,)), "K"), (dict(n_random=0), "n_random"), (dict(target_hz=0), "target_hz"),
+    ({"scope": "global"}, "scope"), ({"n_modes": 0}, "n_modes"), ({"K": ()}, "K"),
+    ({"K": (0.0,)}, "K"), ({"n_random": 0}, "n_random"), ({"target_hz": 0}, "target_hz"),
 ])
 def test_bad_settings(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -94,8 +94,8 @@ def test_rate_below_analysis_rate_is_refused():
 
 
 @pytest.mark.parametrize("kwargs, name", [
-    (dict(window_s=30.0), "window 30 s"),
-    (dict(search_windows=(1.0, 30.0), search_modes=(2,)), "search window 30 s"),
+    ({"window_s": 30.0}, "window 30 s"),
+    ({"search_windows": (1.0, 30.0), "search_modes": (2,)}, "search window 30 s"),
 ])
 def test_window_longer_than_every_trial_is_refused_before_any_work(kwargs, name, monkeypatch):
     demos = generate_demonstrations(1, 0.3, seed=0)  # one 18 s trial

@@ -32,18 +32,16 @@ def test_written_file_has_ordinary_permissions(tmp_path, umask_022):
 def test_failure_keeps_previous_file_and_leaves_no_temporary(tmp_path):
     p = tmp_path / "a.bin"
     p.write_bytes(b"old")
-    with pytest.raises(RuntimeError, match="boom"):
-        with atomic_open(p, "wb") as f:
-            f.write(b"half")
-            raise RuntimeError("boom")
+    with pytest.raises(RuntimeError, match="boom"), atomic_open(p, "wb") as f:
+        f.write(b"half")
+        raise RuntimeError("boom")
     assert p.read_bytes() == b"old"
     assert [x.name for x in tmp_path.iterdir()] == ["a.bin"]
 
 
 def test_bad_mode_is_refused(tmp_path):
-    with pytest.raises(ValueError, match="mode must be"):
-        with atomic_open(tmp_path / "x", "a"):
-            pass
+    with pytest.raises(ValueError, match="mode must be"), atomic_open(tmp_path / "x", "a"):
+        pass
 
 
 def test_saved_data_sets_are_readable_by_others(tmp_path, umask_022):

@@ -8,10 +8,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import learning.data as data
 import learning.data.csv as csv_format
-from learning.data import (DataFormatError, Demonstrations, Trial, load, load_csv_folder, load_npz,
-                           save, save_csv_folder, save_npz)
+from learning import data
+from learning.data import (
+    DataFormatError,
+    Demonstrations,
+    Trial,
+    load,
+    load_csv_folder,
+    load_npz,
+    save,
+    save_csv_folder,
+    save_npz,
+)
 
 OBS = ["x", "y", "z", "roll"]
 ACT = ["kx", "ky", "kz"]
@@ -571,7 +580,7 @@ def test_csv_tolerates_crlf_and_byte_order_mark(tmp_path: Path) -> None:
 def test_each_trial_is_checked_once_on_load(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                             fmt: str) -> None:
     """NPZ and CSV go through the same checks, once per trial."""
-    import learning.data.checks as checks
+    from learning.data import checks
 
     d = make_demos()
     save(d, tmp_path / fmt)

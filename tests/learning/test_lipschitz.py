@@ -197,7 +197,7 @@ def test_torch_backend_cpu_matches():
     X = np.concatenate([X, X[:100] + 1e-9])
     Y = rng.normal(size=(1000, 3))
     q, p = pointwise_quotients(X, Y, return_partner=True, backend="torch", device="cpu")
-    qn, pn = pointwise_quotients(X, Y, return_partner=True, backend="numpy")
+    _, pn = pointwise_quotients(X, Y, return_partner=True, backend="numpy")
     assert_exact(q, brute_force(X, Y))
     assert np.array_equal(p, pn)
 

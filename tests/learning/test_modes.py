@@ -14,12 +14,12 @@ from learning.modes import (
     HMMFilterParams,
     ModeFilter,
     ModeSelection,
+    RegularizedGaussianHMM,
     TaskModes,
     check_sequences,
     match_modes,
     mode_agreement,
     mode_ari,
-    RegularizedGaussianHMM,
     relabel,
     select_n_modes,
 )
@@ -224,7 +224,7 @@ def test_clear_errors_on_bad_input(data, fitted):
 # ------------------------------------------------------------------ online filter
 
 def test_mode_filter_equals_offline_filter_and_hmmlearn(data, fitted):
-    X, _, L = data
+    X, _, _ = data
     T = 150
     seq = X[400:400 + T]  # a prefix of the second trial
     f = fitted.make_filter()
@@ -383,10 +383,10 @@ def test_regularised_hmm_matches_hmmlearn_em_step(data):
     X, _, L = data
     rng = np.random.default_rng(0)
     K, D = 3, X.shape[1]
-    init = dict(startprob_=np.full(K, 1 / K), transmat_=np.full((K, K), 1 / K),
-                means_=X[rng.choice(len(X), K)], covars_=np.array([np.cov(X.T)] * K))
-    kw = dict(n_components=K, covariance_type="full", n_iter=2, tol=-np.inf, init_params="",
-              covars_prior=0.0, covars_weight=1.0, means_weight=0.0)
+    init = {"startprob_": np.full(K, 1 / K), "transmat_": np.full((K, K), 1 / K),
+            "means_": X[rng.choice(len(X), K)], "covars_": np.array([np.cov(X.T)] * K)}
+    kw = {"n_components": K, "covariance_type": "full", "n_iter": 2, "tol": -np.inf,
+          "init_params": "", "covars_prior": 0.0, "covars_weight": 1.0, "means_weight": 0.0}
     ours, ref = RegularizedGaussianHMM(**kw), GaussianHMM(**kw)
     ours.reg_covar = 0.0
     for h in (ours, ref):
