@@ -1,6 +1,6 @@
 """torch kernel of the Lipschitz search: the same screens and exact step on CPU or CUDA.
 
-The leaf bookkeeping stays in numpy (``_lipschitz_search``); this kernel holds the
+The leaf bookkeeping stays in numpy (``_search``); this kernel holds the
 float32 features and the float64 data on the device and returns index arrays.
 Reduced-precision float32 products (TF32 / bf16, allowed by
 ``torch.set_float32_matmul_precision``) are accounted for by a larger unit
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from ._lipschitz_bounds import F32_UNIT_ROUNDOFF, Features, thresholds
-from ._lipschitz_exact import pair_norms
+from ._bounds import F32_UNIT_ROUNDOFF, Features, thresholds
+from ._exact import pair_norms
 
 __all__ = ["TorchKernel", "resolve_device", "torch_unit_roundoff"]
 
@@ -54,7 +54,7 @@ class TorchKernel:
         return torch.from_numpy(np.ascontiguousarray(a, dtype=np.int64)).to(self.dev)
 
     def _rowfeat(self, ws, nb, xs, na, T):
-        # [−2ŵ, 1, 2Tẑ, −T, b − Ta], see _lipschitz_bounds.row_features.
+        # [−2ŵ, 1, 2Tẑ, −T, b − Ta], see _bounds.row_features.
         one = torch.ones_like(nb)[:, None]
         const = (nb.double() - T.double() * na.double()).float()[:, None]
         return torch.cat([-2.0 * ws, one, (2.0 * T)[:, None] * xs, -T[:, None], const], dim=1)
