@@ -100,7 +100,9 @@ class NumpyKernel:
         Gy += f.nw_hi[cols][None, :]  # upper bound of ‖Δŵ‖²
         ylb /= xub  # lower bound of the squared scaled ratio (xub > 0 by the norm floor)
         conv = f.scale_x / f.scale_y
-        lift = lambda best: np.sqrt(np.maximum(best.astype(np.float64), 0.0)) * conv * (1.0 - 1e-5)
+        def lift(best: np.ndarray) -> np.ndarray:
+            return np.sqrt(np.maximum(best.astype(np.float64), 0.0)) * conv * (1.0 - 1e-5)
+
         Lr = np.maximum(Lr, lift(ylb.max(axis=1)))
         Lc = np.maximum(Lc, lift(ylb.max(axis=0)))
         T = thresholds(Lr, f.scale_x, f.scale_y)

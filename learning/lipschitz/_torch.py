@@ -42,7 +42,9 @@ class TorchKernel:
         self.f = f
         self.dev = resolve_device(device)
         self.chunk_elems = (1 << 24) if self.dev.type == "cuda" else (1 << 20)
-        t = lambda a: None if a is None else torch.from_numpy(np.ascontiguousarray(a)).to(self.dev)
+        def t(a):
+            return None if a is None else torch.from_numpy(np.ascontiguousarray(a)).to(self.dev)
+
         self.ws, self.zs, self.xs = t(f.ws), t(f.zs), t(f.xs)
         self.na, self.nb, self.nx, self.nbx = t(f.na), t(f.nb), t(f.nx), t(f.nbx)
         self.nx_lo, self.nx_hi, self.nw_lo, self.nw_hi = t(f.nx_lo), t(f.nx_hi), t(f.nw_lo), t(f.nw_hi)
@@ -96,7 +98,9 @@ class TorchKernel:
         ylb = (Gy + self.nw_lo[r][:, None] + self.nw_lo[c][None, :]) / xub
         yub = Gy + self.nw_hi[r][:, None] + self.nw_hi[c][None, :]
         conv = f.scale_x / f.scale_y
-        lift = lambda best: np.sqrt(np.maximum(best.double().cpu().numpy(), 0.0)) * conv * (1.0 - 1e-5)
+        def lift(best) -> np.ndarray:
+            return np.sqrt(np.maximum(best.double().cpu().numpy(), 0.0)) * conv * (1.0 - 1e-5)
+
         Lr = np.maximum(Lr, lift(ylb.amax(dim=1)))
         Lc = np.maximum(Lc, lift(ylb.amax(dim=0)))
         T = thresholds(Lr, f.scale_x, f.scale_y)

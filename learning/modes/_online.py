@@ -101,7 +101,9 @@ class HMMFilterParams:
         K = np.shape(self.startprob)[0] if np.ndim(self.startprob) == 1 else None
         means = _frozen("means", self.means, (K, None))
         K, D = means.shape
-        set_ = lambda name, value: object.__setattr__(self, name, value)
+        def set_(name: str, value: object) -> None:
+            object.__setattr__(self, name, value)
+
         set_("means", means)
         set_("startprob", _frozen("startprob", self.startprob, (K,)))
         set_("transmat", _frozen("transmat", self.transmat, (K, K)))
@@ -158,7 +160,8 @@ class ModeFilter:
     the fitted scaler and PCA, evaluates the K Gaussian log densities through Cholesky
     factors precomputed here, and updates the posterior: O(K² + K·D·D_in) per step
     (D = model dimension after PCA; scaler, PCA and each L_j⁻¹ are folded into one
-    D_in × K·D matrix at construction), no hmmlearn call. The result equals ``TaskModes.filter_proba`` on the same prefix.
+    D_in × K·D matrix at construction), no hmmlearn call. The result equals
+    ``TaskModes.filter_proba`` on the same prefix.
 
     With ``fixed_lag = L > 0``, ``step`` returns the fixed-lag smoothed posterior
     p(s_{t−L} | o_0..o_t) (a backward pass over the last L steps, O(L·K²) more); during the
