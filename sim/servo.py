@@ -1,0 +1,170 @@
+"""Joint servo at the physics rate: tracks the controller's command within every limit, in MuJoCo.
+
+Between two controller steps (period T = 10 ms) the servo follows the commanded
+constant-acceleration segment that ends at (q_cmd, v_cmd) [rad, rad/s]:
+
+    q_ref(s) = q_cmd − v_cmd·r + ½·a_cmd·r²,   v_ref(s) = v_cmd − a_cmd·r,   r = t_end − s,
+
+with a PD law on top of the feed-forward acceleration (as a motor driver's
+position loop):  a_des = a_cmd + k_p·(q_ref − q) + k_d·(v_ref − v).
+
+**Limits in the physics.** MuJoCo's ``Euler`` integrator is semi-implicit: with
+zero joint damping, one step h [s] gives exactly
+
+    v⁺ = v + h·M(q)⁻¹·(τ − b(q, v)),      q⁺ = q + h·v⁺
+
+(M: ``mj_fullM`` incl. armature; b: ``qfrc_bias``, gravity + Coriolis).  So the
+servo chooses the next velocity v⁺ inside the *viable* interval
+
+    −v_max ≤ v⁺ ≤ v_max,     v⁺ ≤ u(q_max − q),     −v⁺ ≤ u(q − q_min),
+    u(gap) = −A·h + sqrt(A²h² + 2A·gap)     (A: braking acceleration),
+
+which keeps q⁺ + v⁺²/(2A) ≤ q_max: from there, braking at A (semi-implicit
+steps v ← v − A·h, q ← q + h·v, the last one partial) stops within v⁺²/(2A)
+(:func:`viable_next_velocity`; the set is invariant under braking).  The
+robot package's :func:`robot.constraints.viable_velocity_bound` is the same idea
+for the controller's *exact* constant-acceleration integration (q⁺ = q + h(v + v⁺)/2)
+and does not hold for MuJoCo's step, hence this variant.  Then τ = M·a + b; if
+|τ| exceeds τ_max the small QP  min ‖a − a_des‖²  s.t. the viable box and
+|M·a + b| ≤ τ_max  (DAQP through :mod:`robot.solvers`) picks the nearest
+feasible a.  It is always feasible when braking is: the servo checks every step
+that braking a_b = clip(−v/h, ±A) needs at most τ_max (``brake_infeasible``
+counts the steps where it would not), as the SuperLimb's A were chosen for.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from robot.solvers import make_backend
+from robot.superlimb import SuperLimbParams
+
+__all__ = ["JointServo", "ServoConfig", "viable_next_velocity"]
+
+
+def viable_next_velocity(gap: float, A: float, h: float) -> float:
+    """Largest v⁺ [rad/s] toward a limit ``gap`` [rad] away (≥ 0) under semi-implicit steps h [s].
+
+    Solves q + h·v⁺ + v⁺²/(2A) ≤ q_lim for v⁺:  v⁺ ≤ −A·h + sqrt(A²h² + 2A·gap).
+    A negative gap (beyond the limit) gives gap/h < 0: the velocity that brings
+    q⁺ back onto the limit in one step.
+    """
+    if gap <= 0.0:
+        return gap / h
+    return -A * h + math.sqrt(A * A * h * h + 2.0 * A * gap)
+
+
+@dataclass(frozen=True)
+class ServoConfig:
+    """Servo gains: natural frequency ``omega`` [rad/s] and damping ratio ``zeta`` of the PD loop.
+
+    k_p = ω², k_d = 2ζω.  ω = 2π·25 Hz: a stiff position loop as a harmonic-drive
+    servo's, well inside the 1 kHz step (k_d·h ≈ 0.3).
+    """
+
+    omega: float = 2.0 * math.pi * 25.0
+    zeta: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (self.omega > 0 and self.zeta > 0):
+            raise ValueError(f"ServoConfig needs omega > 0 and zeta > 0, got {self.omega}, {self.zeta}")
+
+
+class JointServo:
+    """Computes the joint torques [N·m] of one physics step from MuJoCo's current state.
+
+    Call :meth:`set_segment` at each controller step, then, every physics step,
+    ``mj_step1`` → :meth:`torque` → write ``ctrl`` → ``mj_step2``.  Counters:
+    ``qp_steps`` (torque limit active, QP used), ``fallback_steps`` (QP failed,
+    braking with clipped torque), ``brake_infeasible`` (see module docstring).
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, params: SuperLimbParams | None = None,
+                 config: ServoConfig | None = None) -> None:
+        p = params or SuperLimbParams()
+        self.model, self.data, self.config = model, data, config or ServoConfig()
+        if model.nv != 3:
+            raise ValueError(f"JointServo drives a 3-DOF arm, model has nv={model.nv}")
+        if model.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
+            raise ValueError("JointServo predicts MuJoCo's semi-implicit Euler step: set integrator=\"Euler\"")
+        if np.any(model.dof_damping != 0):
+            raise ValueError("JointServo assumes zero joint damping (Euler treats damping implicitly)")
+        self.h = float(model.opt.timestep)
+        self.q_min, self.q_max = p.lower.tolist(), p.upper.tolist()
+        self.v_max, self.A = p.velocity_limit.tolist(), p.braking_acceleration.tolist()
+        self.tau_max = p.torque_limit
+        self._tau_max_l = self.tau_max.tolist()
+        self.kp = self.config.omega ** 2
+        self.kd = 2.0 * self.config.zeta * self.config.omega
+        self._M = np.zeros((3, 3))
+        self._qp = make_backend("auto", 3, 6, 1e-12)
+        self._G = np.zeros((6, 3))
+        self.qp_steps = self.fallback_steps = self.brake_infeasible = 0
+        self.hold()
+
+    def set_segment(self, q_cmd: np.ndarray, v_cmd: np.ndarray, a_cmd: np.ndarray, t_end: float) -> None:
+        """The commanded segment ending at t_end [s] in state (q_cmd, v_cmd) with acceleration a_cmd."""
+        self._seg_l = ([float(x) for x in q_cmd], [float(x) for x in v_cmd], [float(x) for x in a_cmd],
+                       float(t_end))
+
+    def hold(self) -> None:
+        """Stop and hold the current position (used when a command is not usable)."""
+        self._seg_l = (self.data.qpos[:3].tolist(), [0.0] * 3, [0.0] * 3, float(self.data.time))
+
+    def torque(self) -> np.ndarray:
+        """τ (3,) [N·m] for the state in ``data`` (after ``mj_step1``); within ±τ_max always.
+
+        Plain-float arithmetic on the fast path: for 3 joints at 1 kHz, numpy's
+        per-call overhead would cost more than the physics step itself.
+        """
+        d, h = self.data, self.h
+        q, v = d.qpos[:3].tolist(), d.qvel[:3].tolist()
+        q_c, v_c, a_c, t_end = self._seg_l
+        r = t_end - d.time
+        r = max(r, 0.0)
+        kp, kd, vmax, A = self.kp, self.kd, self.v_max, self.A
+        a_des, lo, hi, a_brake = [0.0] * 3, [0.0] * 3, [0.0] * 3, [0.0] * 3
+        for i in range(3):
+            qi, vi = q[i], v[i]
+            a_des[i] = a_c[i] + kp * (q_c[i] - v_c[i] * r + 0.5 * a_c[i] * r * r - qi) + kd * (v_c[i] - a_c[i] * r - vi)
+            v_up = min(vmax[i], viable_next_velocity(self.q_max[i] - qi, A[i], h))
+            v_lo = max(-vmax[i], -viable_next_velocity(qi - self.q_min[i], A[i], h))
+            if v_lo > v_up:  # only beyond a position limit: head back at the speed limit
+                v_lo = v_up = vmax[i] if qi < self.q_min[i] else -vmax[i]
+            lo[i] = (v_lo - vi) / h
+            hi[i] = (v_up - vi) / h
+            a_brake[i] = min(max(-vi / h, -A[i]), A[i])
+        mujoco.mj_fullM(self.model, d, self._M)  # M(q) incl. armature, computed by mj_step1
+        M = self._M.tolist()
+        b = d.qfrc_bias[:3].tolist()
+        tmax = self._tau_max_l
+        a = [min(max(a_des[i], lo[i]), hi[i]) for i in range(3)]
+        tau = [M[i][0] * a[0] + M[i][1] * a[1] + M[i][2] * a[2] + b[i] for i in range(3)]
+        for i in range(3):
+            tb = M[i][0] * a_brake[0] + M[i][1] * a_brake[1] + M[i][2] * a_brake[2] + b[i]
+            if abs(tb) > tmax[i]:
+                self.brake_infeasible += 1
+                break
+        if abs(tau[0]) <= tmax[0] and abs(tau[1]) <= tmax[1] and abs(tau[2]) <= tmax[2]:
+            return np.array(tau)
+        return self._constrained(self._M.copy(), np.array(b), np.array(a_des), np.array(lo), np.array(hi),
+                                 np.array(a_brake))
+
+    def _constrained(self, M: np.ndarray, bias: np.ndarray, a_des: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                     a_brake: np.ndarray) -> np.ndarray:
+        """Nearest a to a_des in the viable box with |M a + b| ≤ τ_max; braking if the QP fails."""
+        self.qp_steps += 1
+        self._G[:3], self._G[3:] = M, -M
+        h_rows = np.concatenate([self.tau_max - bias, self.tau_max + bias])
+        out = self._qp.solve(np.eye(3), -a_des, lo, hi, self._G, h_rows)
+        if out.x is not None:
+            a = np.minimum(np.maximum(out.x, lo), hi)
+            tau = M @ a + bias
+            if np.all(np.abs(tau) <= self.tau_max + 1e-9):
+                return np.clip(tau, -self.tau_max, self.tau_max)
+        self.fallback_steps += 1
+        return np.clip(M @ a_brake + bias, -self.tau_max, self.tau_max)
