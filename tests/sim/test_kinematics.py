@@ -5,7 +5,7 @@ import pinocchio as pin
 import pytest
 
 from robot.superlimb import SuperLimbParams, build_pinocchio_model
-from sim.demonstrator import ACT_NAMES, generate_demonstrations
+from sim.demonstrator import ACT_NAMES, GeneratorConfig, generate_demonstrations
 from sim.kinematics import (
     ArmGeometry,
     forward_tip,
@@ -51,9 +51,9 @@ def test_layout_outside_the_closed_form_is_refused():
         ArmGeometry.from_params(p)
 
 
-@pytest.mark.parametrize("seed", [0, 7])
-def test_demonstrated_knife_tips_reachable_and_on_or_above_the_plate(seed):
-    demos = generate_demonstrations(n_subjects=2, minutes=3, seed=seed)
+@pytest.mark.parametrize("seed,single", [(0, False), (7, False), (2, True)])
+def test_demonstrated_knife_tips_reachable_and_on_or_above_the_plate(seed, single):
+    demos = generate_demonstrations(n_subjects=2, minutes=3, seed=seed, config=GeneratorConfig(single_regime=single))
     cols = [ACT_NAMES.index(c) for c in ("knife_x", "knife_y", "knife_z")]
     tips = np.concatenate([tr.act[:, cols] for tr in demos])
     # Tolerance below the surface: the generator adds sensor noise of σ = 0.01·0.05 m = 0.5 mm
