@@ -211,9 +211,9 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     status = np.empty(n_ctrl, dtype=object)
     step_time = np.zeros(n_ctrl)
     base_poses = np.zeros((n_ctrl, 4, 4))
-    q_lo, q_hi = (sc.params.lower - LIMIT_TOL).tolist(), (sc.params.upper + LIMIT_TOL).tolist()
-    v_lim = (sc.params.velocity_limit + LIMIT_TOL).tolist()
-    tau_lim = (sc.params.torque_limit + TORQUE_TOL).tolist()
+    q_lo, q_hi = sc.params.lower - LIMIT_TOL, sc.params.upper + LIMIT_TOL
+    v_lim, tau_lim = sc.params.velocity_limit + LIMIT_TOL, sc.params.torque_limit + TORQUE_TOL
+    buf_t, buf_q, buf_v, buf_f = np.zeros(n_sub), np.zeros((n_sub, 3)), np.zeros((n_sub, 3)), np.zeros((n_sub, 3))
     violations, worst = 0, {"q": 0.0, "v": 0.0, "tau": 0.0}
     renderer = None
     if render is not None:
@@ -227,7 +227,6 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         bar = tqdm(total=n_ctrl, desc=f"trial {trial.trial_id}", unit="step", leave=False)
 
     wall0 = time.perf_counter()
-    i_phys = 0
     for k in range(n_ctrl):
         t_k = k * sc.control_period
         world.set_time(t_k)
@@ -263,27 +262,28 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         if renderer is not None:
             renderer.maybe_capture(d, k)
 
+        if record:
+            blk = slice(k * n_sub, (k + 1) * n_sub)
+            bt, bq, bv, bf = rec_t[blk], rec_q[blk], rec_v[blk], rec_tau[blk]
+        else:
+            bt, bq, bv, bf = buf_t, buf_q, buf_v, buf_f
         for j in range(n_sub):
             if j:  # the first sub-step's kinematics were computed above
                 world.set_time(t_k + j * h)
                 mujoco.mj_step1(m, d)
-            tau = srv.torque()
-            d.ctrl[:3] = tau
+            d.ctrl[:3] = srv.torque()
             mujoco.mj_step2(m, d)
-            qn, vn, fa = d.qpos[:3].tolist(), d.qvel[:3].tolist(), d.actuator_force[:3].tolist()
-            excess = False
-            for i in range(3):  # plain floats: this runs at 1 kHz
-                eq = max(q_lo[i] - qn[i], qn[i] - q_hi[i])
-                ev, et = abs(vn[i]) - v_lim[i], abs(fa[i]) - tau_lim[i]
-                if eq > 0.0 or ev > 0.0 or et > 0.0:
-                    excess = True
-                    worst["q"], worst["v"] = max(worst["q"], eq), max(worst["v"], ev)
-                    worst["tau"] = max(worst["tau"], et)
-            violations += excess
-            if record:
-                rec_t[i_phys] = d.time
-                rec_q[i_phys], rec_v[i_phys], rec_tau[i_phys] = qn, vn, fa
-                i_phys += 1
+            bt[j] = d.time
+            bq[j], bv[j], bf[j] = d.qpos[:3], d.qvel[:3], d.actuator_force[:3]
+        # the limits, checked on every physics step of the period (vectorised once per period)
+        eq = np.maximum(q_lo - bq, bq - q_hi).max(axis=1)
+        ev = (np.abs(bv) - v_lim).max(axis=1)
+        et = (np.abs(bf) - tau_lim).max(axis=1)
+        bad = (eq > 0.0) | (ev > 0.0) | (et > 0.0)
+        if bad.any():
+            violations += int(bad.sum())
+            worst["q"], worst["v"] = max(worst["q"], float(eq.max())), max(worst["v"], float(ev.max()))
+            worst["tau"] = max(worst["tau"], float(et.max()))
         if bar is not None:
             bar.update(1)
     wall = time.perf_counter() - wall0

@@ -101,6 +101,11 @@ class JointServo:
         self.kp = self.config.omega ** 2
         self.kd = 2.0 * self.config.zeta * self.config.omega
         self._M = np.zeros((3, 3))
+        # per-step scratch arrays (no allocation on the fast path)
+        self._a, self._lo, self._hi, self._a_des = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+        self._tau, self._tau_brake, self._a_brake = np.zeros(3), np.zeros(3), np.zeros(3)
+        # beyond this distance to a limit the viable bound exceeds v_max: v_max²/(2A) + v_max·h [rad]
+        self._free_gap = [vm * vm / (2.0 * a) + vm * self.h for vm, a in zip(self.v_max, self.A)]
         self._qp = make_backend("auto", 3, 6, 1e-12)
         self._G = np.zeros((6, 3))
         self.qp_steps = self.fallback_steps = self.brake_infeasible = 0
@@ -119,43 +124,59 @@ class JointServo:
         """τ (3,) [N·m] for the state in ``data`` (after ``mj_step1``); within ±τ_max always.
 
         Plain-float arithmetic on the fast path: for 3 joints at 1 kHz, numpy's
-        per-call overhead would cost more than the physics step itself.
+        per-call overhead would cost more than the physics step itself.  Far from
+        a position limit (gap ≥ v_max²/(2A) + v_max·h) the viable bound cannot be
+        below v_max and is not evaluated.  Braking feasibility is checked where
+        the servo may rely on it: whenever the viable box or the torque limit is active.
         """
         d, h = self.data, self.h
         q, v = d.qpos[:3].tolist(), d.qvel[:3].tolist()
         q_c, v_c, a_c, t_end = self._seg_l
-        r = t_end - d.time
-        r = max(r, 0.0)
-        kp, kd, vmax, A = self.kp, self.kd, self.v_max, self.A
-        a_des, lo, hi, a_brake = [0.0] * 3, [0.0] * 3, [0.0] * 3, [0.0] * 3
+        r = max(t_end - d.time, 0.0)
+        kp, kd, vmax, A, free = self.kp, self.kd, self.v_max, self.A, self._free_gap
+        a, lo, hi, a_des = self._a, self._lo, self._hi, self._a_des
+        active = False
         for i in range(3):
             qi, vi = q[i], v[i]
-            a_des[i] = a_c[i] + kp * (q_c[i] - v_c[i] * r + 0.5 * a_c[i] * r * r - qi) + kd * (v_c[i] - a_c[i] * r - vi)
-            v_up = min(vmax[i], viable_next_velocity(self.q_max[i] - qi, A[i], h))
-            v_lo = max(-vmax[i], -viable_next_velocity(qi - self.q_min[i], A[i], h))
+            ad = a_c[i] + kp * (q_c[i] - v_c[i] * r + 0.5 * a_c[i] * r * r - qi) + kd * (v_c[i] - a_c[i] * r - vi)
+            gap_up, gap_lo = self.q_max[i] - qi, qi - self.q_min[i]
+            v_up = vmax[i] if gap_up >= free[i] else min(vmax[i], viable_next_velocity(gap_up, A[i], h))
+            v_lo = -vmax[i] if gap_lo >= free[i] else max(-vmax[i], -viable_next_velocity(gap_lo, A[i], h))
             if v_lo > v_up:  # only beyond a position limit: head back at the speed limit
                 v_lo = v_up = vmax[i] if qi < self.q_min[i] else -vmax[i]
-            lo[i] = (v_lo - vi) / h
-            hi[i] = (v_up - vi) / h
-            a_brake[i] = min(max(-vi / h, -A[i]), A[i])
-        mujoco.mj_fullM(self.model, d, self._M)  # M(q) incl. armature, computed by mj_step1
-        M = self._M.tolist()
-        b = d.qfrc_bias[:3].tolist()
+            lo_i, hi_i = (v_lo - vi) / h, (v_up - vi) / h
+            lo[i], hi[i], a_des[i] = lo_i, hi_i, ad
+            if ad < lo_i:
+                ad, active = lo_i, True
+            elif ad > hi_i:
+                ad, active = hi_i, True
+            a[i] = ad
+        tau = self._tau
+        mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
+        tau += d.qfrc_bias[:3]
+        t0, t1, t2 = tau.tolist()
         tmax = self._tau_max_l
-        a = [min(max(a_des[i], lo[i]), hi[i]) for i in range(3)]
-        tau = [M[i][0] * a[0] + M[i][1] * a[1] + M[i][2] * a[2] + b[i] for i in range(3)]
-        for i in range(3):
-            tb = M[i][0] * a_brake[0] + M[i][1] * a_brake[1] + M[i][2] * a_brake[2] + b[i]
-            if abs(tb) > tmax[i]:
-                self.brake_infeasible += 1
-                break
-        if abs(tau[0]) <= tmax[0] and abs(tau[1]) <= tmax[1] and abs(tau[2]) <= tmax[2]:
-            return np.array(tau)
-        return self._constrained(self._M.copy(), np.array(b), np.array(a_des), np.array(lo), np.array(hi),
-                                 np.array(a_brake))
+        fits = abs(t0) <= tmax[0] and abs(t1) <= tmax[1] and abs(t2) <= tmax[2]
+        if active or not fits:
+            self._check_brake(v)
+        if fits:
+            return tau.copy()
+        mujoco.mj_fullM(self.model, d, self._M)
+        return self._constrained(self._M.copy(), d.qfrc_bias[:3].copy(), a_des.copy(), lo.copy(), hi.copy())
 
-    def _constrained(self, M: np.ndarray, bias: np.ndarray, a_des: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                     a_brake: np.ndarray) -> np.ndarray:
+    def _check_brake(self, v: list[float]) -> None:
+        """Count the step if braking a_b = clip(−v/h, ±A) would need more than τ_max."""
+        ab = self._a_brake
+        for i in range(3):
+            ab[i] = min(max(-v[i] / self.h, -self.A[i]), self.A[i])
+        tb = self._tau_brake
+        mujoco.mj_mulM(self.model, self.data, tb, ab)
+        tb += self.data.qfrc_bias[:3]
+        if np.any(np.abs(tb) > self.tau_max):
+            self.brake_infeasible += 1
+
+    def _constrained(self, M: np.ndarray, bias: np.ndarray, a_des: np.ndarray, lo: np.ndarray,
+                     hi: np.ndarray) -> np.ndarray:
         """Nearest a to a_des in the viable box with |M a + b| ≤ τ_max; braking if the QP fails."""
         self.qp_steps += 1
         self._G[:3], self._G[3:] = M, -M
@@ -167,4 +188,4 @@ class JointServo:
             if np.all(np.abs(tau) <= self.tau_max + 1e-9):
                 return np.clip(tau, -self.tau_max, self.tau_max)
         self.fallback_steps += 1
-        return np.clip(M @ a_brake + bias, -self.tau_max, self.tau_max)
+        return np.clip(M @ np.clip(self._a_brake, lo, hi) + bias, -self.tau_max, self.tau_max)
