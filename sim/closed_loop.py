@@ -16,6 +16,14 @@ Per control step k (t_k = k·T, T = 10 ms):
 
 The controller object needs only ``step`` (the interface of
 ``mpcshare.controller.SharedController``); ``reset()`` is called first if it has one.
+``obs`` rows go to the controller in the trial's column order: reorder the trial
+to the controller's channel order first if they differ.
+
+Typical use::
+
+    ep = run_episode(controller, trial, duration_s=60.0, seed=0, render="trial.mp4")
+    ep.save("run.npz")
+    figures = sim.metrics.episode_metrics(ep)   # the comparison.json keys
 """
 
 from __future__ import annotations
@@ -226,7 +234,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
 
         bar = tqdm(total=n_ctrl, desc=f"trial {trial.trial_id}", unit="step", leave=False)
 
-    wall0 = time.perf_counter()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
     for k in range(n_ctrl):
         t_k = k * sc.control_period
         world.set_time(t_k)
@@ -286,13 +294,14 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
             worst["tau"] = max(worst["tau"], float(et.max()))
         if bar is not None:
             bar.update(1)
-    wall = time.perf_counter() - wall0
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     if bar is not None:
         bar.close()
 
     info: dict[str, Any] = {
         "trial_id": trial.trial_id, "seed": seed, "duration_s": n_ctrl * sc.control_period,
         "control_period_s": sc.control_period, "physics_dt_s": h, "wall_time_s": wall,
+        "cpu_time_s": cpu,
         "limit_violations": violations, "max_q_excess_rad": worst["q"], "max_v_excess_rad_s": worst["v"],
         "max_tau_excess_nm": worst["tau"], "servo_qp_steps": srv.qp_steps,
         "servo_fallback_steps": srv.fallback_steps, "brake_infeasible_steps": srv.brake_infeasible,

@@ -130,3 +130,21 @@ def test_servo_refuses_a_model_it_cannot_predict():
     s.model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
     with pytest.raises(ValueError, match="Euler"):
         JointServo(s.model, s.data)
+
+
+def test_braking_that_needs_more_than_the_torque_limit_is_counted():
+    """With a braking acceleration the motors cannot deliver, the servo's check says so."""
+    p = SuperLimbParams().with_joint("shoulder", braking_acceleration=99.0)
+    s = EatingScene()
+    m, d = s.model, s.data
+    s.set_state(np.array([0.0, p.upper[1] - 0.2, 0.5]), np.array([0.0, 1.9, 0.0]), 0.0)
+    srv = JointServo(m, d, p)
+    srv.set_segment(np.array([0.0, p.upper[1] + 0.5, 0.5]), np.array([0.0, 1.9, 0.0]), np.zeros(3), 0.0)
+    for _ in range(300):
+        mujoco.mj_step1(m, d)
+        d.ctrl[:3] = srv.torque()
+        mujoco.mj_step2(m, d)
+    assert srv.brake_infeasible > 0
+    with_default = _run_servo([0.0, p.upper[1] - 0.2, 0.5], [0.0, 1.9, 0.0], [0.0, p.upper[1] + 0.5, 0.5],
+                              [0.0, 1.9, 0.0], np.zeros(3), 300)[3]
+    assert with_default.brake_infeasible == 0
