@@ -279,10 +279,10 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
             if j:  # the first sub-step's kinematics were computed above
                 world.set_time(t_k + j * h)
                 mujoco.mj_step1(m, d)
-            d.ctrl[:3] = srv.torque()
+            d.ctrl = srv.torque()
             mujoco.mj_step2(m, d)
             bt[j] = d.time
-            bq[j], bv[j], bf[j] = d.qpos[:3], d.qvel[:3], d.actuator_force[:3]
+            bq[j], bv[j], bf[j] = d.qpos, d.qvel, d.actuator_force  # the arm is the whole state
         # the limits, checked on every physics step of the period (vectorised once per period)
         eq = np.maximum(q_lo - bq, bq - q_hi).max(axis=1)
         ev = (np.abs(bv) - v_lim).max(axis=1)

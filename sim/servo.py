@@ -87,8 +87,9 @@ class JointServo:
                  config: ServoConfig | None = None) -> None:
         p = params or SuperLimbParams()
         self.model, self.data, self.config = model, data, config or ServoConfig()
-        if model.nv != 3:
-            raise ValueError(f"JointServo drives a 3-DOF arm, model has nv={model.nv}")
+        if model.nv != 3 or model.nq != 3 or model.nu != 3:
+            raise ValueError(f"JointServo drives a 3-DOF arm as the whole state (nq = nv = nu = 3), model has "
+                             f"nq={model.nq}, nv={model.nv}, nu={model.nu}")
         if model.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
             raise ValueError("JointServo predicts MuJoCo's semi-implicit Euler step: set integrator=\"Euler\"")
         if np.any(model.dof_damping != 0):
@@ -130,7 +131,7 @@ class JointServo:
         the servo may rely on it: whenever the viable box or the torque limit is active.
         """
         d, h = self.data, self.h
-        q, v = d.qpos[:3].tolist(), d.qvel[:3].tolist()
+        q, v = d.qpos.tolist(), d.qvel.tolist()  # nq = nv = 3 (checked in __init__)
         q_c, v_c, a_c, t_end = self._seg_l
         r = max(t_end - d.time, 0.0)
         kp, kd, vmax, A, free = self.kp, self.kd, self.v_max, self.A, self._free_gap
@@ -153,7 +154,7 @@ class JointServo:
             a[i] = ad
         tau = self._tau
         mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
-        tau += d.qfrc_bias[:3]
+        tau += d.qfrc_bias
         t0, t1, t2 = tau.tolist()
         tmax = self._tau_max_l
         fits = abs(t0) <= tmax[0] and abs(t1) <= tmax[1] and abs(t2) <= tmax[2]
