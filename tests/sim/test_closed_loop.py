@@ -151,3 +151,17 @@ def test_render_writes_a_video_or_says_why(trial, tmp_path):
             with Image.open(video) as im:
                 assert im.n_frames >= 5
     assert ep.q.shape == (0, 3)  # record=False keeps no physics arrays
+
+
+def test_without_opengl_the_loop_says_so_and_goes_on(trial, tmp_path, monkeypatch):
+    import sim.render
+
+    def no_gl(*args, **kwargs):
+        raise RuntimeError("an OpenGL platform library has not been loaded")
+
+    monkeypatch.setattr(sim.render.mujoco, "Renderer", no_gl)
+    with pytest.warns(RuntimeWarning, match="no video: offscreen OpenGL is not available"):
+        ep = run_episode(IdleController(), trial, duration_s=0.3, render=tmp_path / "clip.mp4")
+    assert ep.info["video"] is None and "MUJOCO_GL=egl" in ep.info["render_message"]
+    assert not (tmp_path / "clip.mp4").exists() and not (tmp_path / "clip.gif").exists()
+    assert ep.t.size == 30 and ep.info["limit_violations"] == 0
