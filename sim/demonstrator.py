@@ -150,7 +150,10 @@ SCOOP_TILT_RAD = 0.15  # fork pitch added when scooping a piece [rad]
 REMOVING_HOLD = 0.1  # share of a removing segment the fork holds before lifting [-]
 _CHANNEL_SCALE = np.array([0.05, 0.05, 0.05, 0.2, 0.2, 0.2, 2.0, 2.0, 2.0])
 PLATE_SURFACE_Z = 0.0  # [m] the plate's top surface in the plate frame
-PLATE_CONTACT_STIFFNESS = 20.0  # [N/m] extra knife pressing force per metre aimed below the plate
+# [N/m] extra knife pressing force per metre aimed below the plate: 2 cm → 0.4 N on top of the
+# mode's own pressing force. Kept soft: 100 N/m moved the calibration (seed 1: 45.8 % → 51.2 %
+# of points above K = 5 without modes, 11.7 % → 13.6 % within modes); 20 N/m leaves it in place.
+PLATE_CONTACT_STIFFNESS = 20.0
 
 
 def _mode_sequence(rng: np.random.Generator, n_samples: int, rate_hz: float,
