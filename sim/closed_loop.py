@@ -60,10 +60,10 @@ class Controller(Protocol):
              base_pose: np.ndarray | None = None) -> Any: ...
 
 
-#: run-file arrays: physics rate, then control rate (the keys of issue 12, plus base_pose)
+#: run-file arrays: physics rate, then control rate (the keys of issue 12, plus base_pose and novelty)
 PHYSICS_KEYS = ("t_physics", "q", "v", "tau")
 CONTROL_KEYS = ("t", "alpha", "beta", "mode", "tip", "tip_reference", "tip_intent", "voluntary", "status",
-                "step_time", "base_pose")
+                "step_time", "base_pose", "novelty")
 
 
 @dataclass
@@ -75,7 +75,8 @@ class Episode:
     Control rate (100 Hz): ``t`` (Nc,) [s], ``alpha``, ``beta`` (Nc,), ``mode`` (Nc,)
     int (argmax of ``mode_proba``, −1 if none), ``tip``, ``tip_reference``,
     ``tip_intent`` (Nc, 3) [m] plate frame, ``voluntary`` (Nc, 3) [rad], ``status``
-    (Nc,) str, ``step_time`` (Nc,) [s], ``base_pose`` (Nc, 4, 4).
+    (Nc,) str, ``step_time`` (Nc,) [s], ``base_pose`` (Nc, 4, 4), ``novelty`` (Nc,)
+    (the command's ``novelty`` where it has one, else NaN).
     ``info``: scalars — limit_violations (physics steps with any limit exceeded),
     the largest excesses, servo counters, wall_time_s, shoulder gain/deadband, the
     trial id, render result.
@@ -96,6 +97,7 @@ class Episode:
     status: np.ndarray
     step_time: np.ndarray
     base_pose: np.ndarray
+    novelty: np.ndarray
     info: dict[str, Any] = field(default_factory=dict)
 
     def save(self, path: str | Path) -> Path:
@@ -214,7 +216,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     rec_t, rec_q = np.zeros(n_phys), np.zeros((n_phys, 3))
     rec_v, rec_tau = np.zeros((n_phys, 3)), np.zeros((n_phys, 3))
     out = {k: np.full((n_ctrl, 3), np.nan) for k in ("tip", "tip_reference", "voluntary")}
-    alpha, beta = np.full(n_ctrl, np.nan), np.full(n_ctrl, np.nan)
+    alpha, beta, novelty = np.full(n_ctrl, np.nan), np.full(n_ctrl, np.nan), np.full(n_ctrl, np.nan)
     mode = np.full(n_ctrl, -1, dtype=int)
     status = np.empty(n_ctrl, dtype=object)
     step_time = np.zeros(n_ctrl)
@@ -260,6 +262,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
             status[k] = err or "invalid_command"
         if cmd is not None:
             alpha[k], beta[k] = _scalar(getattr(cmd, "alpha", np.nan)), _scalar(getattr(cmd, "beta", np.nan))
+            novelty[k] = _scalar(getattr(cmd, "novelty", np.nan))
             ref = _vec3(getattr(cmd, "tip_reference", None))
             if ref is not None:
                 out["tip_reference"][k] = ref
@@ -315,4 +318,4 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
             warnings.warn(message, RuntimeWarning, stacklevel=2)
     return Episode(rec_t, rec_q, rec_v, rec_tau, np.arange(n_ctrl) * sc.control_period, alpha, beta, mode,
                    out["tip"], out["tip_reference"], intent.copy(), out["voluntary"], status.astype(str),
-                   step_time, base_poses, info)
+                   step_time, base_poses, novelty, info)

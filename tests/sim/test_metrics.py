@@ -15,7 +15,7 @@ def _episode(n=100, **over):
         "t": t, "alpha": np.zeros(n), "beta": np.ones(n), "mode": np.zeros(n, int),
         "tip": np.zeros((n, 3)), "tip_reference": np.zeros((n, 3)), "tip_intent": np.zeros((n, 3)),
         "voluntary": np.zeros((n, 3)), "status": np.array(["ok"] * n), "step_time": np.full(n, 0.001),
-        "base_pose": np.tile(np.eye(4), (n, 1, 1)),
+        "base_pose": np.tile(np.eye(4), (n, 1, 1)), "novelty": np.full(n, np.nan),
         "info": {"wall_time_s": 0.1, "duration_s": n * 0.01, "control_period_s": 0.01, "limit_violations": 0,
                  "shoulder_gain": 0.5, "shoulder_deadband_rad": 0.01},
     }
