@@ -1,9 +1,9 @@
 """Offscreen video of an episode: MuJoCo's renderer, written as MP4 (imageio + ffmpeg) or an animated GIF.
 
 Needs an OpenGL context: ``MUJOCO_GL=egl``, set before MuJoCo is first imported (the
-``mpcshare`` command line sets it when it is unset and there is no display), works on headless machines with a GPU driver or
-Mesa's EGL.  Without one, :class:`VideoRecorder` records nothing and
-:meth:`VideoRecorder.close` returns a message saying so; the episode goes on.
+``mpcshare`` command line sets it when it is unset and there is no display), works
+on headless machines with a GPU driver or Mesa's EGL.  Without one, :class:`VideoRecorder`
+records nothing and :meth:`VideoRecorder.close` returns a message saying so; the episode goes on.
 """
 
 from __future__ import annotations

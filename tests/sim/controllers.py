@@ -98,7 +98,7 @@ class VoluntaryController:
     def step(self, t, obs, voluntary, q, v, base_pose=None):
         R, p = base_pose[:3, :3], base_pose[:3, 3]
         if self.ref is None:
-            self.ref = R @ self.qp._evaluate(q, v, self.dt).p + p  # start at the current tip (plate frame)
+            self.ref = R @ self.qp.tip_position(q) + p  # start at the current tip (plate frame)
         u = self.shoulder.tip_velocity(voluntary)
         self.ref = self.ref + u * self.dt
         res = self.qp.step(q, v, R.T @ (self.ref - p), R.T @ u)
