@@ -77,20 +77,19 @@ def rmse(pred: np.ndarray, true: np.ndarray, mask: np.ndarray | None = None) -> 
 
 
 def fit_ridge(data: TrainingData) -> Any:
-    """The ridge baseline on the training windows (all points): window → standardised act."""
+    """The ridge baseline: ridge regression on the causal window (L samples) of the LSTM's
+    input concat(o_t, p_t) → standardised act, fitted on every windowed training step."""
     from learning.predictor import RidgeWindowBaseline
 
-    return RidgeWindowBaseline().fit(data.train.windows.X, data.train.windows.Y)
+    side = data.train
+    mask = side.masks(np.ones(len(side.q), dtype=bool))
+    return RidgeWindowBaseline(lags=side.windows.lags).fit(side.sequences(), side.targets(), mask)
 
 
 def predict_side(model: Any, side: SplitData) -> np.ndarray:
-    """(n_windows, d_u) standardised predictions at the windowed steps of ``side``:
-    an LSTM runs over each trial's sequence; any other model maps the windows."""
-    from learning.predictor import ReactivePredictor
-
-    if isinstance(model, ReactivePredictor):
-        return side.stacked_predictions(model)
-    return np.asarray(model.predict(side.windows.X))
+    """(n_windows, d_u) standardised predictions at the windowed steps of ``side``: the
+    model (LSTM or ridge) runs over each trial's sequence concat(o_t, p_t)."""
+    return side.stacked_predictions(model)
 
 
 def _errors(data: TrainingData, pred: np.ndarray, R: np.ndarray,

@@ -52,7 +52,7 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--rate", type=positive_float, default=10.0, help="model rate [Hz] (default 10)")
     g.add_argument("--heldout", type=_fraction, default=0.25,
                    help="share of trials held out for evaluation (default 0.25)")
-    g.add_argument("--epochs", type=positive_int, default=60, help="maximum LSTM epochs (default 60)")
+    g.add_argument("--epochs", type=positive_int, default=80, help="maximum LSTM epochs (default 80)")
     g.add_argument("--hmm-restarts", type=positive_int, default=3, help="EM restarts (default 3)")
     g.add_argument("--baselines", action="store_true",
                    help="also train the LSTM on all points as a baseline (the sweep always does)")
