@@ -38,7 +38,7 @@ from learning.predictability import threshold_from_percentile
 from mpcshare.training import (Stages, TrainConfig, fit_gates, fit_predictor, prepare_training_data,
                                reactive_labels)
 
-__all__ = ["SweepResult", "run_sweep", "trend_sentence", "write_sweep"]
+__all__ = ["SweepResult", "baseline_sentence", "run_sweep", "trend_sentence", "write_sweep"]
 
 DEFAULT_PERCENTILES: tuple[float, ...] = (100.0, 90.0, 80.0, 70.0, 60.0, 50.0)
 
@@ -121,6 +121,23 @@ def trend_sentence(rows: Sequence[dict[str, Any]]) -> str:
             f"{parts[1]}, {verdict}.")
 
 
+def baseline_sentence(rows: Sequence[dict[str, Any]]) -> str:
+    """One sentence on the all-points LSTM evaluated on each R_p: does R itself get easier
+    as K is lowered (independent of training on fewer points)?"""
+    rs = sorted([r for r in rows if r.get("kind") == "gate+predictor"
+                 and r.get("rmse_reactive_lstm_all") is not None], key=lambda r: -r["percentile"])
+    if len(rs) < 2:
+        return ""
+    v = [r["rmse_reactive_lstm_all"] for r in rs]
+    own = [r["rmse_reactive"] for r in rs]
+    better = sum(o < b - 1e-12 for o, b in zip(own, v) if o is not None)
+    trend = "falls" if v[-1] < v[0] else "does not fall"
+    steps = "at every step" if not _monotone(v, -1) else "not at every step"
+    return (f"The LSTM trained on all points, measured on the same subsets R, {trend} from {v[0]:.4g} to "
+            f"{v[-1]:.4g} ({steps}): this is how much easier R itself gets; the LSTM trained on R "
+            f"beats it on {better} of {len(rs)} percentiles.")
+
+
 def run_sweep(demos: Demonstrations, config: TrainConfig | None = None,
               percentiles: Sequence[float] = DEFAULT_PERCENTILES, out: str | Path | None = None,
               progress: bool = True) -> SweepResult:
@@ -193,7 +210,7 @@ def _markdown(result: SweepResult) -> str:
     lines = ["# Trade-off: robot accuracy against wearer effort", "",
              f"Held-out trials {result.info.get('heldout_trials')}, training trials "
              f"{result.info.get('train_trials')} (LSTM early stopping on {result.info.get('val_trials')}).", "",
-             result.conclusion, "",
+             result.conclusion, "", baseline_sentence(result.rows), "",
              "| percentile | K | RMSE on R | RMSE all | RMSE gated | voluntary share | effort | gate accuracy "
              "| gate F1 | R share (held-out) |",
              "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]

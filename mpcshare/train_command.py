@@ -56,7 +56,8 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--hmm-restarts", type=positive_int, default=3, help="EM restarts (default 3)")
     g.add_argument("--baselines", action="store_true",
                    help="also train the LSTM on all points as a baseline (the sweep always does)")
-    g.add_argument("--device", default="cpu", help="torch device of the LSTM (default cpu)")
+    g.add_argument("--device", choices=["cpu", "cuda", "auto"], default="cpu",
+                   help="torch device of the LSTM (default cpu; auto = CUDA when present)")
     g.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
 

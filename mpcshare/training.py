@@ -113,6 +113,8 @@ class TrainConfig:
         for name in ("heldout_fraction", "val_fraction"):
             if not 0.0 < getattr(self, name) < 1.0:
                 raise ValueError(f"{name} must be in (0, 1), got {getattr(self, name)!r}")
+        if self.device not in ("cpu", "cuda", "auto"):
+            raise ValueError(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
         if not self.learning_rate > 0:
             raise ValueError(f"learning_rate must be > 0, got {self.learning_rate!r}")
 
@@ -244,6 +246,10 @@ def _check_data(demos: Demonstrations, config: TrainConfig) -> int:
         f = decimation_factor(demos.rate_hz, config.model_hz)
     except ValueError as exc:
         raise TrainingError(f"cannot downsample causally to {config.model_hz:g} Hz: {exc}") from None
+    if config.device == "cuda":
+        import torch
+        if not torch.cuda.is_available():
+            raise TrainingError("device 'cuda' was asked for but torch sees no CUDA device; use cpu or auto")
     L = window_lags(config.window_s, config.model_hz)
     short = [(tr.trial_id, len(tr)) for tr in demos.trials if -(-len(tr) // f) < L + 1]
     if short:

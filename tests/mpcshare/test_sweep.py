@@ -39,6 +39,7 @@ def test_sweep_writes_rows_table_and_plot(sweep_dir):
     assert rows[0]["rmse_reactive"] == pytest.approx(rows[0]["rmse_reactive_lstm_all"])
     md = (sweep_dir / "sweep.md").read_text()
     assert "| percentile |" in md and "As K is lowered" in md and "effort E = (1/N)" in md
+    assert "The LSTM trained on all points, measured on the same subsets R" in md
     assert (sweep_dir / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
