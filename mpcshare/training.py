@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -113,6 +113,11 @@ class TrainConfig:
         for name in ("heldout_fraction", "val_fraction"):
             if not 0.0 < getattr(self, name) < 1.0:
                 raise ValueError(f"{name} must be in (0, 1), got {getattr(self, name)!r}")
+        if self.gate_kernel not in ("rbf", "nystroem"):
+            raise ValueError(f"gate_kernel must be 'rbf' or 'nystroem', got {self.gate_kernel!r}")
+        if self.gate_max_samples is not None and (int(self.gate_max_samples) != self.gate_max_samples
+                                                  or self.gate_max_samples < 40):
+            raise ValueError(f"gate_max_samples must be None or an integer >= 40, got {self.gate_max_samples!r}")
         if self.device not in ("cpu", "cuda", "auto"):
             raise ValueError(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
         if not self.learning_rate > 0:
@@ -221,7 +226,6 @@ class TrainingData:
     fit_trials: list[int]
     val_trials: list[int]
     novelty_threshold: float
-    timings: dict[str, float] = field(default_factory=dict)
 
     @property
     def train_trials(self) -> list[int]:

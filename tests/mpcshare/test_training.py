@@ -162,3 +162,13 @@ def test_cli_refuses_unusable_data_and_outputs_with_one_message(demos, data_file
         main(["train", str(data_file), "--out", str(tmp_path / "m"), "--percentile", "120"],
              commands=(TRAIN_COMMAND,))
     assert e.value.code == 2
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"percentile": 120}, "percentile"), ({"heldout_fraction": 1.0}, "heldout_fraction"),
+    ({"gate_kernel": "poly"}, "gate_kernel"), ({"gate_max_samples": 10}, "gate_max_samples"),
+    ({"device": "tpu"}, "device"), ({"n_modes": 0}, "n_modes"), ({"burn_in": -1}, "burn_in"),
+])
+def test_config_names_the_bad_setting(kw, match):
+    with pytest.raises(ValueError, match=match):
+        TrainConfig(**kw)
