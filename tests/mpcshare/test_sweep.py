@@ -35,8 +35,9 @@ def test_sweep_writes_rows_table_and_plot(sweep_dir):
     assert rows[0]["K"] > rows[1]["K"] > 0
     # at the 100th percentile R is every point: the all-points LSTM, nothing handed over
     assert rows[0]["predictor_is_lstm_all"] and rows[0]["voluntary_share"] == 0.0
-    assert rows[0]["rmse_reactive"] == pytest.approx(rows[2]["rmse_all"])
+    assert rows[0]["rmse_all"] == pytest.approx(rows[2]["rmse_all"])
     assert rows[0]["rmse_reactive"] == pytest.approx(rows[0]["rmse_reactive_lstm_all"])
+    assert rows[1]["rmse_all"] > 0 and rows[3]["rmse_all"] > 0
     md = (sweep_dir / "sweep.md").read_text()
     assert "| percentile |" in md and "As K is lowered" in md and "effort E = (1/N)" in md
     assert "The LSTM trained on all points, measured on the same subsets R" in md
