@@ -27,6 +27,7 @@ from .commands.base import (
 )
 from .commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from .commands.demo import DEMO_COMMAND
+from .commands.train import TRAIN_COMMAND
 
 __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "positive_int", "positive_float",
            "nonnegative_float", "prepare_output_folder", "load_or_fail"]
@@ -36,6 +37,7 @@ COMMANDS: tuple[Command, ...] = (
     GENERATE_COMMAND,
     INSPECT_COMMAND,
     ANALYZE_COMMAND,
+    TRAIN_COMMAND,
     DEMO_COMMAND,
 )
 

@@ -6,8 +6,8 @@ import pytest
 
 from learning.data import save
 from mpcshare.cli import main
+from mpcshare.commands.train import TRAIN_COMMAND
 from mpcshare.sweep import trend_sentence
-from mpcshare.train_command import TRAIN_COMMAND
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 KEYS = {"percentile", "K", "rmse_reactive", "rmse_all", "voluntary_share", "voluntary_effort", "gate_accuracy"}

@@ -10,7 +10,7 @@ from learning.data import Demonstrations, Trial, save
 from learning.resample import causal_downsample
 from mpcshare.bundle import load_bundle
 from mpcshare.cli import main
-from mpcshare.train_command import TRAIN_COMMAND
+from mpcshare.commands.train import TRAIN_COMMAND
 from mpcshare.training import TrainConfig, TrainingError, prepare_training_data, train_bundle
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from mpcshare.cli import (
+from .base import (
     Command,
     CommandError,
     load_or_fail,
