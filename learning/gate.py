@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -40,7 +41,7 @@ from sklearn.base import BaseEstimator
 from sklearn.calibration import CalibratedClassifierCV
 from sklearn.kernel_approximation import Nystroem
 from sklearn.metrics import accuracy_score, brier_score_loss, f1_score
-from sklearn.model_selection import StratifiedKFold, train_test_split
+from sklearn.model_selection import StratifiedKFold
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC, LinearSVC
@@ -118,6 +119,19 @@ def check_gate_inputs(windows: Any, modes: Any, n_modes: int | None,
     return X, m
 
 
+def _stratified_subsample(rows: np.ndarray, y: np.ndarray, cap: int, min_count: int,
+                          rng: np.random.Generator) -> np.ndarray:
+    """``cap`` of ``rows`` drawn without replacement, each class in proportion to its share
+    (rounded) but never fewer than ``min(n_class, min_count)`` rows; sorted."""
+    n_pos = int(y.sum())
+    k_pos = round(cap * n_pos / rows.size)
+    k_pos = min(max(k_pos, min(n_pos, min_count)), n_pos, cap - min(rows.size - n_pos, min_count))
+    k_neg = cap - k_pos
+    pos, neg = rows[y == 1], rows[y == 0]
+    return np.sort(np.concatenate([rng.choice(pos, k_pos, replace=False),
+                                   rng.choice(neg, k_neg, replace=False)]))
+
+
 def _check_labels(labels: Any, n: int) -> np.ndarray:
     y_raw = np.asarray(labels)
     if y_raw.shape != (n,):
@@ -140,7 +154,8 @@ class ModeGates(BaseEstimator):
         gamma: RBF width on the standardised windows; ``"scale"`` = 1/(D · var(z)) of
             the mode's standardised training rows (sklearn's rule, resolved at fit).
         max_samples_per_mode: rows kept per mode for fitting (stratified, seeded
-            subsample); None keeps all.
+            subsample that keeps at least ``min_class_count`` rows of each class); None
+            keeps all.
         min_class_count: a mode with fewer points of either class gets a constant gate.
         n_folds: calibration folds (Platt scaling on held-out folds); ≤ min_class_count.
         n_components: Nyström components (``kernel="nystroem"`` only).
@@ -244,8 +259,8 @@ class ModeGates(BaseEstimator):
             keep = rows
             cap = self.max_samples_per_mode
             if cap is not None and rows.size > cap:
-                keep, _ = train_test_split(rows, train_size=int(cap), stratify=yj, random_state=seed_j)
-                keep = np.sort(keep)
+                keep = _stratified_subsample(rows, yj, int(cap), int(self.min_class_count),
+                                             np.random.default_rng(seed_j))
             Xj, yk = X[keep], y[keep]
             gamma = float(self.gamma) if self.gamma != "scale" else self._scale_gamma(Xj)
             gates.append(self._new_classifier(gamma, seed_j).fit(Xj, yk))
@@ -304,14 +319,17 @@ class ModeGates(BaseEstimator):
         check_is_fitted(self, "gates_")
         X, m = check_gate_inputs(windows, modes, self.n_modes_, self.n_features_in_)
         out = np.empty(X.shape[0])
-        for j, gate in enumerate(self.gates_):
-            rows = np.flatnonzero(m == j)
-            if rows.size == 0:
-                continue
-            if isinstance(gate, ConstantGate):
-                out[rows] = float(gate.value)
-            else:
-                with threadpool_limits(1):
+        # BLAS threads only matter (and only hurt) for large Nyström batches; entering the
+        # limit costs milliseconds, so small batches skip it
+        ctx = threadpool_limits(1) if X.shape[0] >= 1000 else nullcontext()
+        with ctx:
+            for j, gate in enumerate(self.gates_):
+                rows = np.flatnonzero(m == j)
+                if rows.size == 0:
+                    continue
+                if isinstance(gate, ConstantGate):
+                    out[rows] = float(gate.value)
+                else:
                     out[rows] = gate.predict_proba(X[rows])[:, 1]
         return out
 
@@ -335,7 +353,11 @@ class ModeGates(BaseEstimator):
         j = int(mode)
         if j != mode or not 0 <= j < self.n_modes_:
             raise ValueError(f"mode must be an integer in 0..{self.n_modes_ - 1}, got {mode!r}")
-        folds = self._fast[j]
+        fast = getattr(self, "_fast", None)
+        if fast is None:  # e.g. an object restored by an older pickle
+            fast = self._fast = [None if isinstance(g, ConstantGate) else self._fold_arrays(g)
+                                 for g in self.gates_]
+        folds = fast[j]
         if folds is None:
             return float(self.gates_[j].value)
         p = 0.0

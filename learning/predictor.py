@@ -148,6 +148,8 @@ class ReactivePredictor(BaseEstimator):
         learning_rate, weight_decay: Adam settings; grad_clip: max gradient norm (0 = none).
         max_epochs, patience: early stopping stops after ``patience`` epochs without a
             validation improvement; the best epoch's weights are kept.
+        lr_patience: halve the learning rate after this many epochs without a validation
+            improvement (``ReduceLROnPlateau``); 0 = constant rate.
         val_fraction: share of trials held out for early stopping when ``fit`` gets no
             validation sequences (at least 1 trial, split with ``seed``).
         num_threads: torch CPU threads during ``fit`` (None = torch's setting). Default 1:
@@ -162,9 +164,9 @@ class ReactivePredictor(BaseEstimator):
     None when validation sequences were given).
     """
 
-    def __init__(self, hidden_size: int = 28, batch_size: int = 64, chunk_len: int = 100,
+    def __init__(self, hidden_size: int = 28, batch_size: int = 64, chunk_len: int = 50,
                  burn_in: int = 20, learning_rate: float = 1e-2, weight_decay: float = 0.0,
-                 grad_clip: float = 1.0, max_epochs: int = 150, patience: int = 15,
+                 grad_clip: float = 1.0, max_epochs: int = 200, patience: int = 20, lr_patience: int = 5,
                  val_fraction: float = 0.2, num_threads: int | None = 1, seed: int = 0,
                  device: str = "cpu") -> None:
         self.hidden_size = hidden_size
@@ -176,6 +178,7 @@ class ReactivePredictor(BaseEstimator):
         self.grad_clip = grad_clip
         self.max_epochs = max_epochs
         self.patience = patience
+        self.lr_patience = lr_patience
         self.val_fraction = val_fraction
         self.num_threads = num_threads
         self.seed = seed
@@ -185,7 +188,7 @@ class ReactivePredictor(BaseEstimator):
 
     def _check_params(self) -> None:
         for name, lo in (("hidden_size", 1), ("batch_size", 1), ("chunk_len", 1), ("burn_in", 0),
-                         ("max_epochs", 1), ("patience", 1)):
+                         ("max_epochs", 1), ("patience", 1), ("lr_patience", 0)):
             v = getattr(self, name)
             if not (isinstance(v, numbers.Integral) and v >= lo):
                 raise ValueError(f"{name} must be an integer ≥ {lo}, got {v!r}")
@@ -265,6 +268,8 @@ class ReactivePredictor(BaseEstimator):
         val = None if vx is None else tuple(torch.from_numpy(a).to(dev) for a in pad_sequences(vx, vy, vm))
         opt = torch.optim.Adam(net.parameters(), lr=float(self.learning_rate),
                                weight_decay=float(self.weight_decay))
+        sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=int(self.lr_patience))
+                 if self.lr_patience else None)
         gen = torch.Generator().manual_seed(int(self.seed))
         history: dict[str, list[float]] = {"train_loss": [], "val_loss": []}
         best, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
@@ -290,6 +295,8 @@ class ReactivePredictor(BaseEstimator):
                 with torch.no_grad():
                     v = float(_masked_mse(net(val[0]), val[1], val[2]))
                 history["val_loss"].append(v)
+                if sched is not None:
+                    sched.step(v)
                 if v < best:
                     best, best_epoch, best_state = v, epoch, copy.deepcopy(net.state_dict())
                 elif epoch - best_epoch >= int(self.patience):
