@@ -223,7 +223,9 @@ class ReactivePredictor(BaseEstimator):
             raise ValueError("no training step has mask True: nothing to fit")
         if (val_sequences is None) != (val_targets is None):
             raise ValueError("give both val_sequences and val_targets, or neither")
-        self.val_trials_: list[int] | None = None
+        if val_masks is not None and val_sequences is None:
+            raise ValueError("val_masks given without val_sequences")
+        val_trials: list[int] | None = None
         if val_sequences is not None:
             vx, vy, vm = check_sequence_set(val_sequences, val_targets, val_masks, what="val_sequences",
                                             d_in=xs[0].shape[1], d_out=ys[0].shape[1])
@@ -231,7 +233,7 @@ class ReactivePredictor(BaseEstimator):
         elif len(xs) >= 2:
             n_val = min(max(round(len(xs) * self.val_fraction), 1), len(xs) - 1)
             val = set(np.random.default_rng(self.seed).permutation(len(xs))[:n_val].tolist())
-            self.val_trials_ = sorted(val)
+            val_trials = sorted(val)
             vx, vy, vm = ([a[i] for i in sorted(val)] for a in (xs, ys, ms))
             xs, ys, ms = ([a[i] for i in range(len(xs)) if i not in val] for a in (xs, ys, ms))
             if not any(m.any() for m in ms):
@@ -244,8 +246,7 @@ class ReactivePredictor(BaseEstimator):
             warnings.warn("the validation trials have no step with mask True: no early stopping",
                           UserWarning, stacklevel=2)
             vx = vy = vm = None
-        self.input_dim_, self.output_dim_ = int(xs[0].shape[1]), int(ys[0].shape[1])
-        self.device_ = _resolve_device(self.device)
+        device = _resolve_device(self.device)
         t0 = time.perf_counter()
         old_threads = torch.get_num_threads()
         if self.num_threads is not None:
@@ -253,16 +254,24 @@ class ReactivePredictor(BaseEstimator):
         try:
             with torch.random.fork_rng(devices=[]):
                 torch.manual_seed(int(self.seed))
-                self._train(xs, ys, ms, vx, vy, vm, progress)
+                net, history, best_epoch = self._train(xs, ys, ms, vx, vy, vm, device, progress)
         finally:
             torch.set_num_threads(old_threads)
+        # fitted attributes only once training has succeeded (nothing half-written)
+        self.input_dim_, self.output_dim_ = int(xs[0].shape[1]), int(ys[0].shape[1])
+        self.device_, self.net_, self.history_ = device, net, history
+        self.best_epoch_, self.n_epochs_ = best_epoch, len(history["train_loss"])
+        self.val_trials_ = val_trials
         self.fit_time_s_ = time.perf_counter() - t0
         self._cache_numpy()
         return self
 
-    def _train(self, xs, ys, ms, vx, vy, vm, progress: bool) -> None:
-        dev = self.device_
-        net = _Net(self.input_dim_, int(self.hidden_size), self.output_dim_).to(dev)
+    def _train(self, xs: list[np.ndarray], ys: list[np.ndarray], ms: list[np.ndarray],
+               vx: list[np.ndarray] | None, vy: list[np.ndarray] | None, vm: list[np.ndarray] | None,
+               dev: torch.device, progress: bool) -> tuple[_Net, dict[str, list[float]], int]:
+        """Adam on shuffled chunks, early stopping on the validation loss; returns the best
+        network (eval mode), the loss history and the best epoch."""
+        net = _Net(int(xs[0].shape[1]), int(self.hidden_size), int(ys[0].shape[1])).to(dev)
         X, Y, W = (torch.from_numpy(a).to(dev) for a in chunk_sequences(xs, ys, ms, int(self.chunk_len),
                                                                  int(self.burn_in)))
         val = None if vx is None else tuple(torch.from_numpy(a).to(dev) for a in pad_sequences(vx, vy, vm))
@@ -290,6 +299,11 @@ class ReactivePredictor(BaseEstimator):
                 ws = float(W[b].sum())
                 tot, wsum = tot + loss.item() * ws, wsum + ws
             history["train_loss"].append(tot / wsum)
+            if not math.isfinite(tot / wsum):
+                bar.close()
+                raise RuntimeError(f"training diverged: the loss is not finite at epoch {epoch} (targets "
+                                   f"beyond float32, or too high a learning_rate, now {self.learning_rate}); "
+                                   f"standardise the targets or lower learning_rate")
             if val is not None:
                 net.eval()
                 with torch.no_grad():
@@ -308,10 +322,7 @@ class ReactivePredictor(BaseEstimator):
         bar.close()
         net.load_state_dict(best_state)
         net.eval()
-        self.net_ = net
-        self.history_ = history
-        self.best_epoch_ = best_epoch
-        self.n_epochs_ = len(history["train_loss"])
+        return net, history, best_epoch
 
     def _cache_numpy(self) -> None:
         """float64 copies of the weights for :meth:`predict` and the stream."""

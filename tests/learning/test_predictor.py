@@ -199,6 +199,13 @@ def test_bad_input_errors():
     if not torch.cuda.is_available():
         with pytest.raises(ValueError, match="no CUDA device"):
             ReactivePredictor(device="cuda").fit(xs, ys, progress=False)
+    with pytest.raises(ValueError, match="val_masks given without val_sequences"):
+        m.fit(xs, ys, val_masks=[np.ones(40, bool)])
+    with pytest.raises(RuntimeError, match="training diverged"):
+        huge = [y * 1e30 for y in ys]
+        ReactivePredictor(**{**SMALL, "max_epochs": 2, "grad_clip": 0.0}).fit(xs, [h * 1e10 for h in huge],
+                                                                                progress=False)
+    assert not hasattr(m, "net_") and not hasattr(m, "input_dim_")  # failed fits leave nothing
     with pytest.warns(UserWarning, match="one training trial"):
         one = ReactivePredictor(**{**SMALL, "max_epochs": 2}).fit(xs[:1], ys[:1], progress=False)
     assert one.n_epochs_ == 2 and one.val_trials_ is None
