@@ -77,6 +77,19 @@ def _resolve_device(device: str) -> torch.device:
     return torch.device(device)
 
 
+MAX_ABS_VALUE = 1e6
+
+
+def _check_magnitude(arrays: list[np.ndarray], what: str) -> None:
+    """Training runs in float32 on standardised data; refuse values beyond ±MAX_ABS_VALUE
+    (squared errors of such values lose all precision or overflow float32)."""
+    for i, a in enumerate(arrays):
+        big = np.flatnonzero(np.abs(a).max(axis=1) > MAX_ABS_VALUE)
+        if big.size:
+            raise ValueError(f"{what}[{i}] row {big[0]} has a value beyond ±{MAX_ABS_VALUE:g}: the "
+                             f"predictor expects standardised inputs and targets")
+
+
 def _masked_mse(out: torch.Tensor, y: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
     """Σ w_t ‖out_t − y_t‖² / (Σ w_t · d_u): mean squared error over the masked steps."""
     return ((out - y) ** 2 * w.unsqueeze(-1)).sum() / (w.sum() * y.shape[-1])
@@ -221,6 +234,8 @@ class ReactivePredictor(BaseEstimator):
         ms = ms if ms is not None else [np.ones(x.shape[0], bool) for x in xs]
         if not any(m.any() for m in ms):
             raise ValueError("no training step has mask True: nothing to fit")
+        _check_magnitude(xs, "sequences")
+        _check_magnitude(ys, "targets")
         if (val_sequences is None) != (val_targets is None):
             raise ValueError("give both val_sequences and val_targets, or neither")
         if val_masks is not None and val_sequences is None:
@@ -230,6 +245,8 @@ class ReactivePredictor(BaseEstimator):
             vx, vy, vm = check_sequence_set(val_sequences, val_targets, val_masks, what="val_sequences",
                                             d_in=xs[0].shape[1], d_out=ys[0].shape[1])
             vm = vm if vm is not None else [np.ones(x.shape[0], bool) for x in vx]
+            _check_magnitude(vx, "val_sequences")
+            _check_magnitude(vy, "val_targets")
         elif len(xs) >= 2:
             n_val = min(max(round(len(xs) * self.val_fraction), 1), len(xs) - 1)
             val = set(np.random.default_rng(self.seed).permutation(len(xs))[:n_val].tolist())
@@ -301,9 +318,8 @@ class ReactivePredictor(BaseEstimator):
             history["train_loss"].append(tot / wsum)
             if not math.isfinite(tot / wsum):
                 bar.close()
-                raise RuntimeError(f"training diverged: the loss is not finite at epoch {epoch} (targets "
-                                   f"beyond float32, or too high a learning_rate, now {self.learning_rate}); "
-                                   f"standardise the targets or lower learning_rate")
+                raise RuntimeError(f"training diverged: the loss is not finite at epoch {epoch}; lower "
+                                   f"learning_rate (now {self.learning_rate})")
             if val is not None:
                 net.eval()
                 with torch.no_grad():
