@@ -1,6 +1,6 @@
 """Speed and accuracy of the learned parts (learning.gate, learning.predictor). Prints JSON.
 
-    python benchmarks/bench_learned.py [--quick] [--subjects 3] [--minutes 10] [--seed 0]
+    python benchmarks/bench_learned.py [--quick] [--subjects 3] [--minutes 10] [--seed 0] [--single-regime]
 
 Data: the generator's demonstrations (default 3 subjects × 10 min), causal 10 Hz
 (``causal_downsample``), standardised per sensor on the training trials, RMS windows of
@@ -44,7 +44,7 @@ from learning.modes import TaskModes
 from learning.predictor import ReactivePredictor, RidgeWindowBaseline, rmse_by_group
 from learning.preprocess import Preprocessor, Standardizer, causal_windows
 from learning.resample import causal_downsample
-from sim.demonstrator import generate_demonstrations
+from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 
 def percentiles_us(t: np.ndarray) -> dict[str, float]:
@@ -61,8 +61,9 @@ def time_calls(fn, args: list[tuple], repeat: int = 1) -> np.ndarray:
     return np.array(out)
 
 
-def prepare(subjects: int, minutes: float, seed: int) -> dict:
-    demos = causal_downsample(generate_demonstrations(subjects, minutes, seed))
+def prepare(subjects: int, minutes: float, seed: int, single_regime: bool = False) -> dict:
+    config = GeneratorConfig(single_regime=single_regime)
+    demos = causal_downsample(generate_demonstrations(subjects, minutes, seed, config=config))
     ids = demos.trial_ids
     test_ids = ids[3::4]
     train_ids = [i for i in ids if i not in test_ids]
@@ -132,7 +133,8 @@ def bench_proba_one(d: dict, pct: float, n_calls: int) -> dict:
             "speedup_p50": float(np.median(slow) / np.median(fast)), "max_abs_diff": float(diff),
             "sklearn_calibrated_one_row_mode": sk, "sklearn_calibrated_one_row": percentiles_us(raw),
             "proba_one_same_mode": percentiles_us(one), "speedup_vs_sklearn_p50": float(np.median(raw) / np.median(one)),
-            "n_support": [None if f is None else int(sum(x.centers.shape[0] for x in f)) for f in g._fast],
+            "distinct_support_vectors": [None if f is None else int(f.centers.shape[0]) for f in g._fast],
+            "support_vectors_over_folds": [None if f is None else int((f.weights != 0).sum()) for f in g._fast],
             "target_us": 300}
 
 
@@ -218,15 +220,17 @@ def main() -> None:
     ap.add_argument("--subjects", type=int, default=None)
     ap.add_argument("--minutes", type=float, default=None)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--single-regime", action="store_true", help="generator without task modes")
     a = ap.parse_args()
     subjects = a.subjects or (2 if a.quick else 3)
     minutes = a.minutes or (3.0 if a.quick else 10.0)
     torch.set_num_threads(1)
-    d = prepare(subjects, minutes, a.seed)
+    d = prepare(subjects, minutes, a.seed, a.single_regime)
     w = d["w"]
     caps = (1000, 2000, None) if a.quick else (1000, 2000, 5000, None)
     result = {
-        "data": {"subjects": subjects, "minutes": minutes, "seed": a.seed, "windows": len(w),
+        "data": {"subjects": subjects, "minutes": minutes, "seed": a.seed, "single_regime": a.single_regime,
+                 "windows": len(w),
                  "window_dim": int(w.X.shape[1]), "train_windows": int(d["is_train"].sum()),
                  "mode_counts": np.bincount(d["mode"], minlength=4).tolist(), **d["timings"]},
         "gates": bench_gates(d, (90.0, 50.0), caps, a.quick),
