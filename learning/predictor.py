@@ -17,10 +17,10 @@ the masked MSE of the validation trials (run whole, from the zero state, as
 :meth:`ReactivePredictor.predict` does) decides early stopping; the best epoch's
 weights are kept.
 
-Online, :meth:`ReactivePredictor.make_stream` gives a :class:`PredictorStream` that
-applies the equations above in NumPy (float64) one step at a time, carrying (h, c);
-it equals :meth:`ReactivePredictor.predict` over the same sequence (tested to 1e-5).
-Written by hand because a PyTorch call costs tens of µs of dispatch per step.
+Online, :meth:`ReactivePredictor.make_stream` gives a
+:class:`learning.predictor_stream.PredictorStream` that applies the equations above in
+NumPy (float64) one step at a time, carrying (h, c); it equals
+:meth:`ReactivePredictor.predict` over the same sequence (tested to 1e-5).
 
 Reproducibility: the weights' initialisation and the chunk order come from ``seed``
 (torch's CPU generator inside ``torch.random.fork_rng``, so the global RNG is left
@@ -46,6 +46,7 @@ from tqdm.auto import tqdm
 
 from .predictor_baseline import RidgeWindowBaseline
 from .predictor_metrics import rmse_by_channel, rmse_by_group
+from .predictor_stream import PredictorStream
 from .sequences import check_sequence_set, chunk_sequences, pad_sequences
 
 __all__ = ["PredictorStream", "ReactivePredictor", "RidgeWindowBaseline", "rmse_by_channel",
@@ -93,61 +94,6 @@ def _check_magnitude(arrays: list[np.ndarray], what: str) -> None:
 def _masked_mse(out: torch.Tensor, y: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
     """Σ w_t ‖out_t − y_t‖² / (Σ w_t · d_u): mean squared error over the masked steps."""
     return ((out - y) ** 2 * w.unsqueeze(-1)).sum() / (w.sum() * y.shape[-1])
-
-
-class PredictorStream:
-    """Step-by-step LSTM inference in NumPy (float64) carrying (h, c) between calls.
-
-    ``step(x (d_in,)) -> (d_u,)`` standardised action; ``reset()`` returns to the zero
-    state (the state :meth:`ReactivePredictor.predict` starts from). A wrong shape or a
-    non-finite input raises ValueError and leaves the state unchanged.
-
-    Per step: ``z = W [x; h] + b`` with the rows of the i, f, o gates pre-scaled by ½, so
-    that one ``tanh`` gives all four gates (σ(v) = ½ + ½·tanh(v/2)); then
-    ``c = f ⊙ c + i ⊙ g``, ``h = o ⊙ tanh(c)``, ``û = W_y h + b_y``.
-    """
-
-    def __init__(self, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray, w_out: np.ndarray,
-                 b_out: np.ndarray) -> None:
-        H, d = int(w_hh.shape[1]), int(w_ih.shape[1])
-        W = np.hstack([w_ih, w_hh]).astype(float)   # rows in torch order i, f, g, o
-        b = np.asarray(bias, dtype=float)
-        order = np.r_[0:2 * H, 3 * H:4 * H, 2 * H:3 * H]   # → i, f, o, g
-        scale = np.r_[np.full(3 * H, 0.5), np.ones(H)]
-        self._W = np.ascontiguousarray(W[order] * scale[:, None])
-        self._b = b[order] * scale
-        self._w_out = np.ascontiguousarray(w_out, dtype=float)
-        self._b_out = np.asarray(b_out, dtype=float).copy()
-        self._v = np.zeros(d + H)
-        self.hidden_size, self.input_dim, self.output_dim = H, d, int(w_out.shape[0])
-        self.reset()
-
-    def reset(self) -> None:
-        """Zero hidden and cell state."""
-        self.h = np.zeros(self.hidden_size)
-        self.c = np.zeros(self.hidden_size)
-
-    def step(self, x: np.ndarray) -> np.ndarray:
-        """One LSTM cell update and the read-out (class docstring)."""
-        x = np.asarray(x, dtype=float)
-        if x.shape != (self.input_dim,):
-            raise ValueError(f"stream input must have shape ({self.input_dim},), got {x.shape}")
-        if not math.isfinite(x.sum()):
-            raise ValueError("stream input is not finite; state left unchanged")
-        H, d, v = self.hidden_size, self.input_dim, self._v
-        v[:d] = x
-        v[d:] = self.h
-        z = self._W @ v
-        z += self._b
-        np.tanh(z, out=z)
-        gates = z[:3 * H]
-        gates *= 0.5
-        gates += 0.5
-        c = gates[H:2 * H] * self.c
-        c += gates[:H] * z[3 * H:]
-        self.c = c
-        self.h = gates[2 * H:3 * H] * np.tanh(c)
-        return self._w_out @ self.h + self._b_out
 
 
 class ReactivePredictor(BaseEstimator):
