@@ -199,12 +199,27 @@ def test_bad_input_errors():
     if not torch.cuda.is_available():
         with pytest.raises(ValueError, match="no CUDA device"):
             ReactivePredictor(device="cuda").fit(xs, ys, progress=False)
+    with pytest.raises(ValueError, match="val_masks given without val_sequences"):
+        m.fit(xs, ys, val_masks=[np.ones(40, bool)])
+    with pytest.raises(ValueError, match=r"targets\[2\] row 5 has a value beyond ±1e\+06"):
+        m.fit(xs, [ys[0], ys[1], np.where(np.arange(40)[:, None] == 5, 1e7, ys[2])])
+    assert not hasattr(m, "net_") and not hasattr(m, "input_dim_")  # failed fits leave nothing
     with pytest.warns(UserWarning, match="one training trial"):
         one = ReactivePredictor(**{**SMALL, "max_epochs": 2}).fit(xs[:1], ys[:1], progress=False)
     assert one.n_epochs_ == 2 and one.val_trials_ is None
     fitted = ReactivePredictor(**{**SMALL, "max_epochs": 1}).fit(xs, ys, progress=False)
     with pytest.raises(ValueError, match="has 3 input channels, expected 5"):
         fitted.predict(xs[0][:, :3])
+
+
+def test_divergence_is_reported(monkeypatch):
+    import learning.predictor as lp
+    xs, ys = memory_task(2, 30, seed=9)
+    monkeypatch.setattr(lp, "_masked_mse", lambda out, y, w: (out * float("nan")).sum())
+    m = ReactivePredictor(**{**SMALL, "max_epochs": 3})
+    with pytest.raises(RuntimeError, match="loss is not finite at epoch 1"):
+        m.fit(xs, ys, progress=False)
+    assert not hasattr(m, "net_")
 
 
 def test_ridge_baseline_respects_masks_and_shapes():
