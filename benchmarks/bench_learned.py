@@ -132,7 +132,8 @@ def bench_proba_one(d: dict, pct: float, n_calls: int) -> dict:
     return {"percentile": pct, "proba_one": percentiles_us(fast), "predict_proba_one_row": percentiles_us(slow),
             "speedup_p50": float(np.median(slow) / np.median(fast)), "max_abs_diff": float(diff),
             "sklearn_calibrated_one_row_mode": sk, "sklearn_calibrated_one_row": percentiles_us(raw),
-            "proba_one_same_mode": percentiles_us(one), "speedup_vs_sklearn_p50": float(np.median(raw) / np.median(one)),
+            "proba_one_same_mode": percentiles_us(one),
+            "speedup_vs_sklearn_p50": float(np.median(raw) / np.median(one)),
             "distinct_support_vectors": [None if f is None else int(f.centers.shape[0]) for f in g._fast],
             "support_vectors_over_folds": [None if f is None else int((f.weights != 0).sum()) for f in g._fast],
             "target_us": 300}
@@ -173,7 +174,9 @@ def bench_predictor(d: dict, pct: float, quick: bool) -> tuple[dict, ReactivePre
     train = [pos[i] for i in d["train_ids"]]
     test = [pos[i] for i in d["test_ids"]]
     names = list(d["demos"].act_names)
-    sub = lambda key, idx: [s[key][i] for i in idx]
+    def sub(key: str, idx: list[int]) -> list:
+        return [s[key][i] for i in idx]
+
     out: dict = {"K": s["K"], "train_steps": int(sum(len(s["xs"][i]) for i in train)),
                  "train_reactive_steps": int(sum(s["ms"][i].sum() for i in train)),
                  "input_dim": int(s["xs"][0].shape[1]), "torch_threads": 1}

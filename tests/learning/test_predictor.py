@@ -30,7 +30,9 @@ def memory_task(n_trials: int, T: int, seed: int):
         x[0] = e[0]
         for t in range(1, T):
             x[t] = 0.7 * x[t - 1] + 0.71 * e[t]
-        lag = lambda a, k: np.vstack([np.repeat(a[:1], k, 0), a[:-k]])
+        def lag(a, k):
+            return np.vstack([np.repeat(a[:1], k, 0), a[:-k]])
+
         y = np.column_stack([0.8 * x[:, 0] - 0.6 * lag(x, 2)[:, 1], np.tanh(lag(x, 1)[:, 2]) + 0.5 * x[:, 3]])
         xs.append(x)
         ys.append(y)
