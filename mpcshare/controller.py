@@ -40,7 +40,13 @@ from robot.superlimb import TOOL_FRAME, SuperLimbParams
 from .arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
 from .controller_setup import BundleLayout, check_bundle, make_mpc
 from .streaming import StreamingFrontEnd
-from .workspace import DEFAULT_BASE_POSE, DEFAULT_WORKSPACE, ReachShell, WorkspaceBox, check_base_pose
+from .workspace import (
+    DEFAULT_BASE_POSE,
+    DEFAULT_WORKSPACE,
+    ReachShell,
+    WorkspaceBox,
+    check_base_pose,
+)
 
 __all__ = ["STATUSES", "Command", "ControllerConfig", "SharedController"]
 
@@ -50,6 +56,11 @@ STATUSES: tuple[str, ...] = (
     "invalid_shoulder", "qp_failed", "mpc_timeout", "mpc_failed", "invalid_observation_shape",
     "missing_observation", "invalid_base_pose", "reference_unreachable", "ok")
 _RANK = {s: i for i, s in enumerate(STATUSES)}
+
+
+def _finite(x: np.ndarray) -> bool:
+    """True when every entry is finite (a NaN or inf makes the sum non-finite)."""
+    return math.isfinite(x.sum())
 
 
 @dataclass
@@ -128,7 +139,7 @@ class SharedController:
         self.shoulder = shoulder if shoulder is not None else ShoulderMap()
         self.params = robot if robot is not None else SuperLimbParams()
         if not isinstance(self.params, SuperLimbParams):
-            raise ValueError(f"robot must be a robot.superlimb.SuperLimbParams or None, got {type(robot).__name__}")
+            raise TypeError(f"robot must be a robot.superlimb.SuperLimbParams or None, got {type(robot).__name__}")
         self.dt = 1.0 / float(bundle.rate_hz)
         qp_cfg = cfg.qp if abs(cfg.qp.dt - self.dt) < 1e-12 else QPConfig(**{**cfg.qp.__dict__, "dt": self.dt})
         self.qp = QPController.for_superlimb(self.params, qp_cfg)
@@ -149,7 +160,7 @@ class SharedController:
     @classmethod
     def from_bundle(cls, folder_or_bundle, robot: SuperLimbParams | None = None, strategy: str = "gate",
                     beta: float = 0.5, use_mpc: bool = True, shoulder: ShoulderMap | None = None,
-                    **options) -> "SharedController":
+                    **options) -> SharedController:
         """Controller from a bundle folder (``mpcshare.bundle.load_bundle``) or a loaded bundle.
 
         ``options``: ``tip_channels``, ``fork_channels`` (act/obs names of the knife and fork
@@ -222,7 +233,7 @@ class SharedController:
         if self.smoother.initialized:
             p_hold = self.smoother.state()[0]
         else:
-            p_hold = self._tip_model(q) if np.all(np.isfinite(q)) else None
+            p_hold = self._tip_model(q) if _finite(q) else None
         res = self.qp.step(q, v, p_hold, np.zeros(3), np.zeros(3))
         if res.status is QPStatus.SOLVER_FAILED:
             faults.append(("qp_failed", res.reason))
@@ -234,15 +245,15 @@ class SharedController:
         t0 = time.perf_counter()
         try:
             return self._step(t0, t, obs, voluntary, q, v, base_pose)
-        except Exception as exc:  # last line of defence: brake within limits, say why
+        except Exception as exc:  # noqa: BLE001 — last line of defence: brake within limits, say why
             reason = f"{type(exc).__name__}: {exc}"
             try:
                 qa, va = np.asarray(q, dtype=float).reshape(3), np.asarray(v, dtype=float).reshape(3)
-            except Exception:
+            except Exception:  # noqa: BLE001 — q, v unusable: hold
                 qa = va = np.full(3, np.nan)
             try:
                 return self._hold(qa, va, [("internal_error", reason)], {}, t0)
-            except Exception:
+            except Exception:  # noqa: BLE001 — even the QP failed: repeat the last command at rest
                 n = self.qp.n
                 last = self._last
                 z = np.zeros(n)
@@ -258,7 +269,7 @@ class SharedController:
         q = np.asarray(q, dtype=float) if np.size(q) == n else np.full(n, np.nan)
         v = np.asarray(v, dtype=float) if np.size(v) == n else np.full(n, np.nan)
         q, v = q.reshape(n), v.reshape(n)
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        if not (_finite(q) and _finite(v)):
             faults.append(("invalid_joint_state", "q or v not finite or of the wrong shape: holding"))
             return self._command(self.qp.step(q, v), 0.0, 1.0, faults, timings, t0)
         t = float(t)
@@ -280,7 +291,7 @@ class SharedController:
         if o is not None and o.shape != (lay.d_o,):
             faults.append(("invalid_observation_shape", f"obs has shape {o.shape}, expected ({lay.d_o},)"))
             o = None
-        elif o is None or not np.all(np.isfinite(o)):
+        elif o is None or not _finite(o):
             faults.append(("missing_observation", "fork sample missing or NaN: Kalman prediction substituted"))
         try:
             fe = self.frontend.step(t, o)
@@ -304,10 +315,10 @@ class SharedController:
         if self._p_ref is None:
             self._p_ref = self._to_plate(self._tip_model(q))
         p_ref = self._p_ref
-        pred_ok = bool(np.all(np.isfinite(self._p_pred)))
+        pred_ok = _finite(self._p_pred)
         if stale:
-            faults.append(("stale_fork_sensor", f"no fork measurement for {fe.predicting_for_s:.2f} s: "
-                                                "control handed to the wearer"))
+            why = f"no fork measurement for {fe.predicting_for_s:.2f} s: control handed to the wearer"
+            faults.append(("stale_fork_sensor", why))
             alpha, beta = 0.0, 1.0
             self.arbiter.decide(t, None, available=False)
         else:
@@ -316,7 +327,7 @@ class SharedController:
         u_r = reactive_velocity(self._p_pred, p_ref, cfg.reactive_gain, cfg.reactive_max_speed) if pred_ok \
             else np.zeros(3)
         th = np.asarray(voluntary, dtype=float) if voluntary is not None else np.full(3, np.nan)
-        if th.shape == (3,) and np.all(np.isfinite(th)):
+        if th.shape == (3,) and _finite(th):
             u = fuse(alpha, u_r, beta, self.shoulder.tip_velocity(th))
         else:
             faults.append(("invalid_shoulder", "shoulder signal NaN, missing or not (3,): reference held"))
@@ -362,7 +373,7 @@ class SharedController:
             u_std = np.asarray(self._stream.step(x), dtype=float)
             u = u_std * lay.act_scale + lay.act_mean
             self._p_pred = u[lay.tip_index]
-        except Exception as exc:
+        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
             self._p_pred = np.full(3, np.nan)
             faults.append(("internal_error", f"reactive predictor failed: {exc}"))
         if tick.window is None:
@@ -370,7 +381,7 @@ class SharedController:
             return
         try:
             self._gate_proba = float(self.bundle.gates.proba_one(tick.window, int(np.argmax(tick.mode_proba))))
-        except Exception as exc:
+        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
             self._gate_proba = None
             faults.append(("internal_error", f"gate failed: {exc}"))
 
@@ -381,7 +392,7 @@ class SharedController:
         p_ref = sm.position[None, :] + k * sm.velocity[None, :]
         try:
             r = self.mpc.solve(q, v, p_ref, deadline_s=self.config.mpc_deadline_s)
-        except Exception as exc:
+        except Exception as exc:  # noqa: BLE001 — the QP takes over
             faults.append(("mpc_failed", f"MPC raised {type(exc).__name__}: {exc}; QP tracks the smoothed reference"))
             return None
         timed_out = r.solve_time > self.config.mpc_deadline_s or "time" in str(r.status).lower()
@@ -390,8 +401,8 @@ class SharedController:
             faults.append((name, f"MPC {r.status}; QP tracks the smoothed reference"))
             return None
         if timed_out:
-            faults.append(("mpc_timeout", f"MPC took {r.solve_time * 1e3:.2f} ms > deadline; "
-                                          "QP tracks the smoothed reference"))
+            why = f"MPC took {r.solve_time * 1e3:.2f} ms > deadline; QP tracks the smoothed reference"
+            faults.append(("mpc_timeout", why))
             return None
         tp = np.asarray(r.tip_plan, dtype=float)
         dt = self.dt

@@ -2,7 +2,7 @@
 
 Per control step (one raw sample of the fork, ``rate_hz``):
 
-1. :class:`ForkKalman` — a constant-velocity Kalman filter (filterpy) per channel,
+1. :class:`ForkKalman` — a constant-velocity Kalman filter per channel (equal to filterpy's),
    state ``[x_j, ẋ_j]``: x⁺ = x + ẋ·Δt, ẋ⁺ = ẋ + w·Δt (white acceleration w).
    It predicts through missing (NaN) channels and stale samples (a sample bit-for-bit
    equal to the previous one: a frozen sensor) and says for how long it has been
@@ -30,9 +30,6 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-from filterpy.common import Q_discrete_white_noise
-from filterpy.kalman import KalmanFilter
-from scipy.linalg import block_diag
 
 from learning.preprocess import window_lags
 from learning.resample import StreamingDecimator
@@ -41,13 +38,18 @@ __all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd"]
 
 
 class ForkKalman:
-    """Constant-velocity Kalman filter over ``d`` channels (filterpy ``KalmanFilter``).
+    """Constant-velocity Kalman filter over ``d`` independent channels.
 
-    State (2d,): ``[x_0, ẋ_0, x_1, ẋ_1, …]``. Process noise: white acceleration of
-    standard deviation ``accel_std[j]`` [unit/s²] (filterpy ``Q_discrete_white_noise``);
-    measurement noise ``meas_std[j]`` [unit]. A channel that is NaN is left out of the
-    update (its row of H is zero for that step, which leaves the gain column zero: an
-    exact partial update).
+    Per channel j the state is ``[x_j, ẋ_j]``, F = [[1, Δt], [0, 1]], H = [1, 0];
+    process noise: white acceleration of standard deviation ``accel_std[j]`` [unit/s²]
+    (Q as filterpy's ``Q_discrete_white_noise(2, Δt, σ²)``); measurement noise ``meas_std[j]``
+    [unit]. A NaN channel is left out of that step's update.
+
+    The channels are independent (block-diagonal F, Q, R), so the filter is d 2-state
+    filters, vectorised over channels here: filterpy's ``KalmanFilter`` on the stacked
+    2d-state (an 18×18 covariance and a 9×9 inverse per step) takes ~0.3 ms of the 1 ms
+    step budget, this ~30 µs. The update is filterpy's (Joseph form); the test checks
+    equality with filterpy's ``KalmanFilter`` per channel to 1e-12.
     """
 
     def __init__(self, n_channels: int, dt: float, accel_std: np.ndarray, meas_std: np.ndarray) -> None:
@@ -61,15 +63,8 @@ class ForkKalman:
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"ForkKalman: dt must be > 0, got {dt!r}")
         self.n_channels, self.dt = d, float(dt)
-        self._accel_var = accel_std ** 2
-        self._H = np.zeros((d, 2 * d))
-        self._H[np.arange(d), 2 * np.arange(d)] = 1.0
-        self._R = np.diag(meas_std ** 2)
-        self._Q_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
-        self.kf = KalmanFilter(dim_x=2 * d, dim_z=d)
-        self.kf.H = self._H.copy()
-        self.kf.R = self._R.copy()
-        self._meas_var = meas_std ** 2
+        self.accel_var = accel_std ** 2
+        self.meas_var = meas_std ** 2
         self.reset()
 
     def reset(self) -> None:
@@ -77,63 +72,68 @@ class ForkKalman:
         self.initialized = False
         self.last_update_t = float("nan")
 
-    def _transition(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        key = round(dt, 9)
-        if key not in self._Q_cache:
-            if len(self._Q_cache) > 64:
-                self._Q_cache.clear()
-            F1 = np.array([[1.0, dt], [0.0, 1.0]])
-            F = block_diag(*([F1] * self.n_channels))
-            Q = block_diag(*[Q_discrete_white_noise(2, dt=dt, var=v) for v in self._accel_var])
-            self._Q_cache[key] = (F, Q)
-        return self._Q_cache[key]
+    def initial_covariance(self) -> tuple[np.ndarray, np.ndarray]:
+        """(P_xx, P_ẋẋ) at the first measurement: σ_m² and 100·σ_m²/Δt² (velocity unknown)."""
+        return self.meas_var.copy(), self.meas_var * (100.0 / self.dt ** 2)
 
     def step(self, t: float, z: np.ndarray | None) -> np.ndarray:
         """Predict to time ``t`` [s], then update with the finite entries of ``z`` (None: none).
 
         Returns the predicted position (d,) *before* the update (what substitutes a
-        missing channel). Before the first measurement it returns NaNs.
+        missing channel). Before the first complete measurement it returns NaNs.
         """
         d = self.n_channels
         if not self.initialized:
             if z is None or not np.all(np.isfinite(z)):
                 return np.full(d, np.nan)
-            x0 = np.zeros(2 * d)
-            x0[0::2] = z
-            self.kf.x = x0
-            self.kf.P = np.diag(np.repeat(self._meas_var, 2) * np.tile([1.0, 100.0 / self.dt ** 2], d))
+            self.x, self.v = np.array(z, dtype=float), np.zeros(d)
+            self.p00, self.p11 = self.initial_covariance()
+            self.p01 = np.zeros(d)
             self.initialized, self.t = True, float(t)
             self.last_update_t = float(t)
-            return np.array(z, dtype=float)
+            return self.x.copy()
         dt = min(max(float(t) - self.t, 0.0), 1.0)
-        if dt > 0:
-            F, Q = self._transition(dt)
-            self.kf.predict(F=F, Q=Q)
+        if dt > 0:  # x⁺ = F x;  P⁺ = F P Fᵀ + Q
+            # Q / σ² = [[Δt⁴/4, Δt³/2], [Δt³/2, Δt²]] (filterpy's Q_discrete_white_noise(2, Δt, 1))
+            dt2 = dt * dt
+            self.x = self.x + dt * self.v
+            self.p00 = self.p00 + dt * (2.0 * self.p01 + dt * self.p11) + (0.25 * dt2 * dt2) * self.accel_var
+            self.p01 = self.p01 + dt * self.p11 + (0.5 * dt2 * dt) * self.accel_var
+            self.p11 = self.p11 + dt2 * self.accel_var
         self.t = float(t)
-        prior = self.kf.x[0::2].copy()
-        if z is not None:
-            ok = np.isfinite(z)
-            if ok.all():
-                self.kf.update(z)
-                self.last_update_t = float(t)
-            elif ok.any():
-                H = self._H.copy()
-                H[~ok] = 0.0
-                self.kf.update(np.where(ok, z, 0.0), H=H)
-                self.last_update_t = float(t)
+        prior = self.x.copy()
+        if z is None:
+            return prior
+        ok = np.isfinite(z)
+        if not ok.any():
+            return prior
+        if ok.all():
+            ok = True  # np.where with a scalar condition: same values, less work
+        # K = P Hᵀ / S, S = P_xx + r;  P⁺ = (I − K H) P (I − K H)ᵀ + K r Kᵀ  (filterpy's Joseph form)
+        r = self.meas_var
+        s = self.p00 + r
+        k0, k1 = self.p00 / s, self.p01 / s
+        y = np.where(ok, z, prior) - self.x
+        a = 1.0 - k0
+        n00 = a * self.p00 * a + k0 * r * k0
+        n01 = a * (self.p01 - self.p00 * k1) + k0 * r * k1
+        n11 = k1 * (self.p00 * k1 - self.p01) - k1 * self.p01 + self.p11 + k1 * r * k1
+        self.x = np.where(ok, self.x + k0 * y, self.x)
+        self.v = np.where(ok, self.v + k1 * y, self.v)
+        self.p00, self.p01, self.p11 = (np.where(ok, n00, self.p00), np.where(ok, n01, self.p01),
+                                        np.where(ok, n11, self.p11))
+        self.last_update_t = float(t)
         return prior
 
     @property
     def position(self) -> np.ndarray:
-        """(d,) filtered position."""
-        return self.kf.x[0::2].copy()
+        """(d,) filtered position; NaN before the first measurement."""
+        return self.x.copy() if self.initialized else np.full(self.n_channels, np.nan)
 
     @property
     def velocity(self) -> np.ndarray:
         """(d,) filtered velocity [unit/s]; NaN before the first measurement."""
-        if not self.initialized:
-            return np.full(self.n_channels, np.nan)
-        return self.kf.x[1::2].copy()
+        return self.v.copy() if self.initialized else np.full(self.n_channels, np.nan)
 
     def predicting_for(self, t: float) -> float:
         """Seconds since the last update with at least one measured channel (inf before any)."""
@@ -225,7 +225,7 @@ class StreamingFrontEnd:
         d = self.n_channels
         z = None if obs is None else np.asarray(obs, dtype=float)
         stale = bool(self.detect_stale and z is not None and self._last_raw is not None
-                     and np.array_equal(z, self._last_raw) and np.all(np.isfinite(z)))
+                     and math.isfinite(z.sum()) and bool((z == self._last_raw).all()))
         if z is not None:
             self._last_raw = z.copy()
         prior = self.kalman.step(t, None if stale else z)
@@ -234,7 +234,7 @@ class StreamingFrontEnd:
         else:
             missing = ~np.isfinite(z)
         feat = prior if (z is None or stale) else np.where(missing, prior, z)
-        if not np.all(np.isfinite(feat)):
+        if not math.isfinite(feat.sum()):
             raise ValueError("no fork measurement yet: the front end cannot form a feature")
         tick = None
         y = self.decimator.push(feat)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-__all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "ReachShell", "check_base_pose", "WorkspaceBox"]
+__all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "ReachShell", "WorkspaceBox", "check_base_pose"]
 
 DEFAULT_BASE_POSE = np.eye(4)
 DEFAULT_BASE_POSE[:3, 3] = (-0.22, 0.12, 0.0)
@@ -48,7 +48,7 @@ class WorkspaceBox:
 
     def clamp(self, p: np.ndarray) -> tuple[np.ndarray, bool]:
         c = np.minimum(np.maximum(p, self.lower), self.upper)
-        return c, bool(np.any(c != p))
+        return c, bool((c != p).any())
 
 
 DEFAULT_WORKSPACE = WorkspaceBox()

@@ -14,7 +14,13 @@ from sklearn.linear_model import Ridge
 from learning.modes import TaskModes
 from learning.preprocess import Preprocessor, Standardizer
 from learning.resample import causal_downsample
-from sim.demonstrator import ACT_NAMES, OBS_NAMES, VOL_NAMES, GeneratorConfig, generate_demonstrations
+from sim.demonstrator import (
+    ACT_NAMES,
+    OBS_NAMES,
+    VOL_NAMES,
+    GeneratorConfig,
+    generate_demonstrations,
+)
 
 
 class TableGate:

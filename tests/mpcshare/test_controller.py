@@ -120,7 +120,7 @@ def test_time_backwards_wrong_shape_and_nan_joint_state():
 
 
 def test_no_observation_yet_holds():
-    demos, ctl = _controller()
+    _, ctl = _controller()
     c = ctl.step(0.0, np.full(9, np.nan), np.zeros(3), Q0, np.zeros(3))
     assert c.status == "no_observation"
     _safe(c)
@@ -223,6 +223,6 @@ def test_construction_misuse():
         SharedController.from_bundle(short, use_mpc=False)
     with pytest.raises(ValueError, match="lacks field"):
         SharedController.from_bundle(SimpleNamespace(obs_names=()), use_mpc=False)
-    with pytest.raises(ValueError, match="robot must be"):
+    with pytest.raises(TypeError, match="robot must be"):
         SharedController.from_bundle(bundle, robot="ur5", use_mpc=False)
     assert dataclasses.is_dataclass(SharedController.from_bundle(bundle, use_mpc=False).config)
