@@ -41,7 +41,13 @@ from learning.resample import causal_downsample
 from mpcshare.controller import SharedController
 from robot.qp import QPController
 from robot.superlimb import SuperLimbParams
-from sim.demonstrator import ACT_NAMES, OBS_NAMES, VOL_NAMES, GeneratorConfig, generate_demonstrations
+from sim.demonstrator import (
+    ACT_NAMES,
+    OBS_NAMES,
+    VOL_NAMES,
+    GeneratorConfig,
+    generate_demonstrations,
+)
 
 
 class _RidgeStream:
