@@ -96,7 +96,8 @@ class ControllerConfig:
     reactive_gain [1/s], reactive_max_speed [m/s]: û_r = sat(k·(p̂ − p_ref));
     stale_after_s [s]: fork sensor predicted for longer → stale; max_dt [s]: longest
     integration step of the reference; smoother limits [m/s], [m/s²], [m/s³];
-    mpc_deadline_s [s]; gate hysteresis/dwell and blend ramp (see ``Arbiter``);
+    mpc_deadline_s [s]; detect_stale: a fork sample equal to the previous one counts as
+    missing (a frozen sensor); gate hysteresis/dwell and blend ramp (see ``Arbiter``);
     workspace (plate frame), reach_margin [m]; qp: ``robot.qp.QPConfig``.
     """
 
@@ -112,6 +113,7 @@ class ControllerConfig:
     off_threshold: float = 0.4
     min_dwell_s: float = 0.5
     blend_range: tuple[float, float] = (0.5, 0.9)
+    detect_stale: bool = True
     workspace: WorkspaceBox = DEFAULT_WORKSPACE
     reach_margin: float = 0.01
     qp: QPConfig = field(default_factory=QPConfig)
@@ -150,7 +152,8 @@ class SharedController:
         self._fk_data = self.qp.model.createData()
         self.reach = ReachShell(self.qp.model, self._fid, margin=cfg.reach_margin)
         self.frontend = StreamingFrontEnd(bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz,
-                                          model_hz=bundle.model_hz, window_s=bundle.window_s)
+                                          model_hz=bundle.model_hz, window_s=bundle.window_s,
+                                          detect_stale=cfg.detect_stale)
         self.arbiter = Arbiter(strategy, beta, novelty_threshold=float(bundle.novelty_threshold),
                                on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
                                min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range)
