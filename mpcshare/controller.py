@@ -96,7 +96,8 @@ class ControllerConfig:
     reactive_gain [1/s], reactive_max_speed [m/s]: û_r = sat(k·(p̂ − p_ref));
     stale_after_s [s]: fork sensor predicted for longer → stale; max_dt [s]: longest
     integration step of the reference; smoother limits [m/s], [m/s²], [m/s³];
-    mpc_deadline_s [s]; detect_stale: a fork sample equal to the previous one counts as
+    mpc_deadline_s [s]; mpc_every: solve the MPC every n-th step and follow the last
+    plan in between (shifted by the steps since its solve); detect_stale: a fork sample equal to the previous one counts as
     missing (a frozen sensor); gate hysteresis/dwell and blend ramp (see ``Arbiter``);
     workspace (plate frame), reach_margin [m]; qp: ``robot.qp.QPConfig``.
     """
@@ -109,6 +110,7 @@ class ControllerConfig:
     max_acceleration: float = 2.0
     max_jerk: float = 30.0
     mpc_deadline_s: float = 0.003
+    mpc_every: int = 1
     on_threshold: float = 0.6
     off_threshold: float = 0.4
     min_dwell_s: float = 0.5
@@ -206,6 +208,8 @@ class SharedController:
         self._pose = np.array(self.default_base_pose, dtype=float)
         self._fork_vel = np.zeros(self.layout.d_o)
         self._last: Command | None = None
+        self._plan: np.ndarray | None = None  # last MPC tip plan (model frame)
+        self._plan_age = 0
 
     # ------------------------------------------------------------------ helpers
     def _tip_model(self, q: np.ndarray) -> np.ndarray:
@@ -389,8 +393,18 @@ class SharedController:
             faults.append(("internal_error", f"gate failed: {exc}"))
 
     def _mpc_reference(self, q, v, sm, faults):
-        """MPC over the smoothed reference extrapolated at constant velocity; QP references at t + dt."""
+        """MPC over the smoothed reference extrapolated at constant velocity; QP references at t + dt.
+
+        With ``mpc_every = n > 1`` the MPC is solved every n-th step; in between the QP follows
+        the last plan shifted by the steps since it was solved.
+        """
         H = int(self.mpc.horizon)
+        every = max(int(self.config.mpc_every), 1)
+        if self._plan is not None and 0 < self._plan_age < every and self._plan_age + 2 <= H:
+            j = self._plan_age
+            self._plan_age += 1
+            return self._plan_reference(self._plan, j)
+        self._plan, self._plan_age = None, 0
         k = np.arange(H + 1)[:, None] * self.dt
         p_ref = sm.position[None, :] + k * sm.velocity[None, :]
         try:
@@ -407,6 +421,10 @@ class SharedController:
             why = f"MPC took {r.solve_time * 1e3:.2f} ms > deadline; QP tracks the smoothed reference"
             faults.append(("mpc_timeout", why))
             return None
-        tp = np.asarray(r.tip_plan, dtype=float)
+        self._plan, self._plan_age = np.asarray(r.tip_plan, dtype=float), 1
+        return self._plan_reference(self._plan, 0)
+
+    def _plan_reference(self, tp: np.ndarray, j: int):
+        """Tip position, velocity, acceleration of plan ``tp`` at step j + 1 (central differences)."""
         dt = self.dt
-        return tp[1], (tp[2] - tp[0]) / (2 * dt), (tp[2] - 2 * tp[1] + tp[0]) / dt ** 2
+        return tp[j + 1], (tp[j + 2] - tp[j]) / (2 * dt), (tp[j + 2] - 2 * tp[j + 1] + tp[j]) / dt ** 2

@@ -203,6 +203,16 @@ def test_mpc_paths(mode, status):
         _safe(c)
 
 
+def test_mpc_at_its_own_rate():
+    from mpcshare.controller import ControllerConfig
+
+    demos, bundle = demos_and_bundle(0)
+    mpc = _FakeMPC("ok")
+    ctl = SharedController.from_bundle(bundle, mpc=mpc, config=ControllerConfig(mpc_every=3))
+    cmds = _run(ctl, demos.trials[0], 60)
+    assert mpc.calls == 20 and all(c.status == "ok" for c in cmds)
+
+
 def test_qp_failure_brakes_within_limits():
     demos, ctl = _controller()
     trial = demos.trials[0]
