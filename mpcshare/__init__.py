@@ -2,6 +2,18 @@
 
 - :mod:`mpcshare.cli` — the core subcommands of the ``mpcshare`` command line.
 - :mod:`mpcshare.report` — analysis reports (JSON, Markdown) and plots.
+- :mod:`mpcshare.bundle` — model bundles (:func:`load_bundle`, re-exported here lazily,
+  so that ``import mpcshare`` does not import torch or scikit-learn).
+- :mod:`mpcshare.training`, :mod:`mpcshare.sweep` — training a bundle, the K trade-off.
 """
 
 __version__ = "0.1.0"
+
+__all__ = ["load_bundle", "__version__"]
+
+
+def __getattr__(name: str):
+    if name == "load_bundle":
+        from mpcshare.bundle import load_bundle
+        return load_bundle
+    raise AttributeError(f"module 'mpcshare' has no attribute {name!r}")
