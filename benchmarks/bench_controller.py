@@ -10,15 +10,15 @@ comparable figures):
 * ``step_mpc``: the whole step with ``mpcshare.mpc.TipMPC`` (when it can be imported);
   target p99 ≤ 5 ms.
 
-Per-stage medians (``Command.timings``) and the statuses seen are reported too, with
-the load average of the machine before and after.
+Per-stage medians and p99 (``Command.timings``, wall clock) and the statuses seen are
+reported too, with the load average of the machine before and after, and the step's
+thread CPU time (``cpu_time``: excludes the time the process waited for a core, which
+dominates the wall-clock p99 on a loaded machine).
 
 The bundle: ``--bundle FOLDER`` loads a trained one (``mpcshare.bundle.load_bundle``);
-without it a small one is built here on generated data: real preprocessing, task
-modes (3) and ``learning.gate.ModeGates`` (labels: the ground-truth mode is not
-"cutting"), with the reactive predictor ``learning.predictor.ReactivePredictor`` when
-it can be imported, else a ridge regression with the same ``make_stream().step``
-interface (reported as ``predictor``).
+without it a small one is trained here (``mpcshare.training.train_bundle``, 4 modes,
+RBF gates, the LSTM for at most 10 epochs) on 3 generated trials of 30 s; the
+controller then runs on 2 other trials.
 
 Usage: ``python benchmarks/bench_controller.py [--rounds 3] [--bundle DIR]``.
 """
@@ -30,79 +30,24 @@ import json
 import os
 import platform
 import time
-from types import SimpleNamespace
 
 import numpy as np
 
-from learning.gate import ModeGates
-from learning.modes import TaskModes
-from learning.preprocess import Preprocessor, Standardizer, causal_windows
-from learning.resample import causal_downsample
 from mpcshare.controller import SharedController
 from robot.qp import QPController
 from robot.superlimb import SuperLimbParams
 from sim.demonstrator import (
-    ACT_NAMES,
-    OBS_NAMES,
-    VOL_NAMES,
     GeneratorConfig,
     generate_demonstrations,
 )
 
 
-class _RidgeStream:
-    def __init__(self, W: np.ndarray, b: np.ndarray) -> None:
-        self.W, self.b = W, b
-
-    def step(self, x: np.ndarray) -> np.ndarray:
-        return self.W @ x + self.b
-
-    def reset(self) -> None:
-        pass
-
-
-class _RidgePredictor:
-    """Linear stand-in for the reactive predictor (same ``make_stream`` interface)."""
-
-    def __init__(self, W: np.ndarray, b: np.ndarray) -> None:
-        self.W, self.b = W, b
-
-    def make_stream(self) -> _RidgeStream:
-        return _RidgeStream(self.W, self.b)
-
-
 def small_bundle(demos, seed: int = 0):
-    """A bundle-like object fitted on ``demos`` (module docstring); returns (bundle, predictor kind)."""
-    from sklearn.linear_model import Ridge
+    """A real bundle trained on ``demos`` with short settings (``mpcshare.training.train_bundle``)."""
+    from mpcshare.training import TrainConfig, train_bundle
 
-    low = causal_downsample(demos, 10.0)
-    pre = Preprocessor(obs=Standardizer("sensor", field="obs").fit(low),
-                       act=Standardizer("sensor", field="act").fit(low), target_hz=10.0, window_s=1.0)
-    std = pre.standardize(low)
-    X = np.concatenate([tr.obs for tr in std.trials])
-    A = np.concatenate([tr.act for tr in std.trials])
-    lengths = [len(tr) for tr in std.trials]
-    modes = TaskModes(n_modes=3, n_restarts=1, seed=seed).fit(X, lengths)
-    P = modes.filter_proba(X, lengths)
-    win = causal_windows(std, 1.0, rms=True)
-    hard = P.argmax(1)[win.source_index]
-    labels = (np.concatenate([tr.mode for tr in low.trials])[win.source_index] != 0).astype(int)
-    gates = ModeGates(max_samples_per_mode=600, seed=seed).fit(win.X, hard, labels, n_modes=3)
-    try:
-        from learning.predictor import ReactivePredictor
-
-        seqs = [np.hstack([tr.obs, p]) for tr, p in zip(std.trials, np.split(P, np.cumsum(lengths)[:-1]))]
-        predictor = ReactivePredictor(seed=seed, max_epochs=5).fit(
-            seqs, [tr.act for tr in std.trials], [np.ones(len(tr), bool) for tr in std.trials])
-        kind = "ReactivePredictor"
-    except ImportError:
-        ridge = Ridge(alpha=1e-3).fit(np.hstack([X, P]), A)
-        predictor, kind = _RidgePredictor(ridge.coef_, ridge.intercept_), "ridge stand-in"
-    bundle = SimpleNamespace(
-        format_version=1, obs_names=OBS_NAMES, act_names=ACT_NAMES, vol_names=VOL_NAMES, rate_hz=100.0,
-        model_hz=10.0, window_s=1.0, preprocessor=pre, modes=modes, gates=gates, predictor=predictor,
-        novelty_threshold=float(np.percentile(-modes.log_predictive(X, lengths), 99.9)))
-    return bundle, kind
+    cfg = TrainConfig(n_modes=4, hmm_restarts=1, max_epochs=10, patience=3, gate_max_samples=600, seed=seed)
+    return train_bundle(demos, cfg, progress=False)
 
 
 def run_controller(ctl: SharedController, trial) -> tuple[list[float], dict[str, list[float]], dict[str, int]]:
@@ -110,10 +55,13 @@ def run_controller(ctl: SharedController, trial) -> tuple[list[float], dict[str,
     q, v = 0.5 * (p.lower + p.upper), np.zeros(3)
     ctl.reset()
     totals, stages, statuses = [], {}, {}
+    cpu = stages.setdefault("cpu_time", [])
     for k in range(len(trial)):
+        c0 = time.thread_time()
         t0 = time.perf_counter()
         c = ctl.step(trial.t[k], trial.obs[k], trial.voluntary[k], q, v)
         totals.append(time.perf_counter() - t0)
+        cpu.append(time.thread_time() - c0)
         for name, dt in c.timings.items():
             stages.setdefault(name, []).append(dt)
         statuses[c.status] = statuses.get(c.status, 0) + 1
@@ -147,12 +95,9 @@ def main() -> None:
     ap.add_argument("--bundle", default=None, help="trained bundle folder (default: a small one built here)")
     args = ap.parse_args()
     load_before = os.getloadavg()
-    demos = generate_demonstrations(n_subjects=1, minutes=2.0, seed=0, config=GeneratorConfig(trial_minutes=0.5))
-    if args.bundle:
-        bundle, kind = args.bundle, "from bundle"
-    else:
-        bundle, kind = small_bundle(demos.select(demos.trial_ids[:2]))
-    trials = demos.trials[2:]
+    demos = generate_demonstrations(n_subjects=1, minutes=2.5, seed=0, config=GeneratorConfig(trial_minutes=0.5))
+    bundle = args.bundle or small_bundle(demos.select(demos.trial_ids[:3]))
+    trials = demos.trials[3:]
     variants = {"step_no_mpc": SharedController.from_bundle(bundle, use_mpc=False)}
     mpc_error = None
     try:
@@ -187,7 +132,8 @@ def main() -> None:
         r["meets_target"] = (p50_t is None or r["p50_us"] <= p50_t) and r["p99_us"] <= p99_t
     out = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
            "python": platform.python_version(), "load_avg_before": [round(x, 2) for x in load_before],
-           "load_avg_after": [round(x, 2) for x in os.getloadavg()], "predictor": kind,
+           "load_avg_after": [round(x, 2) for x in os.getloadavg()],
+           "bundle": args.bundle or "trained here (small)",
            "mpc": "TipMPC" if "step_mpc" in variants else f"not available: {mpc_error}", "results": results}
     print(json.dumps(out, indent=2))
 
