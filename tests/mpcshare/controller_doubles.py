@@ -79,3 +79,30 @@ def demos_and_bundle(seed: int = 0):
         K=5.0, percentile=90.0,
         novelty_threshold=float(np.percentile(-modes.log_predictive(X, lengths), 99.9)))
     return demos, bundle
+
+
+def real_model_bundle(seed: int = 0):
+    """A ``mpcshare.bundle.ModelBundle`` with the real learned parts (RBF gates, a small LSTM
+    trained for one epoch) on the same data and modes as :func:`demos_and_bundle`."""
+    from learning.gate import ModeGates
+    from learning.predictor import ReactivePredictor
+    from learning.preprocess import causal_windows
+    from mpcshare.bundle import ModelBundle
+
+    demos, b = demos_and_bundle(seed)
+    low = causal_downsample(demos, 10.0)
+    std = b.preprocessor.standardize(low)
+    lengths = [len(tr) for tr in std.trials]
+    P = b.modes.filter_proba(np.concatenate([tr.obs for tr in std.trials]), lengths)
+    win = causal_windows(std, 1.0, rms=True)
+    hard = P.argmax(1)[win.source_index]
+    labels = (np.concatenate([tr.mode for tr in low.trials])[win.source_index] != 0).astype(int)
+    gates = ModeGates(max_samples_per_mode=150, seed=seed).fit(win.X, hard, labels, n_modes=3)
+    seqs = [np.hstack([tr.obs, p]) for tr, p in zip(std.trials, np.split(P, np.cumsum(lengths)[:-1]))]
+    predictor = ReactivePredictor(hidden_size=8, max_epochs=1, chunk_len=25, seed=seed).fit(
+        seqs, [tr.act for tr in std.trials], progress=False)
+    return demos, ModelBundle(
+        obs_names=tuple(b.obs_names), act_names=tuple(b.act_names), vol_names=tuple(b.vol_names),
+        rate_hz=100.0, model_hz=10.0, window_s=1.0, preprocessor=b.preprocessor, modes=b.modes, gates=gates,
+        predictor=predictor, K=5.0, percentile=90.0, novelty_threshold=b.novelty_threshold,
+        train_trials=list(demos.trial_ids), heldout_trials=[])

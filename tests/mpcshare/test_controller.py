@@ -10,7 +10,7 @@ import pytest
 
 from mpcshare.controller import STATUSES, SharedController
 from robot.superlimb import SuperLimbParams
-from tests.mpcshare.controller_doubles import demos_and_bundle
+from tests.mpcshare.controller_doubles import demos_and_bundle, real_model_bundle
 
 P = SuperLimbParams()
 Q0 = 0.5 * (P.lower + P.upper)
@@ -239,6 +239,22 @@ def test_learned_part_failure_is_reported_not_raised():
     assert all(c.alpha == 0.0 for c in cmds)  # π̂ not finite → α = 0
     for c in cmds:
         _safe(c)
+
+
+def test_from_a_saved_bundle_folder(tmp_path):
+    """The real learned parts (gates, LSTM stream) through save_bundle / load_bundle."""
+    from mpcshare.bundle import save_bundle
+
+    demos, bundle = real_model_bundle(0)
+    save_bundle(bundle, tmp_path / "bundle")
+    ctl = SharedController.from_bundle(str(tmp_path / "bundle"), strategy="gate", use_mpc=False)
+    cmds = _run(ctl, demos.trials[1], 400)
+    for c in cmds:
+        _safe(c)
+    assert all(c.status == "ok" for c in cmds)
+    assert np.all(np.isfinite(cmds[-1].predicted_tip)) and np.all(np.isfinite(cmds[-1].tip_reference))
+    with pytest.raises(ValueError, match="tip_channels"):
+        SharedController.from_bundle(str(tmp_path / "bundle"), use_mpc=False, tip_channels=("a", "b", "c"))
 
 
 def test_construction_misuse():
