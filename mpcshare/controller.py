@@ -19,7 +19,27 @@ Per :meth:`SharedController.step`:
    tracks the smoothed reference alone.
 
 ``step`` never raises: every fault gives a safe command and a status (:data:`STATUSES`,
-most severe first; ``reasons`` lists every fault of the step).
+most severe first; ``reasons`` lists every fault of the step):
+
+==========================  ==========================================================
+status                      what the step does
+==========================  ==========================================================
+internal_error              an unexpected exception (or a learned part raised): brake
+                            toward the smoothed reference within limits; a failing
+                            gate/predictor only sets α = 0
+invalid_joint_state         q or v NaN / wrong shape: the QP holds its last command
+time_went_backwards         t ≤ previous t (or NaN): nothing is updated, brake and hold
+no_observation              no fork sample ever measured: brake and hold
+stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β = 1 (the
+                            wearer has control), the reactive term is dropped
+invalid_shoulder            shoulder angles NaN / wrong shape: û = 0, reference held
+qp_failed                   both QPs failed: the QP's brake (torque limits hold)
+mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
+invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
+missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
+invalid_base_pose           the last valid base pose is kept
+reference_unreachable       the reference is clamped to the workspace box / reach shell
+==========================  ==========================================================
 """
 
 from __future__ import annotations
