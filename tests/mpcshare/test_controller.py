@@ -66,6 +66,26 @@ def test_run_on_a_recorded_trial(strategy, seconds):
     assert cmds[-1].mode_proba.shape == (3,) and np.isclose(cmds[-1].mode_proba.sum(), 1.0)
 
 
+class _AlternatingGate:
+    """Gate probability 0.45, 0.55, 0.45, … on successive calls (a gate undecided around 0.5)."""
+
+    def __init__(self):
+        self.n = 0
+
+    def proba_one(self, window, mode):
+        self.n += 1
+        return 0.45 if self.n % 2 else 0.55
+
+
+def test_undecided_gate_does_not_toggle_alpha_in_the_loop():
+    demos, bundle = demos_and_bundle(0)
+    gate = _AlternatingGate()
+    undecided = SimpleNamespace(**{**vars(bundle), "gates": gate})
+    ctl = SharedController.from_bundle(undecided, strategy="gate", use_mpc=False)
+    cmds = _run(ctl, demos.trials[0], 500)
+    assert gate.n > 40 and ctl.handovers == [] and {c.alpha for c in cmds} == {0.0}
+
+
 def test_torso_sway_moves_the_arm_not_the_plate_frame_reference():
     """A swaying base pose: the reference stays put in the plate frame, the arm compensates."""
     import pinocchio as pin
