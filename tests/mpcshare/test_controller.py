@@ -233,6 +233,18 @@ def test_mpc_at_its_own_rate():
     assert mpc.calls == 20 and all(c.status == "ok" for c in cmds)
 
 
+def test_with_the_real_mpc():
+    """TipMPC in the loop (a generous deadline: no timing dependence); the QP gets its plan."""
+    from mpcshare.controller import ControllerConfig
+
+    demos, bundle = demos_and_bundle(0)
+    ctl = SharedController.from_bundle(bundle, use_mpc=True, config=ControllerConfig(mpc_deadline_s=1.0))
+    cmds = _run(ctl, demos.trials[0], 300)
+    for c in cmds:
+        _safe(c)
+    assert all(c.status == "ok" for c in cmds) and "mpc" in cmds[-1].timings
+
+
 def test_qp_failure_brakes_within_limits():
     demos, ctl = _controller()
     trial = demos.trials[0]
