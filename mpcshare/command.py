@@ -53,8 +53,8 @@ class ControllerConfig:
     stale_after_s [s]: fork sensor predicted for longer → stale; max_dt [s]: longest
     integration step of the reference; smoother limits [m/s], [m/s²], [m/s³];
     mpc_deadline_s [s]; mpc_every: solve the MPC every n-th step and follow the last
-    plan in between (shifted by the steps since its solve); detect_stale: a fork sample equal to the previous one counts as
-    missing (a frozen sensor); gate hysteresis/dwell and blend ramp (see ``Arbiter``);
+    plan in between (shifted by the steps since its solve); detect_stale: a fork sample equal
+    to the previous one counts as missing (a frozen sensor); gate hysteresis/dwell and blend ramp (see ``Arbiter``);
     workspace (plate frame), reach_margin [m]; qp: ``robot.qp.QPConfig``.
     """
 

@@ -178,7 +178,9 @@ def test_no_observation_yet_holds():
 def test_unreachable_reference_is_clamped():
     demos, ctl = _controller("voluntary")
     trial = demos.trials[0]
-    push = lambda k, a: [*a[:2], np.array([0.0, 0.5, 0.0]), *a[3:]]  # protraction: +x, 0.25 m/s
+    def push(k, a):  # protraction: +x, 0.25 m/s
+        return [*a[:2], np.array([0.0, 0.5, 0.0]), *a[3:]]
+
     cmds = _run(ctl, trial, 300, modify=push)
     assert cmds[-1].status == "reference_unreachable"
     assert cmds[-1].tip_reference[0] == pytest.approx(0.30)  # the workspace box
@@ -249,7 +251,9 @@ def test_qp_failure_brakes_within_limits():
     demos, ctl = _controller()
     trial = demos.trials[0]
     cmds = _run(ctl, trial, 30)
-    fail = lambda *a, **k: SimpleNamespace(x=None, status="forced failure", infeasible=False, iterations=0)
+    def fail(*a, **k):
+        return SimpleNamespace(x=None, status="forced failure", infeasible=False, iterations=0)
+
     ctl.qp._primary.solve = fail
     ctl.qp._relaxed.solve = fail
     c = ctl.step(trial.t[30], trial.obs[30], trial.voluntary[30], cmds[-1].q_cmd, np.array([1.0, -1.0, 1.0]))
