@@ -26,8 +26,8 @@ import pinocchio as pin
 from ruckig import InputParameter, OutputParameter, Ruckig
 
 from robot.qp import QPConfig, QPController
-from robot.solvers import daqp_available
 from robot.smoothing import ReferenceSmoother
+from robot.solvers import daqp_available
 from robot.superlimb import build_pinocchio_model
 
 SOLVERS = ("daqp", "osqp") if daqp_available() else ("osqp",)

@@ -34,9 +34,9 @@ import threading
 import time
 
 import numpy as np
+from typing_extensions import Self
 
-from learning._lipschitz_exact import pair_ratios
-from learning.lipschitz import last_search_stats, pointwise_quotients
+from learning.lipschitz import pair_ratios, pointwise_quotients
 
 
 def smooth_signals(rng: np.random.Generator, T: int, channels: int, rate_hz: float = 10.0,
@@ -139,7 +139,7 @@ class RssPeak:
         while not self._stop.wait(self.dt):
             self._sample()
 
-    def __enter__(self) -> "RssPeak":
+    def __enter__(self) -> Self:
         self._sample()
         self._t = threading.Thread(target=self._run, daemon=True)
         self._t.start()
@@ -228,11 +228,12 @@ def main(argv: list[str] | None = None) -> dict:
     with RssPeak() as rss_run:
         t0 = time.perf_counter()
         c0 = time.process_time()
-        q = pointwise_quotients(X, Y, block=a.block, n_jobs=a.n_jobs, progress=a.progress,
-                               n_components=a.n_components)
+        q, _, search_stats = pointwise_quotients(X, Y, block=a.block, n_jobs=a.n_jobs,
+                                                 progress=a.progress, n_components=a.n_components,
+                                                 return_stats=True)
         t_project = time.perf_counter() - t0
         cpu_project = time.process_time() - c0
-    stats = last_search_stats()
+    stats = search_stats.to_dict()
     rss_project = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
     rng = np.random.default_rng(a.seed + 1)
@@ -278,7 +279,7 @@ def main(argv: list[str] | None = None) -> dict:
         "peak_rss_mb_after_project": round(rss_project, 1),
         "peak_rss_mb_during_project": round(rss_run.peak_mb, 1),
         "rss_mb_before_project": round(rss_before, 1),
-        "ref_rows": int(len(ref_rows)),
+        "ref_rows": len(ref_rows),
         "max_rel_diff_vs_float64": float(np.max(rel)),
         "max_rel_diff_bruteforce_f32_vs_float64": rel32,
         "q_median": float(np.median(q)),

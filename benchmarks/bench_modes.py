@@ -21,8 +21,9 @@ import time
 
 import numpy as np
 from scipy.special import logsumexp
+from threadpoolctl import threadpool_limits
 
-from learning.modes import TaskModes, _single_threaded, mode_agreement
+from learning.modes import TaskModes, mode_agreement
 
 
 def sample(K: int, D: int, n_trials: int, T: int, seed: int = 0, sep: float = 1.0,
@@ -86,7 +87,7 @@ def bench_step(m: TaskModes, X: np.ndarray, repeat: int, fixed_lags=(0, 5)) -> d
         res[f"step_lag{lag}"] = percentiles_us(time_calls(f.step, rows, repeat))
     # baselines, same process
     Z1 = [m.transform(r[None, :]) for r in rows[:200]]
-    with _single_threaded():
+    with threadpool_limits(limits=1):
         res["baseline_hmmlearn_predict_proba_1_sample"] = percentiles_us(
             time_calls(m.model_.predict_proba, Z1, max(repeat // 20, 200)))
     v = [np.random.default_rng(0).standard_normal(m.n_modes) for _ in range(100)]

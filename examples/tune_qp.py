@@ -43,7 +43,7 @@ def run(cfg: QPConfig, seconds: float, smooth: bool) -> dict:
     ctl = QPController.for_superlimb(params, cfg)
     sm = ReferenceSmoother(3, cfg.dt, max_velocity=0.4, max_acceleration=3.0, max_jerk=40.0)
     q, v = np.array([0.0, 0.5, 1.0]), np.zeros(3)
-    sm.reset(ctl._evaluate(q, v, cfg.dt).p)
+    sm.reset(ctl.evaluate(q, v).p)
     errors, times, not_ok = [], [], 0
     margin_q = margin_v = margin_tau = np.inf
     for k in range(int(seconds / cfg.dt)):
@@ -58,7 +58,7 @@ def run(cfg: QPConfig, seconds: float, smooth: bool) -> dict:
         times.append(time.perf_counter() - t0)
         not_ok += r.status is not QPStatus.OK
         q, v = r.q_next, r.v_next
-        errors.append(np.linalg.norm(target - ctl._evaluate(q, v, cfg.dt).p) if not smooth else r.tip_error)
+        errors.append(np.linalg.norm(target - ctl.evaluate(q, v).p) if not smooth else r.tip_error)
         margin_q = min(margin_q, float(np.min(np.minimum(lim.q_max - q, q - lim.q_min))))
         margin_v = min(margin_v, float(np.min(lim.v_max - np.abs(v))))
         margin_tau = min(margin_tau, float(np.min(1.0 - np.abs(r.tau) / lim.tau_max)))

@@ -1,11 +1,12 @@
 """Learning from demonstrations: data, preprocessing, Lipschitz analysis, task modes.
 
-- :mod:`learning.data` — trials, NPZ / CSV-folder formats, validation.
-- :mod:`learning.preprocess` — downsampling, standardisation, causal windows, splits.
+- :mod:`learning.data` — trials, NPZ / CSV-folder formats, validation, train/test splits.
+- :mod:`learning.preprocess` — downsampling, standardisation, causal windows.
+- :mod:`learning.resample` — causal anti-aliased downsampling, offline and streaming.
 - :mod:`learning.lipschitz` — exact, fast point-wise Lipschitz quotients.
 - :mod:`learning.predictability` — thresholds, voluntary shares, segmentation tests, model order.
 - :mod:`learning.modes` — HMM task modes offline (``TaskModes``) and online (``ModeFilter``).
 - :mod:`learning.analysis` — the paper's analysis end to end (``analyze``).
 
-Imports only numpy, scipy, scikit-learn, hmmlearn, torch and tqdm.
+Imports only numpy, scipy, scikit-learn, threadpoolctl, hmmlearn, torch and tqdm.
 """

@@ -12,25 +12,34 @@
    candidate ranked by how far its modes lower the quotients *beyond* what a
    random segmentation of the same group sizes does.
 
-:func:`analyze` returns an :class:`AnalysisResult` with the JSON-ready ``report``
-(keys in DESIGN.md / issue 4) and the arrays the plots need. Plotting and files
-live in :mod:`mpcshare.report` (matplotlib is not a dependency of ``learning``).
+:func:`analyze` returns an :class:`AnalysisResult`: the findings as an
+:class:`~learning.analysis_report.AnalysisReport` (``summary``; ``report`` is its
+JSON-ready dict, the schema is in docs/design.md) and the arrays the plots need.
+Plotting and files live in :mod:`mpcshare.report` (matplotlib is not a dependency
+of ``learning``).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Callable
 
 import numpy as np
 
+from .analysis_report import AnalysisReport, Candidate, ModesSummary, QuotientStats, SegmentationTest, VoluntaryShare
 from .data import Demonstrations
 from .lipschitz import pointwise_quotients
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
-from .predictability import (compare_segmentation, compare_voluntary_shares, paired_wilcoxon,
-                             random_segmentation, threshold_from_percentile, voluntary_share)
+from .predictability import (
+    compare_segmentation,
+    compare_voluntary_shares,
+    paired_wilcoxon,
+    random_segmentation,
+    threshold_from_percentile,
+    voluntary_share,
+)
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]
@@ -102,7 +111,7 @@ class AnalysisResult:
     """What :func:`analyze` found: the report and the arrays behind it.
 
     Attributes:
-        report: JSON-ready dict (see module docstring).
+        summary: the findings (``report`` is ``summary.to_dict()``, the report.json content).
         windows: the preprocessed data at ``config.window_s``.
         q: (N,) quotients without modes; q_modes: (N,) within HMM modes;
         q_random: (n_random, N) within random segmentations.
@@ -112,7 +121,7 @@ class AnalysisResult:
         shares: {K: (trial ids, shares without modes, shares with modes)}.
     """
 
-    report: dict[str, Any]
+    summary: AnalysisReport
     config: AnalysisConfig
     windows: WindowedData
     q: np.ndarray
@@ -123,12 +132,17 @@ class AnalysisResult:
     mode_model: TaskModes
     shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
 
+    @property
+    def report(self) -> dict[str, Any]:
+        """The JSON-ready report (``summary.to_dict()``, a fresh dict on every access)."""
+        return self.summary.to_dict()
 
-def _finite_stats(q: np.ndarray) -> dict[str, float]:
+
+def _finite_stats(q: np.ndarray, K_by_percentile: dict[str, float | None] | None = None) -> QuotientStats:
     """p50, p90, p99 and max of quotients; an infinite value is reported as None (JSON null)."""
-    return {"p50": _json_float(np.percentile(q, 50)), "p90": _json_float(np.percentile(q, 90)),
-            "p99": _json_float(np.percentile(q, 99)), "max": _json_float(np.max(q)),
-            "n_inf": int(np.isinf(q).sum())}
+    return QuotientStats(p50=_json_float(np.percentile(q, 50)), p90=_json_float(np.percentile(q, 90)),
+                         p99=_json_float(np.percentile(q, 99)), max=_json_float(np.max(q)),
+                         n_inf=int(np.isinf(q).sum()), K_by_percentile=K_by_percentile)
 
 
 def _json_float(x: float) -> float | None:
@@ -184,7 +198,7 @@ def _check_windows(std: Demonstrations, config: AnalysisConfig) -> None:
 
 def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
             fitted: dict[int, tuple[TaskModes, np.ndarray]], quotient: Callable[..., np.ndarray],
-            progress: bool = False) -> list[dict[str, Any]]:
+            progress: bool = False) -> list[Candidate]:
     """Rank (window, n_modes) candidates by log10(median q_random / median q_modes)."""
     K0 = config.K[0]
     rows = []
@@ -213,23 +227,17 @@ def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: Ana
             share_m = float(np.mean(list(voluntary_share(qm, w.trial, K0).values())))
             share_r = float(np.mean([np.mean(list(voluntary_share(r, w.trial, K0).values())) for r in qr]))
             gain = math.log10(med_r / med_m) if med_m > 0 and med_r > 0 else 0.0
-            rows.append({
-                "window_s": float(window), "n_modes": int(n_modes),
-                "median_q_without_modes": float(np.median(q0)),
-                "median_q_modes": med_m, "median_q_random": med_r,
-                "gain_beyond_random_log10": gain,
-                f"voluntary_share_K{K0:g}": {"without_modes": share0, "with_modes": share_m,
-                                             "random": share_r},
-                "hmm_bic": float(model.bic(Z, lengths)),
-            })
+            rows.append(Candidate(
+                window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
+                median_q_modes=med_m, median_q_random=med_r, gain_beyond_random_log10=gain,
+                share_K=float(K0), share_without_modes=share0, share_with_modes=share_m, share_random=share_r,
+                hmm_bic=float(model.bic(Z, lengths))))
             if bar is not None:
                 bar.update(1)
     if bar is not None:
         bar.close()
-    rows.sort(key=lambda r: -r["gain_beyond_random_log10"])
-    for rank, r in enumerate(rows, 1):
-        r["rank"] = rank
-    return rows
+    rows.sort(key=lambda r: -r.gain_beyond_random_log10)
+    return [replace(r, rank=rank) for rank, r in enumerate(rows, 1)]
 
 
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
@@ -244,12 +252,15 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     Raises:
         AnalysisError: the data cannot be analysed with these settings (rate
             below ``target_hz``, a trial too short to downsample, no trial as
-            long as the window or a search window).
+            long as the window or a search window, ``select_modes`` with one trial).
     """
     config = config or AnalysisConfig()
     if demos.rate_hz < config.target_hz:
         raise AnalysisError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
                             f"{config.target_hz:g} Hz; lower --rate")
+    if config.select_modes and len(demos.trials) < 2:
+        raise AnalysisError(f"choosing the number of modes (select_modes) holds out whole trials and needs "
+                            f"at least 2 trials, the data have {len(demos.trials)}")
     n_search = len(config.search_windows) * len(config.search_modes)
     t_start = time.perf_counter()
 
@@ -293,7 +304,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     #    segmentations. Quotients within any grouping can only fall (fewer partners),
     #    so the paired test that means something is HMM modes against random groups
     #    of the same sizes ("p_value"); the test against no modes is reported too.
-    share_report: dict[str, Any] = {}
+    share_report: dict[str, VoluntaryShare] = {}
     shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     for t in compare_voluntary_shares(q_modes, q, w.trial, config.K, alternative="less"):
         ids = t.trials
@@ -301,15 +312,13 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         stat, p, eff = paired_wilcoxon(t.shares_a, rand, alternative="less")
         shares[t.K] = (ids, t.shares_b, t.shares_a)
         mean_without, mean_with = float(np.mean(t.shares_b)), float(np.mean(t.shares_a))
-        share_report[f"{t.K:g}"] = {
-            "without_modes": mean_without, "with_modes": mean_with, "random": float(np.mean(rand)),
-            "fold_reduction": _json_float(mean_without / mean_with) if mean_with > 0 else None,
-            "statistic": stat, "p_value": p, "effect_size": eff,
-            "test": "wilcoxon signed-rank over trials, one-sided: share within HMM modes < share "
-                    "within random segmentations of equal group sizes",
-            "p_value_vs_without_modes": float(t.p_value),
-            "n_trials": int(len(ids)),
-        }
+        share_report[f"{t.K:g}"] = VoluntaryShare(
+            without_modes=mean_without, with_modes=mean_with, random=float(np.mean(rand)),
+            fold_reduction=_json_float(mean_without / mean_with) if mean_with > 0 else None,
+            statistic=stat, p_value=p, effect_size=eff,
+            test="wilcoxon signed-rank over trials, one-sided: share within HMM modes < share "
+                 "within random segmentations of equal group sizes",
+            p_value_vs_without_modes=float(t.p_value), n_trials=int(len(ids)))
     steps.done("voluntary share")
 
     # 5. search for missing information
@@ -321,43 +330,35 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     if config.select_modes:
         sel = select_n_modes(Z, lengths, candidates=config.search_modes or range(2, 7), cv=3,
                              seed=config.seed, n_restarts=min(config.hmm_restarts, 2), progress=progress)
-        selection = sel.to_dict()
+        selection = sel
         steps.done("mode selection")
     steps.close()
 
     test = comp.test
-    report: dict[str, Any] = {
-        "n_samples": int(len(w)),
-        "n_trials": int(len(np.unique(w.trial))),
-        "input_dim": int(w.X.shape[1]),
-        "output_dim": int(w.Y.shape[1]),
-        "rate_hz": float(config.target_hz),
-        "window_s": float(config.window_s),
-        "lags": int(w.lags),
-        "scope": config.scope,
-        "quotients": {**_finite_stats(q), "K_by_percentile": K_by_percentile},
-        "quotients_with_modes": _finite_stats(q_modes),
-        "modes": {
-            "n_modes": int(config.n_modes), "agreement": agreement, "ari": ari,
-            "occupancy": [float(np.mean(modes == k)) for k in range(config.n_modes)],
-            "converged": bool(model.converged_), "loglik": float(model.loglik_),
-            "bic": float(model.bic(Z, lengths)),
-        },
-        "segmentation_test": {
-            "test": "mann-whitney U, one-sided (HMM quotients smaller)",
-            "statistic": float(test.statistic), "p_value": float(test.p_value),
-            "effect_size": float(test.effect_size), "effect_size_name": "Cliff's delta",
-            "hmm_median_q": float(test.median_a), "random_median_q": float(test.median_b),
-            "n_random": int(config.n_random), "random_method": config.random_method,
-            "significant": bool(test.p_value < SIGNIFICANCE and test.median_a < test.median_b),
-            "alpha": SIGNIFICANCE,
-        },
-        "voluntary_share": share_report,
-        "candidates": candidates,
-        "mode_selection": selection,
-        "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(config).items()},
-        "timings_s": steps.timings,
-    }
-    return AnalysisResult(report=report, config=config, windows=w, q=q, q_modes=q_modes,
+    summary = AnalysisReport(
+        n_samples=int(len(w)), n_trials=int(len(np.unique(w.trial))),
+        input_dim=int(w.X.shape[1]), output_dim=int(w.Y.shape[1]),
+        rate_hz=float(config.target_hz), window_s=float(config.window_s), lags=int(w.lags), scope=config.scope,
+        quotients=_finite_stats(q, K_by_percentile),
+        quotients_with_modes=_finite_stats(q_modes),
+        modes=ModesSummary(
+            n_modes=int(config.n_modes), agreement=agreement, ari=ari,
+            occupancy=[float(np.mean(modes == k)) for k in range(config.n_modes)],
+            converged=bool(model.converged_), loglik=float(model.loglik_), bic=float(model.bic(Z, lengths))),
+        segmentation_test=SegmentationTest(
+            test="mann-whitney U, one-sided (HMM quotients smaller)",
+            statistic=float(test.statistic), p_value=float(test.p_value),
+            effect_size=float(test.effect_size), effect_size_name="Cliff's delta",
+            hmm_median_q=float(test.median_a), random_median_q=float(test.median_b),
+            n_random=int(config.n_random), random_method=config.random_method,
+            significant=bool(test.p_value < SIGNIFICANCE and test.median_a < test.median_b),
+            alpha=SIGNIFICANCE),
+        voluntary_share=share_report,
+        candidates=candidates,
+        mode_selection=selection,
+        config={k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(config).items()},
+        timings_s=steps.timings,
+    )
+    return AnalysisResult(summary=summary, config=config, windows=w, q=q, q_modes=q_modes,
                           q_random=q_random, modes=modes, true_modes=true, mode_model=model,
                           shares=shares)

@@ -18,20 +18,32 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Iterable, Literal
+from typing import Literal
 
 import numpy as np
 from scipy import stats
 
-from ._lipschitz_exact import pair_ratios
-from .lipschitz import check_inputs, pointwise_quotients
+from .lipschitz import check_inputs, pair_ratios, pointwise_quotients
 
 __all__ = [
-    "threshold_from_percentile", "voluntary_mask", "split_reactive_voluntary", "voluntary_share",
-    "random_segmentation", "RankTest", "compare_quotients", "SegmentationComparison",
-    "compare_segmentation", "PairedShareTest", "paired_wilcoxon", "compare_voluntary_shares", "lipschitz_index",
-    "narx_regressors", "OrderSelection", "select_order",
+    "OrderSelection",
+    "PairedShareTest",
+    "RankTest",
+    "SegmentationComparison",
+    "compare_quotients",
+    "compare_segmentation",
+    "compare_voluntary_shares",
+    "lipschitz_index",
+    "narx_regressors",
+    "paired_wilcoxon",
+    "random_segmentation",
+    "select_order",
+    "split_reactive_voluntary",
+    "threshold_from_percentile",
+    "voluntary_mask",
+    "voluntary_share",
 ]
 
 
@@ -289,7 +301,7 @@ def lipschitz_index(X, y, p: int | None = None, p_fraction: float = 0.02) -> flo
     if N < 2:
         raise ValueError("need at least 2 samples")
     if p is None:
-        p = max(1, int(round(p_fraction * N)))
+        p = max(1, int(np.rint(p_fraction * N)))
     top = _top_pairwise_quotients(X, Y, int(p))
     if len(top) == 0:
         return 0.0

@@ -8,32 +8,32 @@ The analysis calls :func:`preprocess`, which chains
 3. :func:`causal_windows` — per-sample causal windows ``[o_t, o_{t−1}, …, o_{t−L+1}]``
    that never cross a trial boundary.
 
-:func:`split_by_trial` and :func:`split_by_subject` make train/test splits.
+:func:`learning.data.split_by_trial` and :func:`learning.data.split_by_subject`
+make train/test splits.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Iterable, Literal, Sequence
+from typing import Literal
 
 import numpy as np
 from scipy import signal
 
-from learning.data import Demonstrations, Trial
+from .data import Demonstrations, Trial
 
 __all__ = [
-    "downsample",
+    "Preprocessor",
     "Standardizer",
     "WindowedData",
-    "window_lags",
     "causal_windows",
-    "Preprocessor",
+    "downsample",
     "preprocess",
-    "split_by_trial",
-    "split_by_subject",
+    "window_lags",
 ]
 
 
@@ -88,7 +88,7 @@ def downsample(demos: Demonstrations, target_hz: float = 10.0) -> Demonstrations
                          tr.t[-1] + (idx - last) / rate)
         near = np.minimum(np.rint(idx).astype(int), last)
 
-        def rs(x: np.ndarray) -> np.ndarray:
+        def rs(x: np.ndarray, n_out: int = n_out) -> np.ndarray:
             return signal.resample_poly(x, up, down, axis=0, padtype="line")[:n_out]
 
         out.append(Trial(obs=rs(tr.obs), act=rs(tr.act), t=t_new, trial_id=tr.trial_id,
@@ -166,7 +166,7 @@ class Standardizer:
                              f"{[g.tolist() for g in groups]}")
         return groups
 
-    def fit(self, x: Demonstrations | np.ndarray) -> "Standardizer":
+    def fit(self, x: Demonstrations | np.ndarray) -> Standardizer:
         """Fit mean and scale on ``x`` (the training trials only), (N, d) or a set."""
         a = self._data(x)
         if a.shape[0] == 0:
@@ -272,7 +272,7 @@ def window_lags(window_s: float, rate_hz: float) -> int:
         raise ValueError(f"window_s must be finite and ≥ 0, got {window_s!r}")
     if not (math.isfinite(rate_hz) and rate_hz > 0):
         raise ValueError(f"rate_hz must be finite and > 0, got {rate_hz!r}")
-    return max(1, int(round(window_s * rate_hz)))
+    return max(1, int(np.rint(window_s * rate_hz)))
 
 
 def causal_windows(demos: Demonstrations, window_s: float, *, rate_hz: float | None = None,
@@ -387,51 +387,3 @@ def preprocess(demos: Demonstrations, *, target_hz: float = 10.0, window_s: floa
             raise TypeError(f"standardizer must be a fitted Preprocessor, got {type(standardizer).__name__}")
         pre = standardizer
     return causal_windows(pre.standardize(low), window_s, rms=rms), pre
-
-
-# ------------------------------------------------------------------- splits
-
-
-def split_by_trial(demos: Demonstrations, test_fraction: float = 0.25,
-                   seed: int = 0) -> tuple[Demonstrations, Demonstrations]:
-    """Random split of whole trials: ``round(n · test_fraction)`` test trials, at least 1
-    and at most n−1; each side keeps the original trial order. Deterministic in ``seed``.
-
-    Raises:
-        ValueError: fewer than 2 trials, or ``test_fraction`` outside (0, 1).
-    """
-    n = len(demos)
-    if not 0.0 < test_fraction < 1.0:
-        raise ValueError(f"test_fraction must be in (0, 1), got {test_fraction!r}")
-    if n < 2:
-        raise ValueError(f"need at least 2 trials to split by trial, got {n}; one side would be empty")
-    n_test = min(max(int(round(n * test_fraction)), 1), n - 1)
-    rng = np.random.default_rng(seed)
-    test_pos = set(rng.permutation(n)[:n_test].tolist())
-    ids = demos.trial_ids
-    train = [ids[i] for i in range(n) if i not in test_pos]
-    test = [ids[i] for i in range(n) if i in test_pos]
-    return demos.select(train), demos.select(test)
-
-
-def split_by_subject(demos: Demonstrations,
-                     test_subjects: int | Iterable[int]) -> tuple[Demonstrations, Demonstrations]:
-    """Train = trials of the other subjects, test = trials of ``test_subjects``.
-
-    Raises:
-        ValueError: a requested subject has no trial, or a side would be empty.
-    """
-    wanted = {int(test_subjects)} if isinstance(test_subjects, (int, np.integer)) else \
-        {int(s) for s in test_subjects}
-    have = set(demos.subjects)
-    missing = sorted(wanted - have)
-    if missing:
-        raise ValueError(f"no trial of subject(s) {missing} (subjects: {sorted(have)})")
-    if not wanted:
-        raise ValueError("test_subjects is empty; the test side would be empty")
-    if wanted >= have:
-        raise ValueError(f"test_subjects {sorted(wanted)} cover every subject; the training side "
-                         f"would be empty")
-    train = [tr.trial_id for tr in demos.trials if tr.subject not in wanted]
-    test = [tr.trial_id for tr in demos.trials if tr.subject in wanted]
-    return demos.select(train), demos.select(test)

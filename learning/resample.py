@@ -24,7 +24,7 @@ from scipy import signal
 
 from .data import Demonstrations, Trial
 
-__all__ = ["decimation_factor", "lowpass_sos", "causal_downsample", "StreamingDecimator"]
+__all__ = ["StreamingDecimator", "causal_downsample", "decimation_factor", "lowpass_sos"]
 
 
 def decimation_factor(rate_hz: float, target_hz: float) -> int:
@@ -36,7 +36,7 @@ def decimation_factor(rate_hz: float, target_hz: float) -> int:
     if f < 1 - 1e-9 or abs(f - round(f)) > 1e-6:
         raise ValueError(f"causal downsampling needs an integer factor rate_hz / target_hz ≥ 1; "
                          f"got {rate:g} Hz / {target:g} Hz = {f:g}")
-    return int(round(f))
+    return int(np.rint(f))
 
 
 def lowpass_sos(rate_hz: float, target_hz: float, order: int = 4, cutoff_ratio: float = 0.8) -> np.ndarray:

@@ -8,6 +8,10 @@ Plots (all in the output folder):
 - ``segmentation.png`` — quotients within HMM modes vs within random segmentations;
 - ``voluntary_share.png`` — per-trial voluntary share with and without modes;
 - ``candidates.png`` — the search for missing information.
+
+Figures are drawn with :class:`matplotlib.figure.Figure` directly (no pyplot, no
+backend switch, nothing global): importing this module changes nothing in the process.
+The schema of ``report.json`` is documented in ``docs/design.md``.
 """
 
 from __future__ import annotations
@@ -17,16 +21,14 @@ import math
 from pathlib import Path
 from typing import Any, Sequence
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from learning.analysis import AnalysisResult  # noqa: E402
-from learning.atomic import atomic_open  # noqa: E402
-from learning.data import Demonstrations  # noqa: E402
-from learning.modes import match_modes  # noqa: E402
+from learning.analysis import AnalysisResult
+from learning.analysis_report import AnalysisReport
+from learning.atomic import atomic_open
+from learning.data import Demonstrations
+from learning.modes import match_modes
 
 __all__ = ["plot_demonstrations", "write_analysis_report", "write_json_atomic", "fmt", "fmt_p", "fmt_p_value"]
 
@@ -78,7 +80,8 @@ def plot_demonstrations(demos: Demonstrations, path: Path, *, mode_names: Sequen
             ("knife orientation [rad]", tr.act[:n, 3:6], demos.act_names[3:6])]
     if tr.voluntary is not None:
         rows.append(("voluntary [rad]", tr.voluntary[:n], demos.vol_names))
-    fig, axes = plt.subplots(len(rows), 1, figsize=(11, 1.9 * len(rows)), sharex=True)
+    fig = Figure(figsize=(11, 1.9 * len(rows)))
+    axes = fig.subplots(len(rows), 1, sharex=True, squeeze=False)[:, 0]
     for ax, (title, y, names) in zip(axes, rows):
         for c in range(y.shape[1]):
             ax.plot(t, y[:, c], lw=0.9, label=names[c] if c < len(names) else str(c))
@@ -92,7 +95,6 @@ def plot_demonstrations(demos: Demonstrations, path: Path, *, mode_names: Sequen
     fig.suptitle(f"trial {tr.trial_id} (subject {tr.subject}), first {t[-1]:.0f} s")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _log_q(q: np.ndarray) -> np.ndarray:
@@ -111,7 +113,8 @@ def _plot_trial_quotients(r: AnalysisResult, path: Path, mode_names: Sequence[st
     n = min(int(sel.sum()), int(90 * w.rate_hz))
     idx = np.flatnonzero(sel)[:n]
     t = w.t[idx] - w.t[idx[0]]
-    fig, axes = plt.subplots(3, 1, figsize=(11, 7), sharex=True)
+    fig = Figure(figsize=(11, 7))
+    axes = fig.subplots(3, 1, sharex=True)
     axes[0].plot(t, w.lag(0)[idx] * math.sqrt(w.lags), lw=0.8)
     axes[0].set_ylabel("fork (standardised)", fontsize=8)
     axes[1].plot(t, w.Y[idx], lw=0.8)
@@ -135,11 +138,11 @@ def _plot_trial_quotients(r: AnalysisResult, path: Path, mode_names: Sequence[st
     fig.suptitle(f"trial {tid}: signals and point-wise Lipschitz quotients (background: HMM modes)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _plot_histogram(r: AnalysisResult, path: Path) -> None:
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.subplots()
     bins = np.linspace(min(_log_q(r.q).min(), _log_q(r.q_modes).min()),
                        max(_log_q(r.q).max(), _log_q(r.q_modes).max()), 80)
     ax.hist(_log_q(r.q), bins=bins, alpha=0.55, label="without modes")
@@ -158,29 +161,29 @@ def _plot_histogram(r: AnalysisResult, path: Path) -> None:
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _plot_segmentation(r: AnalysisResult, path: Path) -> None:
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.subplots()
     for q, label in ((r.q, "no segmentation"), (r.q_random.ravel(), "random segmentations"),
                      (r.q_modes, "HMM modes")):
         x = np.sort(_log_q(q))
         ax.plot(x, np.arange(1, len(x) + 1) / len(x), label=label)
-    t = r.report["segmentation_test"]
-    ax.set_title(f"HMM vs random segmentation of equal group sizes: median q {t['hmm_median_q']:.2f} vs "
-                 f"{t['random_median_q']:.2f}, one-sided Mann-Whitney {fmt_p(t['p_value'])}", fontsize=9)
+    t = r.summary.segmentation_test
+    ax.set_title(f"HMM vs random segmentation of equal group sizes: median q {t.hmm_median_q:.2f} vs "
+                 f"{t.random_median_q:.2f}, one-sided Mann-Whitney {fmt_p(t.p_value)}", fontsize=9)
     ax.set_xlabel("log10 q")
     ax.set_ylabel("cumulative share of points")
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _plot_shares(r: AnalysisResult, path: Path) -> None:
     Ks = sorted(r.shares)
-    fig, axes = plt.subplots(1, len(Ks), figsize=(4.5 * len(Ks), 4), squeeze=False)
+    fig = Figure(figsize=(4.5 * len(Ks), 4))
+    axes = fig.subplots(1, len(Ks), squeeze=False)
     for ax, K in zip(axes[0], Ks):
         ids, without, with_modes = r.shares[K]
         for a, b in zip(without, with_modes):
@@ -193,21 +196,20 @@ def _plot_shares(r: AnalysisResult, path: Path) -> None:
         ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _plot_candidates(r: AnalysisResult, path: Path) -> None:
-    c = r.report["candidates"]
-    fig, ax = plt.subplots(figsize=(8, 0.3 * len(c) + 1.5))
-    labels = [f"{x['window_s']:g} s, {x['n_modes']} modes" for x in c]
-    ax.barh(range(len(c)), [x["gain_beyond_random_log10"] for x in c], color="tab:blue")
+    c = r.summary.candidates
+    fig = Figure(figsize=(8, 0.3 * len(c) + 1.5))
+    ax = fig.subplots()
+    labels = [f"{x.window_s:g} s, {x.n_modes} modes" for x in c]
+    ax.barh(range(len(c)), [x.gain_beyond_random_log10 for x in c], color="tab:blue")
     ax.set_yticks(range(len(c)), labels, fontsize=8)
     ax.invert_yaxis()
     ax.set_xlabel("log10(median q random / median q modes)")
     ax.set_title("search for missing information (higher: modes explain more than chance)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def fmt(x: float | None) -> str:
@@ -230,24 +232,22 @@ def fmt_p(p: float, digits: int = 2) -> str:
     return f"p {value}" if value.startswith("<") else f"p = {value}"
 
 
-def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
-    q = report["quotients"]
-    m = report["modes"]
-    t = report["segmentation_test"]
+def _markdown(report: AnalysisReport, mode_names: Sequence[str] | None) -> str:
+    q, m, t = report.quotients, report.modes, report.segmentation_test
     lines = [
         "# Predictability report",
         "",
-        f"{report['n_samples']} samples in {report['n_trials']} trials after preprocessing "
-        f"({report['rate_hz']:g} Hz, {report['scope']} scaling, causal window {report['window_s']:g} s = "
-        f"{report['lags']} lags; input dimension {report['input_dim']}, output dimension {report['output_dim']}).",
+        f"{report.n_samples} samples in {report.n_trials} trials after preprocessing "
+        f"({report.rate_hz:g} Hz, {report.scope} scaling, causal window {report.window_s:g} s = "
+        f"{report.lags} lags; input dimension {report.input_dim}, output dimension {report.output_dim}).",
         "",
         "## Point-wise Lipschitz quotients without modes",
         "",
-        f"median {fmt(q['p50'])}, p90 {fmt(q['p90'])}, p99 {fmt(q['p99'])}, max {fmt(q['max'])} "
-        f"({q['n_inf']} infinite: identical observations, different actions).",
+        f"median {fmt(q.p50)}, p90 {fmt(q.p90)}, p99 {fmt(q.p99)}, max {fmt(q.max)} "
+        f"({q.n_inf} infinite: identical observations, different actions).",
         "",
         "| percentile | K |", "|---|---|",
-        *[f"| {p} | {fmt(v)} |" for p, v in q["K_by_percentile"].items()],
+        *[f"| {p} | {fmt(v)} |" for p, v in (q.K_by_percentile or {}).items()],
         "",
         "![quotients over a trial](quotients_trial.png)",
         "",
@@ -255,19 +255,19 @@ def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
         "",
         "## Task modes (HMM)",
         "",
-        f"{m['n_modes']} modes; occupancy " + ", ".join(f"{100 * o:.0f}%" for o in m["occupancy"]) + ".",
+        f"{m.n_modes} modes; occupancy " + ", ".join(f"{100 * o:.0f}%" for o in m.occupancy) + ".",
     ]
-    if m["agreement"] is not None:
-        lines.append(f"Agreement with the ground-truth labels: **{100 * m['agreement']:.1f} %** "
-                     f"(Hungarian matching), adjusted Rand index {m['ari']:.3f}.")
-    verdict = ("**Modes lower the quotients more than chance**" if t["significant"] else
+    if m.agreement is not None:
+        lines.append(f"Agreement with the ground-truth labels: **{100 * m.agreement:.1f} %** "
+                     f"(Hungarian matching), adjusted Rand index {m.ari:.3f}.")
+    verdict = ("**Modes lower the quotients more than chance**" if t.significant else
                "**No significant gain from modes** over random segmentation")
     lines += [
         "",
-        f"{verdict}: median q within HMM modes {t['hmm_median_q']:.3g} vs {t['random_median_q']:.3g} within "
-        f"{t['n_random']} random segmentations of equal group sizes ({t['random_method']}); one-sided "
-        f"Mann-Whitney U = {t['statistic']:.4g}, {fmt_p(t['p_value'], 3)}, Cliff's delta {t['effect_size']:.3f} "
-        f"(claimed when p < {t['alpha']:g}).",
+        f"{verdict}: median q within HMM modes {t.hmm_median_q:.3g} vs {t.random_median_q:.3g} within "
+        f"{t.n_random} random segmentations of equal group sizes ({t.random_method}); one-sided "
+        f"Mann-Whitney U = {t.statistic:.4g}, {fmt_p(t.p_value, 3)}, Cliff's delta {t.effect_size:.3f} "
+        f"(claimed when p < {t.alpha:g}).",
         "",
         "![segmentation](segmentation.png)",
         "",
@@ -276,32 +276,32 @@ def _markdown(report: dict, mode_names: Sequence[str] | None) -> str:
         "| K | without modes | with modes | random segmentation | fold | p (modes < random) |",
         "|---|---|---|---|---|---|",
     ]
-    for K, v in report["voluntary_share"].items():
-        fold = f"{v['fold_reduction']:.2f}×" if v["fold_reduction"] is not None else "–"
-        lines.append(f"| {K} | {100 * v['without_modes']:.1f} % | {100 * v['with_modes']:.1f} % | "
-                     f"{100 * v['random']:.1f} % | {fold} | {fmt_p_value(v['p_value'])} |")
+    for K, v in report.voluntary_share.items():
+        fold = f"{v.fold_reduction:.2f}×" if v.fold_reduction is not None else "–"
+        lines.append(f"| {K} | {100 * v.without_modes:.1f} % | {100 * v.with_modes:.1f} % | "
+                     f"{100 * v.random:.1f} % | {fold} | {fmt_p_value(v.p_value)} |")
     lines += ["", "Shares are means over trials; the test is a one-sided Wilcoxon signed-rank test over "
               "trials. (Within any grouping quotients can only fall, so the reference is a random "
               "segmentation with the same group sizes, not the data without modes.)", "",
               "![voluntary share](voluntary_share.png)", ""]
-    if report["candidates"]:
+    if report.candidates:
         lines += ["## Search for missing information", "",
                   "| rank | window [s] | modes | median q (none / modes / random) | gain beyond random (log10) |",
                   "|---|---|---|---|---|"]
-        for c in report["candidates"]:
-            lines.append(f"| {c['rank']} | {c['window_s']:g} | {c['n_modes']} | "
-                         f"{c['median_q_without_modes']:.3g} / {c['median_q_modes']:.3g} / "
-                         f"{c['median_q_random']:.3g} | {c['gain_beyond_random_log10']:.3f} |")
+        for c in report.candidates:
+            lines.append(f"| {c.rank} | {c.window_s:g} | {c.n_modes} | "
+                         f"{c.median_q_without_modes:.3g} / {c.median_q_modes:.3g} / "
+                         f"{c.median_q_random:.3g} | {c.gain_beyond_random_log10:.3f} |")
         lines += ["", "![candidates](candidates.png)", ""]
-    sel = report.get("mode_selection")
-    if sel:
+    sel = report.mode_selection
+    if sel is not None:
         lines += ["## Number of modes by held-out likelihood", "",
                   "| modes | held-out log-lik per sample | BIC |", "|---|---|---|",
                   *[f"| {k} | {ll:.4g} | {b:.5g} |" for k, ll, b in
-                    zip(sel["candidates"], sel["heldout_loglik"], sel["bic"])], "",
-                  f"Chosen: {sel['n_modes']} ({sel['rule']} rule, {sel['n_folds']}-fold by trial); "
-                  f"held-out maximum {sel['n_modes_max']}, BIC minimum {sel['n_modes_bic']}.", ""]
-    lines += ["", "Timings [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report["timings_s"].items()), ""]
+                    zip(sel.candidates, sel.heldout_loglik, sel.bic)], "",
+                  f"Chosen: {sel.n_modes} ({sel.rule} rule, {sel.n_folds}-fold by trial); "
+                  f"held-out maximum {sel.n_modes_max}, BIC minimum {sel.n_modes_bic}.", ""]
+    lines += ["", "Timings [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report.timings_s.items()), ""]
     return "\n".join(lines)
 
 
@@ -314,9 +314,9 @@ def write_analysis_report(result: AnalysisResult, out: Path, *,
     _plot_histogram(result, out / "quotient_hist.png")
     _plot_segmentation(result, out / "segmentation.png")
     _plot_shares(result, out / "voluntary_share.png")
-    if result.report["candidates"]:
+    if result.summary.candidates:
         _plot_candidates(result, out / "candidates.png")
-    md = _markdown(result.report, mode_names)
+    md = _markdown(result.summary, mode_names)
     with atomic_open(out / "report.md", "w") as f:
         f.write(md)
-    write_json_atomic(result.report, out / "report.json")
+    write_json_atomic(result.summary.to_dict(), out / "report.json")

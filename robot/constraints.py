@@ -1,11 +1,12 @@
 """QP constraints on the joint acceleration a [rad/s²], each a small object.
 
-Every constraint returns its rows ``(G, h)`` meaning ``G·a ≤ h`` for the
-current :class:`~robot.state.ControlState` (the style of mink and pink).  The
-kinematic ones are per-joint intervals and also expose ``bounds(state) ->
-(lo, hi)``; the controller intersects those in priority order (see
+Every limit returns its rows as a named :class:`Constraint` ``(G, h)`` meaning
+``G·a ≤ h`` for the current :class:`~robot.state.ControlState`, from
+``compute_qp_inequalities(state)`` (the names of mink and pink).  The kinematic
+ones are per-joint intervals and also expose ``bounds(state) -> Bounds(lo, hi)``;
+the controller intersects those in priority order (see
 :func:`intersect_by_priority`) so that a state outside the limits still gives a
-well-defined, non-empty box.
+well-defined, non-empty box.  Returned arrays are read-only.
 
 One control period dt [s] with constant acceleration a is integrated exactly:
 
@@ -15,7 +16,7 @@ One control period dt [s] with constant acceleration a is integrated exactly:
 from __future__ import annotations
 
 import math
-from typing import Protocol, Sequence, runtime_checkable
+from typing import NamedTuple, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -23,32 +24,65 @@ from .limits import JointLimits
 from .state import ControlState
 
 
+def _readonly(*arrays: np.ndarray) -> None:
+    for a in arrays:
+        a.flags.writeable = False
+
+
+class Constraint(NamedTuple):
+    """Linear inequality rows on the joint acceleration: ``G·a ≤ h``; G (m, n), h (m,)."""
+
+    G: np.ndarray
+    h: np.ndarray
+
+
+class Bounds(NamedTuple):
+    """A per-joint interval ``lo ≤ a ≤ hi`` [rad/s²], each (n,)."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+
+
+class PriorityBox(NamedTuple):
+    """Result of :func:`intersect_by_priority`: the box ``lo ≤ a ≤ hi`` and, per joint,
+    ``conflict`` = how many lower-priority intervals had to be collapsed (0: none)."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+    conflict: np.ndarray
+
+
 @runtime_checkable
-class Constraint(Protocol):
-    """Anything that returns rows ``G·a ≤ h`` with a fixed number of rows."""
+class Limit(Protocol):
+    """Anything that gives a fixed number of rows ``G·a ≤ h`` for the current state."""
 
     name: str
 
     def num_rows(self, n: int) -> int: ...
 
-    def rows(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]: ...
+    def compute_qp_inequalities(self, state: ControlState) -> Constraint: ...
 
 
 class BoxConstraint:
-    """A per-joint interval lo ≤ a ≤ hi; rows are ``[I; −I]·a ≤ [hi; −lo]``."""
+    """A per-joint interval lo ≤ a ≤ hi; rows are ``[I; −I]·a ≤ [hi; −lo]``.
+
+    Subclasses implement :meth:`bounds`.
+    """
 
     name = "box"
 
-    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
-        raise NotImplementedError
+    def bounds(self, state: ControlState) -> Bounds:
+        raise NotImplementedError(f"{type(self).__name__} must implement bounds(state)")
 
     def num_rows(self, n: int) -> int:
         return 2 * n
 
-    def rows(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def compute_qp_inequalities(self, state: ControlState) -> Constraint:
         lo, hi = self.bounds(state)
         eye = np.eye(lo.size)
-        return np.vstack([eye, -eye]), np.concatenate([hi, -lo])
+        G, h = np.vstack([eye, -eye]), np.concatenate([hi, -lo])
+        _readonly(G, h)
+        return Constraint(G, h)
 
 
 class AccelerationLimit(BoxConstraint):
@@ -58,11 +92,11 @@ class AccelerationLimit(BoxConstraint):
 
     def __init__(self, limits: JointLimits) -> None:
         self.a_max = limits.a_max
-
         self._neg = -self.a_max
+        _readonly(self._neg)
 
-    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
-        return self._neg, self.a_max
+    def bounds(self, state: ControlState) -> Bounds:
+        return Bounds(self._neg, self.a_max)
 
 
 class VelocityLimit(BoxConstraint):
@@ -73,9 +107,9 @@ class VelocityLimit(BoxConstraint):
     def __init__(self, limits: JointLimits) -> None:
         self.v_max = limits.v_max
 
-    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(self, state: ControlState) -> Bounds:
         inv_dt = 1.0 / state.dt
-        return (-self.v_max - state.v) * inv_dt, (self.v_max - state.v) * inv_dt
+        return Bounds((-self.v_max - state.v) * inv_dt, (self.v_max - state.v) * inv_dt)
 
 
 def viable_velocity_bound(gap: np.ndarray, v: np.ndarray, dt: float, a_brake: np.ndarray) -> np.ndarray:
@@ -117,7 +151,7 @@ class PositionLimit(BoxConstraint):
         self.q_min, self.q_max, self.a_brake = limits.q_min, limits.q_max, limits.a_brake
         self._q_min, self._q_max, self._a = self.q_min.tolist(), self.q_max.tolist(), self.a_brake.tolist()
 
-    def bounds(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(self, state: ControlState) -> Bounds:
         # Scalar loop: for a handful of joints plain floats are ~10× faster than numpy calls.
         dt = state.dt
         inv_dt = 1.0 / dt
@@ -127,7 +161,7 @@ class PositionLimit(BoxConstraint):
             u_low = _viable_bound_scalar(q - q_lo, -v, dt, a)
             lo.append((-u_low - v) * inv_dt)
             hi.append((u_up - v) * inv_dt)
-        return np.array(lo), np.array(hi)
+        return Bounds(np.array(lo), np.array(hi))
 
 
 def _viable_bound_scalar(gap: float, v: float, dt: float, a_brake: float) -> float:
@@ -148,13 +182,14 @@ class TorqueLimit:
     def num_rows(self, n: int) -> int:
         return 2 * n
 
-    def rows(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def compute_qp_inequalities(self, state: ControlState) -> Constraint:
         M, h = state.M, state.h
-        return np.concatenate([M, -M]), np.concatenate([self.tau_max - h, self.tau_max + h])
+        G, ub = np.concatenate([M, -M]), np.concatenate([self.tau_max - h, self.tau_max + h])
+        _readonly(G, ub)
+        return Constraint(G, ub)
 
 
-def intersect_by_priority(boxes: Sequence[tuple[np.ndarray, np.ndarray]],
-                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def intersect_by_priority(boxes: Sequence[tuple[np.ndarray, np.ndarray]]) -> PriorityBox:
     """Intersect intervals in priority order, first = most important.
 
     Where a lower-priority interval does not meet the running intersection
@@ -162,14 +197,14 @@ def intersect_by_priority(boxes: Sequence[tuple[np.ndarray, np.ndarray]],
     the running interval collapses to its end point nearest to it: maximum
     effort toward satisfying the violated limit without breaking the more
     important ones.  An interval that is itself empty (lo > hi) is replaced by
-    its midpoint.  Returns (lo, hi, conflict) with ``conflict[i]`` the number
-    of intervals that had to be collapsed for joint i.
+    its midpoint.  Returns ``PriorityBox(lo, hi, conflict)`` with ``conflict[i]``
+    the number of intervals that had to be collapsed for joint i.
     """
     lo, hi = boxes[0]
     for c_lo, c_hi in boxes[1:]:  # fast path: the plain intersection is what the priority gives when non-empty
         lo, hi = np.maximum(lo, c_lo), np.minimum(hi, c_hi)
     if bool((lo <= hi).all()):
-        return lo, hi, np.zeros(lo.size, dtype=int)
+        return PriorityBox(lo, hi, np.zeros(lo.size, dtype=int))
     lo, hi = boxes[0]
     conflict = np.zeros(lo.size, dtype=int)
     for c_lo, c_hi in boxes[1:]:
@@ -183,9 +218,17 @@ def intersect_by_priority(boxes: Sequence[tuple[np.ndarray, np.ndarray]],
         new_hi = np.where(below, lo, np.where(above, hi, np.minimum(hi, c_hi)))
         conflict += below | above | bad
         lo, hi = new_lo, new_hi
-    return lo, hi, conflict
+    return PriorityBox(lo, hi, conflict)
 
 
-def default_constraints(limits: JointLimits) -> tuple[list[BoxConstraint], list[Constraint]]:
+class DefaultConstraints(NamedTuple):
+    """The controller's default limits: ``boxes`` in priority order, ``rows`` the general ones."""
+
+    boxes: list[BoxConstraint]
+    rows: list[Limit]
+
+
+def default_constraints(limits: JointLimits) -> DefaultConstraints:
     """Box constraints in priority order (acceleration, velocity, position) and the torque limit."""
-    return [AccelerationLimit(limits), VelocityLimit(limits), PositionLimit(limits)], [TorqueLimit(limits)]
+    return DefaultConstraints([AccelerationLimit(limits), VelocityLimit(limits), PositionLimit(limits)],
+                              [TorqueLimit(limits)])

@@ -27,7 +27,7 @@ class JointLimits:
     q_min, q_max [rad]; v_max [rad/s]; a_max [rad/s²] (box on the commanded
     acceleration); a_brake [rad/s²] (deceleration the position limit relies on
     to stop, must be torque-feasible everywhere, ≤ a_max); tau_max [N·m]
-    (symmetric, |τ| ≤ tau_max).
+    (symmetric, |τ| ≤ tau_max).  The arrays are read-only copies.
     """
 
     q_min: np.ndarray
@@ -40,7 +40,9 @@ class JointLimits:
     def __post_init__(self) -> None:
         n = np.asarray(self.q_min).size
         for name in ("q_min", "q_max", "v_max", "a_max", "a_brake", "tau_max"):
-            object.__setattr__(self, name, _vec(name, getattr(self, name), n))
+            arr = _vec(name, getattr(self, name), n)
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
         if np.any(self.q_min >= self.q_max):
             raise ControllerConfigError("q_min must be < q_max for every joint")
         for name in ("v_max", "a_max", "a_brake", "tau_max"):

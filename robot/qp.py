@@ -39,88 +39,19 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
-from enum import Enum
 from typing import Sequence
 
 import numpy as np
 
-from .constraints import BoxConstraint, Constraint, TorqueLimit, default_constraints, intersect_by_priority
+from .constraints import BoxConstraint, Limit, TorqueLimit, default_constraints, intersect_by_priority
 from .errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from .limits import JointLimits
 from .solvers import make_backend
 from .state import ControlState, StateEvaluator
+
+__all__ = ["QPController", "QPConfig", "QPResult", "QPStatus", "manipulability"]
+from .qp_types import Actuation, QPConfig, QPResult, QPStatus, RelaxedSolution, VerifiedActuation
 from .tasks import AccelerationRegularization, DampingTask, PostureTask, Task, TipTrackingTask
-
-
-class QPStatus(str, Enum):
-    """Outcome of one controller step (see the module docstring)."""
-
-    OK = "ok"
-    RECOVERING = "recovering"
-    RELAXED = "relaxed"
-    INVALID_REFERENCE = "invalid_reference"
-    INVALID_STATE = "invalid_state"
-    SOLVER_FAILED = "solver_failed"
-
-
-@dataclass
-class QPResult:
-    """One control period's command.
-
-    a [rad/s²], tau [N·m], v_next [rad/s], q_next [rad]; ``tip_error`` [m]
-    ‖p_ref − p‖ at the current state (nan without reference); ``slack``
-    [rad/s²] largest box relaxation; ``manipulability`` √det(J·Jᵀ) [m³];
-    ``iterations`` of the solver; ``solve_time`` [s] of the whole step.
-    """
-
-    a: np.ndarray
-    tau: np.ndarray
-    v_next: np.ndarray
-    q_next: np.ndarray
-    status: QPStatus
-    reason: str = ""
-    tip_error: float = float("nan")
-    slack: float = 0.0
-    manipulability: float = float("nan")
-    iterations: int = 0
-    solve_time: float = 0.0
-
-    @property
-    def ok(self) -> bool:
-        return self.status is QPStatus.OK
-
-
-@dataclass
-class QPConfig:
-    """Controller settings.
-
-    dt [s] control period; tip_kp [1/s²], tip_kd [1/s], tip_max_error [m]
-    (None: no clipping); posture gains [1/s²], [1/s]; ``q_posture`` [rad]
-    (None: middle of the joint range); slack weights ρ₁ (linear), ρ₂
-    (quadratic); ``solver``: ``"auto"`` (default: DAQP if installed, else OSQP),
-    ``"daqp"`` (dense active set, fastest), ``"osqp"`` (persistent workspace,
-    warm-started) or ``"qpsolvers:<name>"``;
-    ``eps`` OSQP tolerance.
-    """
-
-    dt: float = 0.01
-    tip_weight: float = 1.0
-    tip_kp: float = 400.0
-    tip_kd: float = 40.0
-    tip_max_error: float | None = 0.1
-    posture_weight: float = 1e-4
-    posture_kp: float = 25.0
-    posture_kd: float = 10.0
-    q_posture: np.ndarray | None = None
-    damping_weight: float = 0.0
-    damping_kd: float = 10.0
-    regularization: float = 1e-6
-    slack_linear: float = 1e4
-    slack_quadratic: float = 1e2
-    solver: str = "auto"
-    eps: float = 1e-9
-    singular_threshold: float = 1e-4
 
 
 def _finite(x: np.ndarray) -> bool:
@@ -144,7 +75,10 @@ class QPController:
     tool frame), ``limits`` (default: from the model's URDF limits with
     a_max = 10 rad/s², see :meth:`JointLimits.from_model`), ``config``;
     ``tasks``, ``box_constraints`` (priority order) and ``constraints``
-    override the defaults built from ``config`` and ``limits``.
+    override the defaults built from ``config`` and ``limits``; custom ``tasks``
+    must hold exactly one :class:`TipTrackingTask` (``step``'s ``p_ref`` drives it,
+    ``QPResult.tip_error`` reports it), else :class:`ControllerConfigError`.
+    :meth:`evaluate` gives the kinematic and dynamic state the controller sees.
     """
 
     TORQUE_TOL = 1e-9  # [N·m] rounding allowance in the clip+verify step, ≪ the 1e-6 contract
@@ -152,7 +86,7 @@ class QPController:
     def __init__(self, model, frame: str | int, limits: JointLimits | None = None,
                  config: QPConfig | None = None, tasks: Sequence[Task] | None = None,
                  box_constraints: Sequence[BoxConstraint] | None = None,
-                 constraints: Sequence[Constraint] | None = None) -> None:
+                 constraints: Sequence[Limit] | None = None) -> None:
         self.config = cfg = config or QPConfig()
         if model.nq != model.nv:
             raise UnsupportedModelError(
@@ -186,11 +120,14 @@ class QPController:
                 tasks.append(DampingTask(cfg.damping_weight, cfg.damping_kd))
         else:
             found = [t for t in tasks if isinstance(t, TipTrackingTask)]
-            if found:
-                self.tip_task = found[0]
+            if len(found) != 1:
+                names = [getattr(t, "name", type(t).__name__) for t in tasks]
+                raise ControllerConfigError(
+                    f"tasks must include exactly one TipTrackingTask (step()'s p_ref drives it and "
+                    f"QPResult.tip_error reports it), found {len(found)} among {names}; give one with "
+                    f"weight=0 to run without tip tracking")
+            self.tip_task = found[0]
         self.tasks = list(tasks)
-        if not self.tasks:
-            raise ControllerConfigError("at least one task is required")
         self._other_tasks = self.tasks[1:]
         default_boxes, default_rows = default_constraints(self.limits)
         self.box_constraints = list(box_constraints) if box_constraints is not None else default_boxes
@@ -200,7 +137,7 @@ class QPController:
         self._torque = next((c for c in self.constraints if isinstance(c, TorqueLimit)), None)
         self.m = sum(c.num_rows(n) for c in self.constraints)
 
-        self._evaluate = StateEvaluator(model, frame_id)
+        self._evaluator = StateEvaluator(model, frame_id)
         self._primary = make_backend(cfg.solver, n, self.m, cfg.eps)
         self._relaxed = make_backend(cfg.solver, 2 * n, 2 * n + self.m, cfg.eps)
         eye = np.eye(n)
@@ -216,11 +153,10 @@ class QPController:
     @classmethod
     def for_superlimb(cls, params=None, config: QPConfig | None = None) -> "QPController":
         """Controller on the SuperLimb's ``knife_tip`` with its derived limits."""
-        from .superlimb import SuperLimbParams, TOOL_FRAME, build_pinocchio_model
+        from .superlimb import TOOL_FRAME, SuperLimbParams, build_pinocchio_model
 
         p = params or SuperLimbParams()
-        model, _, _ = build_pinocchio_model(p)
-        return cls(model, TOOL_FRAME, JointLimits.from_superlimb(p), config)
+        return cls(build_pinocchio_model(p).model, TOOL_FRAME, JointLimits.from_superlimb(p), config)
 
     @property
     def dt(self) -> float:
@@ -233,6 +169,21 @@ class QPController:
         if arr.shape != (size,):
             raise ControllerConfigError(f"{name} must have shape ({size},), got {arr.shape}")
         return arr
+
+    def evaluate(self, q: np.ndarray, v: np.ndarray) -> ControlState:
+        """The state the controller sees at (q [rad], v [rad/s]): tip position p [m], velocity
+        [m/s], Jacobian, M(q), h(q, v), drift J̇·v (see :class:`~robot.state.ControlState`).
+
+        Raises :class:`ControllerConfigError` for wrong shapes; the arrays are the
+        caller's own (q and v are copied).
+        """
+        q = np.array(self._vector("q", q, self.n), dtype=float)
+        v = np.array(self._vector("v", v, self.n), dtype=float)
+        return self._evaluator(q, v, self.config.dt)
+
+    def tip_position(self, q: np.ndarray) -> np.ndarray:
+        """Tool-frame position p(q) [m] in the model's world frame."""
+        return self.evaluate(q, np.zeros(self.n)).p
 
     # ------------------------------------------------------------------
     def step(self, q: np.ndarray, v: np.ndarray, p_ref: np.ndarray | None = None,
@@ -273,7 +224,7 @@ class QPController:
                     reasons.append("non-finite a_ref ignored")
                 task.set_reference(p_ref, v_ref, a_ref)
 
-        state = self._evaluate(q, v, dt)
+        state = self._evaluator(q, v, dt)
         manip = manipulability(state.J)
         if manip < self.config.singular_threshold:
             reasons.append(f"near singular pose (manipulability {manip:.2e})")
@@ -291,20 +242,20 @@ class QPController:
             reasons.append("outside kinematic limits on joints " + ",".join(map(str, np.flatnonzero(conflict)))
                            + ": maximum-effort recovery")
         if len(self.constraints) == 1:
-            G, h = self.constraints[0].rows(state)
+            G, h = self.constraints[0].compute_qp_inequalities(state)
         elif self.constraints:
-            rows = [c.rows(state) for c in self.constraints]
-            G = np.concatenate([r[0] for r in rows])
-            h = np.concatenate([r[1] for r in rows])
+            rows = [c.compute_qp_inequalities(state) for c in self.constraints]
+            G = np.concatenate([r.G for r in rows])
+            h = np.concatenate([r.h for r in rows])
         else:
             G, h = self._no_rows
 
         # cost -------------------------------------------------------------
-        H, c = self.tasks[0].cost(state)
+        H, c = self.tasks[0].compute_qp_objective(state)
         for t in self._other_tasks:
-            Ht, ct = t.cost(state)
-            H = H + Ht
-            c = c + ct
+            objective = t.compute_qp_objective(state)
+            H = H + objective.H
+            c = c + objective.c
 
         # solve ------------------------------------------------------------
         slack = 0.0
@@ -339,7 +290,7 @@ class QPController:
 
     # ------------------------------------------------------------------
     def _solve_relaxed(self, H: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                       G: np.ndarray, h: np.ndarray):
+                       G: np.ndarray, h: np.ndarray) -> RelaxedSolution:
         """QP over x = [a, s]: box softened by s ≥ 0, torque rows hard (always feasible)."""
         n, cfg = self.n, self.config
         # Normalise the task part so that the slack penalty dominates whatever the task gains:
@@ -353,11 +304,12 @@ class QPController:
         h2 = np.concatenate([hi, -lo, h])
         out = self._relaxed.solve(P2, c2, self._lb_relax, self._ub_relax, G2, h2)
         if out.x is None:
-            return None, None, out.iterations, out.status
-        return out.x[:n], np.maximum(out.x[n:], 0.0), out.iterations, out.status
+            return RelaxedSolution(None, None, out.iterations, out.status)
+        return RelaxedSolution(out.x[:n], np.maximum(out.x[n:], 0.0), out.iterations, out.status)
 
-    def _finalize(self, state: ControlState, a: np.ndarray, lo: np.ndarray, hi: np.ndarray):
-        """Clip+verify a solver's answer: returns (a, τ, ok).
+    def _finalize(self, state: ControlState, a: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                  ) -> VerifiedActuation:
+        """Clip+verify a solver's answer: returns ``VerifiedActuation(a, τ, ok)``.
 
         a is clipped into [lo, hi]; if the solver tolerance left |τ| above
         τ_max, a moves by δa = M⁻¹·(clip(τ) − τ), alternated with clipping
@@ -369,28 +321,28 @@ class QPController:
         a = np.minimum(np.maximum(a, lo), hi)
         tau = state.M @ a + state.h
         if self._torque is None:
-            return a, tau, True
+            return VerifiedActuation(a, tau, True)
         tau_max = self._torque.tau_max
         tau_ok = tau_max + self.TORQUE_TOL
         for _ in range(5):
             if not (np.abs(tau) > tau_ok).any():
-                return a, tau, True
+                return VerifiedActuation(a, tau, True)
             tau_c = np.minimum(np.maximum(tau, -tau_max), tau_max)
             a_t = a + np.linalg.solve(state.M, tau_c - tau)
             a = np.minimum(np.maximum(a_t, lo), hi)
             if not (a != a_t).any():
-                return a, tau_c, True
+                return VerifiedActuation(a, tau_c, True)
             tau = state.M @ a + state.h
-        return a, tau, False
+        return VerifiedActuation(a, tau, False)
 
-    def _brake(self, state: ControlState, lo: np.ndarray, hi: np.ndarray):
+    def _brake(self, state: ControlState, lo: np.ndarray, hi: np.ndarray) -> Actuation:
         """Last resort: a = clip(−v/dt, lo, hi), then τ clipped to its limits and a = M⁻¹(τ − h)."""
         a = np.minimum(np.maximum(-state.v / state.dt, lo), hi)
         tau = state.M @ a + state.h
         if self._torque is not None:
             tau = np.minimum(np.maximum(tau, -self._torque.tau_max), self._torque.tau_max)
             a = np.linalg.solve(state.M, tau - state.h)
-        return a, tau
+        return Actuation(a, tau)
 
     def _hold(self, q: np.ndarray, v: np.ndarray, t0: float) -> QPResult:
         n = self.n

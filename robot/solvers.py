@@ -76,18 +76,18 @@ class OsqpBackend:
     def solve(self, P: np.ndarray, c: np.ndarray, lb: np.ndarray, ub: np.ndarray,
               G: np.ndarray, h: np.ndarray) -> SolveOutcome:
         px, ax = self._matrices(P, G)
-        l = np.concatenate([lb, np.full(self.m, -np.inf)])
-        u = np.concatenate([ub, h])
+        lower = np.concatenate([lb, np.full(self.m, -np.inf)])
+        upper = np.concatenate([ub, h])
         if self._solver is None:
             n, m = self.n, self.m
             P_csc = sp.csc_matrix((px, self._p_idx), shape=(n, n))
             A_csc = sp.csc_matrix((ax.copy(), (self._a_rows, self._a_cols)), shape=(n + m, n))
             self._solver = self._osqp.OSQP()
-            self._solver.setup(P=P_csc, q=c, A=A_csc, l=l, u=u, verbose=False, eps_abs=self.eps,
+            self._solver.setup(P=P_csc, q=c, A=A_csc, l=lower, u=upper, verbose=False, eps_abs=self.eps,
                                eps_rel=self.eps, polishing=False, check_termination=1,
                                max_iter=self.max_iter, warm_starting=True, adaptive_rho=True)
         else:
-            self._solver.update(q=c, l=l, u=u, Px=px, Ax=ax)
+            self._solver.update(q=c, l=lower, u=upper, Px=px, Ax=ax)
         res = self._solver.solve(raise_error=False)  # failures are reported through the status
         status = res.info.status_val
         st = self._osqp.SolverStatus
@@ -115,8 +115,18 @@ class DaqpBackend:
 
     def solve(self, P: np.ndarray, c: np.ndarray, lb: np.ndarray, ub: np.ndarray,
               G: np.ndarray, h: np.ndarray) -> SolveOutcome:
-        """Bounds must be finite or ±1e30 (DAQP's infinity)."""
+        """Bounds must be finite or ±1e30 (DAQP's infinity).
+
+        DAQP's wrapper takes writable buffers only: read-only inputs (limits and
+        tasks return read-only arrays) are copied.
+        """
         n = self.n
+        if not P.flags.writeable:
+            P = P.copy()
+        if not c.flags.writeable:
+            c = c.copy()
+        if not G.flags.writeable:
+            G = G.copy()
         self._upper[:n] = ub
         self._upper[n:] = h
         self._lower[:n] = lb

@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
@@ -401,7 +401,8 @@ def _urdf_link(link: LinkParams) -> str:
         f'    <inertial>\n'
         f'      <origin xyz="{_v(i.com)}" rpy="0 0 0"/>\n'
         f'      <mass value="{_f(i.mass)}"/>\n'
-        f'      <inertia ixx="{_f(ixx)}" ixy="{_f(ixy)}" ixz="{_f(ixz)}" iyy="{_f(iyy)}" iyz="{_f(iyz)}" izz="{_f(izz)}"/>\n'
+        f'      <inertia ixx="{_f(ixx)}" ixy="{_f(ixy)}" ixz="{_f(ixz)}" '
+        f'iyy="{_f(iyy)}" iyz="{_f(iyz)}" izz="{_f(izz)}"/>\n'
         f'    </inertial>\n'
         f'    <visual>\n'
         f'      <origin xyz="{_v(mid)}" rpy="0 {_f(pitch)} {_f(yaw)}"/>\n'
@@ -438,7 +439,8 @@ def to_urdf(params: SuperLimbParams | None = None) -> str:
             f'    <parent link="{parent}"/>\n    <child link="{child}"/>\n'
             f'    <origin xyz="{_v(j.origin_xyz)}" rpy="{_v(j.origin_rpy)}"/>\n'
             f'    <axis xyz="{_v(j.axis)}"/>\n'
-            f'    <limit lower="{_f(j.lower)}" upper="{_f(j.upper)}" velocity="{_f(j.velocity_limit)}" effort="{_f(j.torque_limit)}"/>\n'
+            f'    <limit lower="{_f(j.lower)}" upper="{_f(j.upper)}" '
+            f'velocity="{_f(j.velocity_limit)}" effort="{_f(j.torque_limit)}"/>\n'
             f'    <dynamics damping="0" friction="0"/>\n'
             f'  </joint>\n'
         )
@@ -472,7 +474,8 @@ def _mj_geom(link: LinkParams, contact: bool, rgba: str) -> str:
     col = "" if contact else ' contype="0" conaffinity="0"'
     a, b = np.array(link.geom_from), np.array(link.geom_to)
     if np.linalg.norm(b - a) < 1e-9:
-        return f'<geom name="{link.name}_geom" type="sphere" size="{_f(link.geom_radius)}" pos="{_v(a)}" rgba="{rgba}"{col}/>'
+        return (f'<geom name="{link.name}_geom" type="sphere" size="{_f(link.geom_radius)}" pos="{_v(a)}" '
+                f'rgba="{rgba}"{col}/>')
     return (f'<geom name="{link.name}_geom" type="capsule" fromto="{_v(tuple(a) + tuple(b))}" '
             f'size="{_f(link.geom_radius)}" rgba="{rgba}"{col}/>')
 
@@ -563,8 +566,16 @@ def to_mjcf(params: SuperLimbParams | None = None, extra_worldbody_xml: str = ""
 # --------------------------------------------------------------------------
 
 
-def build_pinocchio_model(params: SuperLimbParams | None = None):
-    """Pinocchio ``(model, data, tool_frame_id)`` built from :func:`to_urdf`.
+class PinocchioModel(NamedTuple):
+    """What :func:`build_pinocchio_model` returns: the model, a ``data`` for it, the tool frame id."""
+
+    model: Any
+    data: Any
+    frame_id: int
+
+
+def build_pinocchio_model(params: SuperLimbParams | None = None) -> PinocchioModel:
+    """Pinocchio ``PinocchioModel(model, data, frame_id)`` built from :func:`to_urdf` (frame: the tool).
 
     Sets ``model.armature`` (reflected rotor inertia [kg·m²]), the velocity
     [rad/s] and effort [N·m] limits, and gravity (0, 0, −g) [m/s²].
@@ -579,7 +590,7 @@ def build_pinocchio_model(params: SuperLimbParams | None = None):
     arm[idx] = p.armature
     model.armature = arm
     data = model.createData()
-    return model, data, model.getFrameId(TOOL_FRAME)
+    return PinocchioModel(model, data, int(model.getFrameId(TOOL_FRAME)))
 
 
 def write_assets(params: SuperLimbParams | None = None, directory: Path = ASSETS_DIR) -> list[Path]:

@@ -1,14 +1,16 @@
 """QP tasks on the joint acceleration a [rad/s²], each returning its cost terms.
 
 A task with weight w and residual r(a) = A·a − b contributes
-w·‖A·a − b‖² = ½·aᵀ(2w·AᵀA)·a − (2w·Aᵀb)ᵀ·a + const, returned as ``(H, c)``
-with ``H = 2w·AᵀA`` and ``c = −2w·Aᵀb``.
+w·‖A·a − b‖² = ½·aᵀ(2w·AᵀA)·a − (2w·Aᵀb)ᵀ·a + const, returned by
+``compute_qp_objective(state)`` as a named :class:`Objective` ``(H, c)`` with
+``H = 2w·AᵀA`` and ``c = −2w·Aᵀb`` (the names of mink and pink).  Arrays a task
+caches and returns on every call are read-only.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Protocol, runtime_checkable
+from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -16,13 +18,25 @@ from .errors import ControllerConfigError
 from .state import ControlState
 
 
+class Objective(NamedTuple):
+    """Quadratic cost ½·aᵀ·H·a + cᵀ·a of the joint acceleration a; H (n, n) symmetric ⪰ 0, c (n,)."""
+
+    H: np.ndarray
+    c: np.ndarray
+
+
 @runtime_checkable
 class Task(Protocol):
-    """Anything with ``cost(state) -> (H, c)`` for ½·aᵀ·H·a + cᵀ·a."""
+    """Anything with ``compute_qp_objective(state) -> Objective(H, c)``."""
 
     name: str
 
-    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]: ...
+    def compute_qp_objective(self, state: ControlState) -> Objective: ...
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
 
 
 def _nonneg(name: str, x: float) -> float:
@@ -69,7 +83,8 @@ class TipTrackingTask:
 
     def desired_acceleration(self, state: ControlState) -> np.ndarray:
         """ẍ_des [m/s²] for the current state (requires a reference)."""
-        assert self.p_ref is not None
+        if self.p_ref is None:
+            raise ControllerConfigError("desired_acceleration needs a reference: call set_reference first")
         err = self.p_ref - state.p
         if self.max_error is not None:
             norm = math.sqrt(float(err @ err))
@@ -77,13 +92,13 @@ class TipTrackingTask:
                 err = err * (self.max_error / norm)
         return self.a_ref + self.kd * (self.v_ref - state.p_dot) + self.kp * err
 
-    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def compute_qp_objective(self, state: ControlState) -> Objective:
         n = state.v.size
         if self.p_ref is None or self.weight == 0.0:
-            return np.zeros((n, n)), np.zeros(n)
+            return Objective(np.zeros((n, n)), np.zeros(n))
         b = self.desired_acceleration(state) - state.drift
         Jt = state.J.T * (2.0 * self.weight)
-        return Jt @ state.J, -(Jt @ b)
+        return Objective(Jt @ state.J, -(Jt @ b))
 
 
 class PostureTask:
@@ -100,13 +115,13 @@ class PostureTask:
         self.weight = _nonneg("weight", weight)
         self.kp = _nonneg("kp", kp)
         self.kd = _nonneg("kd", kd)
-        self._H = 2.0 * self.weight * np.eye(self.q_ref.size)
+        self._H = _readonly(2.0 * self.weight * np.eye(self.q_ref.size))
 
-    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def compute_qp_objective(self, state: ControlState) -> Objective:
         if self.q_ref.shape != state.q.shape:
             raise ControllerConfigError(f"posture q_ref must have shape {state.q.shape}, got {self.q_ref.shape}")
         target = self.kp * (self.q_ref - state.q) - self.kd * state.v
-        return self._H, (-2.0 * self.weight) * target
+        return Objective(self._H, (-2.0 * self.weight) * target)
 
 
 class DampingTask:
@@ -118,10 +133,10 @@ class DampingTask:
         self.weight = _nonneg("weight", weight)
         self.kd = _nonneg("kd", kd)
 
-    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def compute_qp_objective(self, state: ControlState) -> Objective:
         n = state.v.size
         w2 = 2.0 * self.weight
-        return w2 * np.eye(n), w2 * self.kd * state.v
+        return Objective(w2 * np.eye(n), w2 * self.kd * state.v)
 
 
 class AccelerationRegularization:
@@ -136,8 +151,8 @@ class AccelerationRegularization:
         self._H: np.ndarray | None = None
         self._c: np.ndarray | None = None
 
-    def cost(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+    def compute_qp_objective(self, state: ControlState) -> Objective:
         n = state.v.size
-        if self._H is None or self._H.shape[0] != n:
-            self._H, self._c = 2.0 * self.weight * np.eye(n), np.zeros(n)
-        return self._H, self._c
+        if self._H is None or self._c is None or self._H.shape[0] != n:
+            self._H, self._c = _readonly(2.0 * self.weight * np.eye(n)), _readonly(np.zeros(n))
+        return Objective(self._H, self._c)

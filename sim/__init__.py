@@ -1,5 +1,7 @@
-"""Simulation: synthetic demonstrations and the console script's simulator subcommands.
+"""Simulation: the world the controller acts in.
 
 - :mod:`sim.demonstrator` — synthetic bimanual-eating demonstrations.
-- :mod:`sim.cli` — the ``mpcshare`` console script (``generate``, ``demo`` on top of the core).
+
+``sim`` imports ``learning`` and ``robot``, never ``mpcshare``: the command line
+that runs it (``mpcshare generate``, ``mpcshare demo``) lives in :mod:`mpcshare.cli`.
 """

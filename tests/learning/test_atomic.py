@@ -32,18 +32,16 @@ def test_written_file_has_ordinary_permissions(tmp_path, umask_022):
 def test_failure_keeps_previous_file_and_leaves_no_temporary(tmp_path):
     p = tmp_path / "a.bin"
     p.write_bytes(b"old")
-    with pytest.raises(RuntimeError, match="boom"):
-        with atomic_open(p, "wb") as f:
-            f.write(b"half")
-            raise RuntimeError("boom")
+    with pytest.raises(RuntimeError, match="boom"), atomic_open(p, "wb") as f:
+        f.write(b"half")
+        raise RuntimeError("boom")
     assert p.read_bytes() == b"old"
     assert [x.name for x in tmp_path.iterdir()] == ["a.bin"]
 
 
 def test_bad_mode_is_refused(tmp_path):
-    with pytest.raises(ValueError, match="mode must be"):
-        with atomic_open(tmp_path / "x", "a"):
-            pass
+    with pytest.raises(ValueError, match="mode must be"), atomic_open(tmp_path / "x", "a"):
+        pass
 
 
 def test_saved_data_sets_are_readable_by_others(tmp_path, umask_022):
@@ -56,3 +54,28 @@ def test_saved_data_sets_are_readable_by_others(tmp_path, umask_022):
     assert _mode(tmp_path / "csv") == 0o755
     assert _mode(tmp_path / "csv" / "trial_000.csv") == 0o644
     assert len(load(tmp_path / "d.npz")) == len(load(tmp_path / "csv")) == 1
+
+
+@pytest.fixture
+def umask_077():
+    old = os.umask(0o077)
+    yield
+    os.umask(old)
+
+
+def test_kernel_applies_the_umask_and_it_is_never_changed(tmp_path, umask_077, monkeypatch):
+    """Files and folders get 0666/0777 less the umask from the kernel; nothing calls
+    os.umask (setting it to read it would race with other threads)."""
+    calls = []
+    real = os.umask
+    monkeypatch.setattr(os, "umask", lambda m: calls.append(m) or real(m))
+    with atomic_open(tmp_path / "a.txt") as f:
+        f.write("x")
+    tr = Trial(obs=np.zeros((3, 1)), act=np.ones((3, 1)), t=np.arange(3) / 100.0)
+    save(Demonstrations([tr], rate_hz=100.0), tmp_path / "csv")
+    assert default_file_mode() == 0o600 and default_dir_mode() == 0o700
+    monkeypatch.undo()
+    assert calls == []
+    assert _mode(tmp_path / "a.txt") == 0o600
+    assert _mode(tmp_path / "csv") == 0o700
+    assert _mode(tmp_path / "csv" / "trial_000.csv") == 0o600

@@ -8,9 +8,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import learning.data as data
-from learning.data import (DataFormatError, Demonstrations, Trial, load, load_csv_folder, load_npz,
-                           save, save_csv_folder, save_npz)
+import learning.data.csv as csv_format
+from learning import data
+from learning.data import (
+    DataFormatError,
+    Demonstrations,
+    Trial,
+    load,
+    load_csv_folder,
+    load_npz,
+    save,
+    save_csv_folder,
+    save_npz,
+)
 
 OBS = ["x", "y", "z", "roll"]
 ACT = ["kx", "ky", "kz"]
@@ -345,16 +355,24 @@ def edit_csv(path: Path, row: int, column: str, value: str) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-@pytest.mark.parametrize("column, value, match", [
-    ("obs_y", "nan", "non-finite"), ("act_kz", "inf", "non-finite"), ("vol_prot", "-inf", "non-finite"),
-    ("t", "nan", "non-finite"), ("obs_roll", "abc", "not a number"), ("act_kx", "", "not a number"),
+@pytest.mark.parametrize("name, row, column, value, match", [
+    ("trial_011.csv", 7, "obs_y", "nan", "non-finite"),
+    ("trial_011.csv", 7, "act_kz", "inf", "non-finite"),
+    ("trial_011.csv", 7, "vol_prot", "-inf", "non-finite"),
+    ("trial_011.csv", 7, "t", "nan", "non-finite"),
+    ("trial_011.csv", 7, "obs_roll", "abc", "not a number"),
+    ("trial_011.csv", 7, "act_kx", "", "not a number"),
+    ("trial_011.csv", 12, "t", "0.0", "not strictly increasing"),
+    ("trial_010.csv", 9, "subject", "3", "subject changes"),
+    ("trial_011.csv", 21, "mode", "2.5", "integer"),
 ])
-def test_csv_bad_cell(csv_dir: Path, column: str, value: str, match: str) -> None:
-    f = csv_dir / "trial_011.csv"
-    edit_csv(f, 7, column, value)
+def test_csv_bad_cell(csv_dir: Path, name: str, row: int, column: str, value: str, match: str) -> None:
+    """One bad cell: the error names its file, column and data row."""
+    f = csv_dir / name
+    edit_csv(f, row, column, value)
     with pytest.raises(DataFormatError, match=match) as exc:
         load(csv_dir)
-    check_error(exc, f, column, 7)
+    check_error(exc, f, column, row)
 
 
 def test_csv_ragged_row(csv_dir: Path) -> None:
@@ -368,38 +386,19 @@ def test_csv_ragged_row(csv_dir: Path) -> None:
     assert "file line 6" in str(exc.value)
 
 
-def test_csv_unknown_column(csv_dir: Path) -> None:
-    f = csv_dir / "trial_010.csv"
-    lines = f.read_text().splitlines()
-    f.write_text("\n".join([lines[0] + ",speed"] + [ln + ",1" for ln in lines[1:]]) + "\n")
-    with pytest.raises(DataFormatError, match="unknown column") as exc:
-        load(csv_dir)
-    check_error(exc, f, "speed", None)
-
-
-def test_csv_missing_time_column(csv_dir: Path) -> None:
-    f = csv_dir / "trial_010.csv"
-    lines = f.read_text().splitlines()
-    f.write_text("\n".join(ln.split(",", 1)[1] for ln in lines) + "\n")
-    with pytest.raises(DataFormatError, match="required column missing") as exc:
-        load(csv_dir)
-    check_error(exc, f, "t", None)
-
-
-def test_csv_no_action_column(tmp_path: Path) -> None:
+@pytest.mark.parametrize("text, match, column", [
+    ("t,obs_a,act_b,speed\n0,1,2,1\n0.01,1,2,1\n", "unknown column", "speed"),
+    ("obs_a,act_b\n1,2\n1,2\n", "required column missing", "t"),
+    ("t,obs_a\n0,1\n0.01,2\n", "no act_", "act_*"),
+    ("t,obs_a,obs_a,act_b\n0,1,1,1\n0.01,2,2,2\n", "duplicate column", "obs_a"),
+])
+def test_csv_bad_header(tmp_path: Path, text: str, match: str, column: str) -> None:
+    """A header the format does not allow: the error names the file and the column."""
     f = tmp_path / "trial_000.csv"
-    f.write_text("t,obs_a\n0,1\n0.01,2\n")
-    with pytest.raises(DataFormatError, match="no act_") as exc:
+    f.write_text(text)
+    with pytest.raises(DataFormatError, match=match) as exc:
         load(tmp_path)
-    check_error(exc, f, "act_*", None)
-
-
-def test_csv_duplicate_column(tmp_path: Path) -> None:
-    f = tmp_path / "trial_000.csv"
-    f.write_text("t,obs_a,obs_a,act_b\n0,1,1,1\n0.01,2,2,2\n")
-    with pytest.raises(DataFormatError, match="duplicate column") as exc:
-        load(tmp_path)
-    check_error(exc, f, "obs_a", None)
+    check_error(exc, f, column, None)
 
 
 def test_csv_empty_and_single_sample(tmp_path: Path) -> None:
@@ -415,14 +414,6 @@ def test_csv_empty_and_single_sample(tmp_path: Path) -> None:
     f.write_text("")
     with pytest.raises(DataFormatError, match="no header"):
         load(tmp_path)
-
-
-def test_csv_time_not_increasing(csv_dir: Path) -> None:
-    f = csv_dir / "trial_011.csv"
-    edit_csv(f, 12, "t", "0.0")
-    with pytest.raises(DataFormatError, match="not strictly increasing") as exc:
-        load(csv_dir)
-    check_error(exc, f, "t", 12)
 
 
 def test_csv_inconsistent_channel_names(csv_dir: Path) -> None:
@@ -441,22 +432,6 @@ def test_csv_optional_column_in_some_files_only(tmp_path: Path) -> None:
     with pytest.raises(DataFormatError, match="absent here but present") as exc:
         load(tmp_path)
     check_error(exc, tmp_path / "trial_001.csv", "mode", None)
-
-
-def test_csv_subject_changes(csv_dir: Path) -> None:
-    f = csv_dir / "trial_010.csv"
-    edit_csv(f, 9, "subject", "3")
-    with pytest.raises(DataFormatError, match="subject changes") as exc:
-        load(csv_dir)
-    check_error(exc, f, "subject", 9)
-
-
-def test_csv_non_integer_mode(csv_dir: Path) -> None:
-    f = csv_dir / "trial_011.csv"
-    edit_csv(f, 21, "mode", "2.5")
-    with pytest.raises(DataFormatError, match="integer") as exc:
-        load(csv_dir)
-    check_error(exc, f, "mode", 21)
 
 
 def test_csv_bad_file_names(csv_dir: Path) -> None:
@@ -557,7 +532,7 @@ def test_csv_save_failure_keeps_old_folder(tmp_path: Path, monkeypatch: pytest.M
     old = make_demos(seed=1)
     save(old, p)
     calls = {"n": 0}
-    real = data._write_csv_trial
+    real = csv_format._write_csv_trial
 
     def flaky(*args, **kwargs):
         calls["n"] += 1
@@ -565,7 +540,7 @@ def test_csv_save_failure_keeps_old_folder(tmp_path: Path, monkeypatch: pytest.M
             raise OSError("disk full")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(data, "_write_csv_trial", flaky)
+    monkeypatch.setattr(csv_format, "_write_csv_trial", flaky)
     with pytest.raises(OSError, match="disk full"):
         save(make_demos(seed=2), p)
     monkeypatch.undo()
@@ -599,3 +574,23 @@ def test_csv_tolerates_crlf_and_byte_order_mark(tmp_path: Path) -> None:
     d = load(tmp_path)
     assert d.trial_ids == [4] and d.subjects == [3] and d.rate_hz == 100.0
     np.testing.assert_array_equal(d[0].obs[:, 0], [1, 1, 3])
+
+
+@pytest.mark.parametrize("fmt", ["d.npz", "folder"])
+def test_each_trial_is_checked_once_on_load(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                            fmt: str) -> None:
+    """NPZ and CSV go through the same checks, once per trial."""
+    from learning.data import checks
+
+    d = make_demos()
+    save(d, tmp_path / fmt)
+    seen: list[int] = []
+    real = checks.check_trial
+
+    def counting(tr, start, origin):
+        seen.append(tr.trial_id)
+        return real(tr, start, origin)
+
+    monkeypatch.setattr(checks, "check_trial", counting)
+    assert_same(load(tmp_path / fmt), d)
+    assert seen == [10, 11, 12]

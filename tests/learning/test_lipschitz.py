@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from learning.lipschitz import last_search_stats, pointwise_quotients
+from learning.lipschitz import SearchOptions, pointwise_quotients, survivors
 
 
 def brute_force(X, Y, groups=None):
@@ -83,11 +83,10 @@ def test_random_gaussian_exact(n, d, dy):
 
 def test_windowed_exact_and_pruned():
     X, Y = smooth_windows(2500, 1)
-    q = pointwise_quotients(X, Y, backend="numpy", block=64)
+    q, _, s = pointwise_quotients(X, Y, backend="numpy", block=64, return_stats=True)
     assert_exact(q, brute_force(X, Y))
-    s = last_search_stats()
     # The exact stage sees a small fraction of the ordered pairs.
-    assert s["pairs_exact"] < 0.05 * 2 * s["n_pairs"]
+    assert s.pairs_exact < 0.05 * 2 * s.n_pairs
 
 
 def test_near_duplicates_exact():
@@ -198,7 +197,7 @@ def test_torch_backend_cpu_matches():
     X = np.concatenate([X, X[:100] + 1e-9])
     Y = rng.normal(size=(1000, 3))
     q, p = pointwise_quotients(X, Y, return_partner=True, backend="torch", device="cpu")
-    qn, pn = pointwise_quotients(X, Y, return_partner=True, backend="numpy")
+    _, pn = pointwise_quotients(X, Y, return_partner=True, backend="numpy")
     assert_exact(q, brute_force(X, Y))
     assert np.array_equal(p, pn)
 
@@ -267,7 +266,6 @@ def test_property_search_path_exact(seed, n, d, dup, scale, offset):
 
 def test_survivors_matches_dense_compare():
     """The segmented survivor search finds exactly the entries S ≥ 0 (any width)."""
-    from learning._lipschitz_search import survivors
     rng = np.random.default_rng(11)
     for a, c in [(5, 64), (7, 200), (3, 10), (16, 1000)]:
         S = rng.normal(size=(a, c)).astype(np.float32) - 2.5
@@ -280,21 +278,19 @@ def test_survivors_matches_dense_compare():
 
 
 @pytest.mark.parametrize("tile,chunk", [(64, 128), (100, 192)])
-def test_symmetric_pass_equals_one_sided(monkeypatch, tile, chunk):
+def test_symmetric_pass_equals_one_sided(tile, chunk):
     """Each unordered pair screened once (both points credited) = the one-sided search,
     including the partner convention (smallest index among tied maximisers)."""
-    import learning.lipschitz as lip
     X, Y = smooth_windows(1500, 9)
     rng = np.random.default_rng(9)
     # Exact ties: duplicated rows make several partners attain the same maximum.
     X = np.concatenate([X, X[:200], X[100:300] + 1e-9 * rng.normal(size=(200, X.shape[1]))])
     Y = np.concatenate([Y, Y[:200] + 0.01, Y[100:300]])
-    monkeypatch.setattr(lip, "_SYM_TILE", tile)
-    monkeypatch.setattr(lip, "_SYM_CHUNK", chunk)
-    monkeypatch.setattr(lip, "_SYMMETRIC", True)
-    qs, ps = pointwise_quotients(X, Y, return_partner=True, backend="numpy", block=64, n_jobs=2)
-    monkeypatch.setattr(lip, "_SYMMETRIC", False)
-    q1, p1 = pointwise_quotients(X, Y, return_partner=True, backend="numpy", block=64, n_jobs=1)
+    sym = SearchOptions(search="symmetric", tile=tile, chunk=chunk)
+    qs, ps = pointwise_quotients(X, Y, return_partner=True, backend="numpy", block=64, n_jobs=2,
+                                 options=sym)
+    q1, p1 = pointwise_quotients(X, Y, return_partner=True, backend="numpy", block=64, n_jobs=1,
+                                 options=SearchOptions(search="per_leaf"))
     assert np.array_equal(qs, q1) and np.array_equal(ps, p1)
     assert_exact(qs, brute_force(X, Y))
     assert_partner(X, Y, qs, ps)
@@ -312,39 +308,53 @@ def test_symmetric_pass_equals_one_sided(monkeypatch, tile, chunk):
 
 
 @pytest.mark.parametrize("backend", ["numpy", "torch"])
-def test_symmetric_full_d_mode_iid(monkeypatch, backend):
+def test_symmetric_full_d_mode_iid(backend):
     """i.i.d. data switches the symmetric pass to the full-d two-sided screen; still exact."""
     if backend == "torch":
         pytest.importorskip("torch")
-    import learning.lipschitz as lip
-    monkeypatch.setattr(lip, "_SYM_TILE", 128)
-    monkeypatch.setattr(lip, "_SYM_CHUNK", 512)
     rng = np.random.default_rng(12)
     X = rng.normal(size=(1400, 40))
     X = np.concatenate([X, X[:100] + 1e-9 * rng.normal(size=(100, 40))])
     Y = rng.normal(size=(1500, 2))
-    q, p = pointwise_quotients(X, Y, return_partner=True, backend=backend, device="cpu"
-                               if backend == "torch" else None, n_jobs=2)
-    s = last_search_stats()
-    assert s["pairs_full_screened"] > 0.3 * s["n_pairs"]
+    q, p, s = pointwise_quotients(X, Y, backend=backend, device="cpu" if backend == "torch" else None,
+                                  n_jobs=2, options=SearchOptions(tile=128, chunk=512),
+                                  return_stats=True)
+    assert s.pairs_full_screened > 0.3 * s.n_pairs
     assert_exact(q, brute_force(X, Y))
     assert_partner(X, Y, q, p)
 
 
-def test_symmetric_pass_chooses_the_screen_per_chunk(monkeypatch):
+def test_symmetric_pass_chooses_the_screen_per_chunk():
     """Low-rank smooth points and i.i.d. points in one group: chunks of the same pass
     use the z screen where it prunes and the full-d screen where it does not; exact."""
-    import learning.lipschitz as lip
-    monkeypatch.setattr(lip, "_SYM_TILE", 128)
-    monkeypatch.setattr(lip, "_SYM_CHUNK", 512)
     rng = np.random.default_rng(3)
     t = np.linspace(0, 20, 1500)[:, None]
     smooth = np.sin(t * rng.uniform(0.2, 2.0, size=(1, 40)) + rng.uniform(0, 6, size=(1, 40)))
     X = np.concatenate([smooth, 0.3 * rng.normal(size=(1500, 40))])
     Y = np.concatenate([np.sin(t * np.array([[0.7, 1.3]])), rng.normal(size=(1500, 2))])
-    q, p = pointwise_quotients(X, Y, return_partner=True, n_jobs=2)
-    s = last_search_stats()
-    assert s["pairs_screened"] > 0.2 * s["n_pairs"]
-    assert s["pairs_full_screened"] > 0.2 * s["n_pairs"]
+    q, p, s = pointwise_quotients(X, Y, n_jobs=2, options=SearchOptions(tile=128, chunk=512),
+                                  return_stats=True)
+    assert s.pairs_screened > 0.2 * s.n_pairs
+    assert s.pairs_full_screened > 0.2 * s.n_pairs
     assert_exact(q, brute_force(X, Y))
     assert_partner(X, Y, q, p)
+
+
+def test_stats_are_returned_per_call_and_default_return_is_unchanged():
+    """No state between calls: each call returns its own counters; the default result
+    is the bare array, with the same values."""
+    X, Y = smooth_windows(900, 4)
+    small = pointwise_quotients(X[:600], Y[:600], backend="numpy", return_stats=True)
+    big = pointwise_quotients(X, Y, backend="numpy", return_stats=True)
+    assert small.stats.n_pairs == 600 * 599 // 2 and big.stats.n_pairs == 900 * 899 // 2
+    assert big.stats.to_dict()["n_pairs"] == big.stats.n_pairs
+    q = pointwise_quotients(X, Y, backend="numpy")
+    assert isinstance(q, np.ndarray) and np.array_equal(q, big.q)
+    q, p = pointwise_quotients(X, Y, backend="numpy", return_partner=True)
+    assert np.array_equal(p, big.partner)
+    dense = pointwise_quotients(X[:600], Y[:600], backend="numpy",
+                                options=SearchOptions(small_group=600), return_stats=True)
+    assert np.array_equal(dense.q, small.q)
+    assert dense.stats.pairs_exact == 600 * 599 and dense.stats.pairs_screened == 0
+    with pytest.raises(ValueError, match="search must be 'symmetric' or 'per_leaf'"):
+        SearchOptions(search="fast")

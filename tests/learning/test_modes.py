@@ -8,10 +8,13 @@ import numpy as np
 import pytest
 from hmmlearn.hmm import GaussianHMM
 from sklearn.exceptions import NotFittedError
+from threadpoolctl import threadpool_limits
 
 from learning.modes import (
+    HMMFilterParams,
     ModeFilter,
     ModeSelection,
+    RegularizedGaussianHMM,
     TaskModes,
     check_sequences,
     match_modes,
@@ -20,14 +23,13 @@ from learning.modes import (
     relabel,
     select_n_modes,
 )
-from learning.modes import _single_threaded
 
 
 @pytest.fixture(autouse=True)
 def _one_blas_thread():
     """hmmlearn's reference computations use tiny threaded BLAS calls that crawl on a busy
     2-core machine; TaskModes limits threads itself, the vanilla references here do not."""
-    with _single_threaded():
+    with threadpool_limits(limits=1):
         yield
 
 
@@ -222,7 +224,7 @@ def test_clear_errors_on_bad_input(data, fitted):
 # ------------------------------------------------------------------ online filter
 
 def test_mode_filter_equals_offline_filter_and_hmmlearn(data, fitted):
-    X, _, L = data
+    X, _, _ = data
     T = 150
     seq = X[400:400 + T]  # a prefix of the second trial
     f = fitted.make_filter()
@@ -340,22 +342,52 @@ def test_hungarian_matching_on_hand_made_labels():
         match_modes(np.array([0, 1]), np.array([0, 1, 2]))
 
 
-def test_mode_filter_type(fitted):
-    assert isinstance(fitted.make_filter(), ModeFilter)
+@pytest.mark.parametrize("n_pca", [None, 4])
+def test_mode_filter_from_exported_params(data, n_pca):
+    """A filter built from the frozen parameter object alone (no estimator) equals
+    ``filter_proba`` on every prefix, with and without PCA; the parameters are read-only
+    and survive a round trip through plain arrays (what a model bundle stores)."""
+    X, _, L = data
+    m = TaskModes(3, n_pca=n_pca, n_restarts=1, covariance_type="diag").fit(X, L)
+    params = m.filter_params()
+    assert isinstance(params, HMMFilterParams)
+    assert params.covars.shape == (3, m.n_components_, m.n_components_)  # full, for any type
+    np.testing.assert_allclose(params.covars, m.model_.covars_)
+    with pytest.raises(ValueError, match="read-only"):
+        params.means[0, 0] = 1.0
+    again = HMMFilterParams.from_dict({k: np.array(v) for k, v in params.to_dict().items()})
+    seq = X[400:480]
+    ref = m.filter_proba(seq)
+    for built in (ModeFilter(params), ModeFilter(again), m.make_filter(), ModeFilter(m)):
+        post = np.array([built.step(o) for o in seq])
+        np.testing.assert_allclose(post, ref, rtol=0, atol=1e-9)
+    lag = ModeFilter(params, fixed_lag=2)
+    for o in seq[:10]:
+        lag.step(o)
+    assert lag.posterior_time == 7
+    with pytest.raises(TypeError, match="TaskModes or an HMMFilterParams"):
+        ModeFilter(np.zeros(3))
+    with pytest.raises(ValueError, match="transmat must have shape"):
+        HMMFilterParams(**{**params.to_dict(), "transmat": np.eye(2)})
+    half = params.to_dict()
+    if n_pca:
+        half.pop("pca_mean")
+    else:
+        half["pca_mean"] = np.zeros(9)
+    with pytest.raises(ValueError, match="pca_mean and pca_components go together"):
+        HMMFilterParams(**half)
 
 
 def test_regularised_hmm_matches_hmmlearn_em_step(data):
     """The fast scatter statistics and the emission override reproduce hmmlearn's EM."""
-    from learning.modes import _RegularizedGaussianHMM
-
     X, _, L = data
     rng = np.random.default_rng(0)
     K, D = 3, X.shape[1]
-    init = dict(startprob_=np.full(K, 1 / K), transmat_=np.full((K, K), 1 / K),
-                means_=X[rng.choice(len(X), K)], covars_=np.array([np.cov(X.T)] * K))
-    kw = dict(n_components=K, covariance_type="full", n_iter=2, tol=-np.inf, init_params="",
-              covars_prior=0.0, covars_weight=1.0, means_weight=0.0)
-    ours, ref = _RegularizedGaussianHMM(**kw), GaussianHMM(**kw)
+    init = {"startprob_": np.full(K, 1 / K), "transmat_": np.full((K, K), 1 / K),
+            "means_": X[rng.choice(len(X), K)], "covars_": np.array([np.cov(X.T)] * K)}
+    kw = {"n_components": K, "covariance_type": "full", "n_iter": 2, "tol": -np.inf,
+          "init_params": "", "covars_prior": 0.0, "covars_weight": 1.0, "means_weight": 0.0}
+    ours, ref = RegularizedGaussianHMM(**kw), GaussianHMM(**kw)
     ours.reg_covar = 0.0
     for h in (ours, ref):
         h.n_features = D

@@ -8,9 +8,17 @@ from scipy import stats
 
 from learning.lipschitz import pointwise_quotients
 from learning.predictability import (
-    compare_quotients, compare_segmentation, compare_voluntary_shares, lipschitz_index,
-    narx_regressors, random_segmentation, select_order, split_reactive_voluntary,
-    threshold_from_percentile, voluntary_mask, voluntary_share,
+    compare_quotients,
+    compare_segmentation,
+    compare_voluntary_shares,
+    lipschitz_index,
+    narx_regressors,
+    random_segmentation,
+    select_order,
+    split_reactive_voluntary,
+    threshold_from_percentile,
+    voluntary_mask,
+    voluntary_share,
 )
 
 

@@ -7,9 +7,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from learning.data import Demonstrations, Trial
-from learning.preprocess import (Preprocessor, Standardizer, causal_windows, downsample, preprocess,
-                                 split_by_subject, split_by_trial, window_lags)
+from learning.data import Demonstrations, Trial, split_by_subject, split_by_trial
+from learning.preprocess import (
+    Preprocessor,
+    Standardizer,
+    causal_windows,
+    downsample,
+    preprocess,
+    window_lags,
+)
 
 
 def make_demos(lengths=(300, 250, 400, 350), rate=100.0, d_o=6, d_u=3, seed=0,

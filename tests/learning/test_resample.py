@@ -1,7 +1,12 @@
 import numpy as np
 import pytest
 
-from learning.resample import StreamingDecimator, causal_downsample, decimation_factor, lowpass_sos
+from learning.resample import (
+    StreamingDecimator,
+    causal_downsample,
+    decimation_factor,
+    lowpass_sos,
+)
 from sim.demonstrator import generate_demonstrations
 
 
@@ -22,7 +27,7 @@ def test_filter_is_causal_and_attenuates_above_new_nyquist():
     x = np.sin(2 * np.pi * 8.0 * t)[:, None]  # 8 Hz: above the 5 Hz Nyquist of 10 Hz
     sos = lowpass_sos(rate, target)
     from scipy import signal
-    w, h = signal.sosfreqz(sos, worN=[1.0, 8.0], fs=rate)
+    _, h = signal.sosfreqz(sos, worN=[1.0, 8.0], fs=rate)
     assert abs(h[0]) > 0.95 and abs(h[1]) < 0.1
     dec = StreamingDecimator(rate, target, 1)
     y = np.array([v for v in (dec.push(s) for s in x) if v is not None])

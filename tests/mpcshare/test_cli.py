@@ -90,3 +90,55 @@ def test_data_that_cannot_be_analysed_give_one_message(data_file, tmp_path, caps
     err = capsys.readouterr().err
     assert "cannot analyse the data" in err and "below the analysis rate" in err
     assert "Traceback" not in err
+
+
+def test_help_lists_every_registered_subcommand(capsys):
+    from mpcshare.cli import COMMANDS
+
+    with pytest.raises(SystemExit) as e:
+        main(["--help"])
+    assert e.value.code == 0
+    out = capsys.readouterr().out
+    names = [c.name for c in COMMANDS]
+    assert {"generate", "inspect", "analyze", "demo"} <= set(names)
+    for c in COMMANDS:
+        assert c.name in out and c.help[:30] in out, c.name
+
+
+def test_extra_command_is_added_and_replaces_by_name(capsys):
+    from mpcshare.cli import Command
+
+    seen = []
+    extra = Command("hello", "say hello", lambda p: p.add_argument("--who", default="x"),
+                    lambda a: seen.append(a.who) or 3)
+    assert main(["hello", "--who", "y"], commands=(extra,)) == 3 and seen == ["y"]
+    shadow = Command("inspect", "replaced", lambda p: None, lambda a: 7)
+    assert main(["inspect"], commands=(shadow,)) == 7
+
+
+def test_python_dash_m_runs_the_command_line():
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "mpcshare", "--help"], capture_output=True, text=True,
+                         check=True).stdout
+    assert "generate" in out and "analyze" in out and "demo" in out
+
+
+def test_sim_imports_nothing_from_mpcshare():
+    import ast
+    from pathlib import Path
+
+    for path in (Path(__file__).parents[2] / "sim").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else [])
+            assert not any(n == "mpcshare" or n.startswith("mpcshare.") for n in names), path
+
+
+def test_select_modes_on_one_trial_is_one_message(tmp_path, capsys):
+    one = tmp_path / "one.npz"
+    save(generate_demonstrations(1, 0.5, seed=0), one)
+    assert main(["analyze", str(one), "--out", str(tmp_path / "r"), "--no-search", "--select-modes"]) == 1
+    err = capsys.readouterr().err
+    assert "needs at least 2 trials" in err and "Traceback" not in err

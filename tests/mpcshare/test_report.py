@@ -32,3 +32,14 @@ def test_plot_demonstrations(tmp_path):
     d = generate_demonstrations(1, 0.5, seed=0)
     plot_demonstrations(d, tmp_path / "t.png", mode_names=MODE_NAMES)
     assert (tmp_path / "t.png").stat().st_size > 10_000
+
+
+def test_importing_the_report_module_leaves_the_matplotlib_backend_alone():
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "MPLBACKEND": "svg"}
+    out = subprocess.run([sys.executable, "-c", "import mpcshare.report, matplotlib; print(matplotlib.get_backend())"],
+                         capture_output=True, text=True, check=True, env=env).stdout
+    assert out.strip() == "svg"

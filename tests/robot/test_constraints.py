@@ -7,8 +7,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robot.constraints import (AccelerationLimit, PositionLimit, TorqueLimit, VelocityLimit,
-                               intersect_by_priority, viable_velocity_bound)
+from robot.constraints import (
+    AccelerationLimit,
+    PositionLimit,
+    TorqueLimit,
+    VelocityLimit,
+    intersect_by_priority,
+    viable_velocity_bound,
+)
 from robot.limits import JointLimits
 from robot.state import ControlState
 
@@ -122,7 +128,7 @@ def test_torque_rows_match_inverse_dynamics(seed) -> None:
     h = rng.normal(size=n)
     tau_max = rng.uniform(0.5, 5.0, n)
     lim = JointLimits(-np.ones(n), np.ones(n), np.ones(n), np.ones(n) * 100, np.ones(n), tau_max)
-    G, hh = TorqueLimit(lim).rows(_state(np.zeros(n), np.zeros(n), M=M, h=h))
+    G, hh = TorqueLimit(lim).compute_qp_inequalities(_state(np.zeros(n), np.zeros(n), M=M, h=h))
     for _ in range(20):
         a = rng.normal(scale=2.0, size=n)
         inside = bool(np.all(G @ a <= hh))
@@ -134,13 +140,32 @@ def test_box_rows_and_bounds_agree() -> None:
     s = _state([0.2, -0.3], [1.0, -2.5])
     for c in (AccelerationLimit(lim), VelocityLimit(lim), PositionLimit(lim)):
         lo, hi = c.bounds(s)
-        G, h = c.rows(s)
+        G, h = c.compute_qp_inequalities(s)
         assert G.shape == (4, 2) and c.num_rows(2) == 4
         np.testing.assert_allclose(G @ hi, np.concatenate([hi, -hi]))
         assert np.all(G @ lo <= h + 1e-12) and np.all(G @ hi <= h + 1e-12)
     lo, hi = VelocityLimit(lim).bounds(s)
     np.testing.assert_allclose(s.v + hi * s.dt, lim.v_max)
     np.testing.assert_allclose(s.v + lo * s.dt, -lim.v_max)
+
+
+def test_limits_return_named_read_only_rows() -> None:
+    from robot.constraints import Bounds, Constraint, Limit, default_constraints
+
+    lim = JointLimits([-1, -1], [1, 1], [2, 3], [20, 30], [10, 10], [5, 5])
+    s = _state([0.2, -0.3], [1.0, -2.5])
+    boxes, rows = default_constraints(lim)
+    for c in [*boxes, *rows]:
+        assert isinstance(c, Limit)
+        out = c.compute_qp_inequalities(s)
+        assert isinstance(out, Constraint) and out.G.shape == (4, 2) and out.h.shape == (4,)
+        with pytest.raises(ValueError):
+            out.G[0, 0] = 1.0
+    assert all(isinstance(b.bounds(s), Bounds) for b in boxes)
+    with pytest.raises(ValueError):  # limit arrays are read-only
+        lim.q_max[0] = 2.0
+    with pytest.raises(ValueError):
+        AccelerationLimit(lim).bounds(s).lo[0] = 0.0
 
 
 def test_limits_validation() -> None:

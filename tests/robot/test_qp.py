@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from robot.constraints import viable_velocity_bound
 from robot.errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from robot.limits import JointLimits
-from robot.solvers import daqp_available
 from robot.qp import QPConfig, QPController, QPStatus
+from robot.solvers import daqp_available
 from robot.superlimb import SuperLimbParams, build_pinocchio_model
 
 TOL = 1e-6
@@ -60,15 +60,16 @@ def test_random_states_and_references_respect_every_limit(seed, kp, far) -> None
         for _ in range(25):
             r = ctl.step(q, v, p_ref, v_ref, a_ref)
             assert r.status is QPStatus.OK, r.reason
+            assert "primary QP" not in r.reason  # the first QP answered (no silent fallback)
             assert _violation(r) <= TOL
-            np.testing.assert_allclose(r.tau, ctl._evaluate(q, v, ctl.dt).M @ r.a + ctl._evaluate(q, v, ctl.dt).h,
+            np.testing.assert_allclose(r.tau, ctl.evaluate(q, v).M @ r.a + ctl.evaluate(q, v).h,
                                        atol=1e-9)
             q, v = r.q_next, r.v_next
 
 
 def test_tracks_a_reachable_reference(controller: QPController) -> None:
     q, v = np.array([0.0, 0.5, 1.0]), np.zeros(3)
-    start = controller._evaluate(q, v, controller.dt).p
+    start = controller.evaluate(q, v).p
     target = start + np.array([0.08, 0.05, -0.06])
     for _ in range(150):
         r = controller.step(q, v, target)
@@ -119,7 +120,7 @@ def test_start_outside_limits_recovers(offset: float, v0: float) -> None:
     q = np.array([0.0, 0.4, 0.0])
     q[2] = (LIM.q_max[2] + offset) if offset > 0 else (LIM.q_min[2] + offset)
     v = np.array([0.0, 0.0, v0])
-    target = ctl._evaluate(np.array([0.0, 0.4, 1.0]), np.zeros(3), ctl.dt).p
+    target = ctl.tip_position(np.array([0.0, 0.4, 1.0]))
     statuses = []
     for k in range(300):
         r = ctl.step(q, v, target)
@@ -212,6 +213,40 @@ def test_misuse_raises_typed_errors() -> None:
         ctl.step(np.zeros(2), np.zeros(3))
     with pytest.raises(ControllerConfigError):
         ctl.step(np.zeros(3), np.zeros(3), np.zeros(2))
+
+
+def test_custom_tasks_need_exactly_one_tip_task() -> None:
+    from robot.tasks import AccelerationRegularization, PostureTask, TipTrackingTask
+
+    model, _, _ = build_pinocchio_model(PARAMS)
+    posture = PostureTask(np.zeros(3))
+    with pytest.raises(ControllerConfigError, match="exactly one TipTrackingTask.*found 0.*posture"):
+        QPController(model, "knife_tip", LIM, tasks=[posture, AccelerationRegularization()])
+    with pytest.raises(ControllerConfigError, match="found 2"):
+        QPController(model, "knife_tip", LIM, tasks=[TipTrackingTask(), TipTrackingTask(), posture])
+    tip = TipTrackingTask(weight=2.0)
+    ctl = QPController(model, "knife_tip", LIM, tasks=[posture, tip, AccelerationRegularization()])
+    assert ctl.tip_task is tip
+    q = np.array([0.0, 0.5, 1.0])
+    target = ctl.tip_position(q) + np.array([0.05, 0.0, 0.0])
+    r = ctl.step(q, np.zeros(3), target)
+    assert tip.p_ref is not None and r.tip_error == pytest.approx(0.05, abs=1e-12)
+
+
+def test_evaluate_is_the_state_the_controller_sees() -> None:
+    ctl = QPController.for_superlimb()
+    q, v = np.array([0.1, 0.4, 0.9]), np.array([0.2, -0.1, 0.3])
+    s = ctl.evaluate(q, v)
+    model, data, fid = build_pinocchio_model(PARAMS)
+    pin.forwardKinematics(model, data, q)
+    np.testing.assert_allclose(s.p, pin.updateFramePlacement(model, data, fid).translation, atol=1e-12)
+    upper = np.triu(pin.crba(model, data, q))  # crba fills (at least) the upper triangle
+    np.testing.assert_allclose(s.M, upper + np.triu(upper, 1).T, atol=1e-12)
+    np.testing.assert_allclose(ctl.tip_position(q), s.p, atol=1e-15)
+    q[0] = 5.0  # the state holds its own copy
+    assert s.q[0] == 0.1
+    with pytest.raises(ControllerConfigError, match="q must have shape"):
+        ctl.evaluate(np.zeros(2), np.zeros(3))
 
 
 def test_solvers_agree() -> None:

@@ -97,9 +97,10 @@ PARAM_VARIANTS = {
     # a tilted mount and an off-axis inertia exercise the frame conventions
     "tilted": replace(
         SuperLimbParams(mount_xyz=(0.05, -0.3, 0.5), mount_rpy=(0.3, -0.2, 0.8), knife_pitch=1.0),
-        links=tuple(replace(l, inertial=replace(l.inertial, inertia=l.inertial.inertia[:3]
-                                                     + tuple(f * min(l.inertial.inertia[:3]) for f in (0.2, -0.3, 0.1))))
-                    for l in SuperLimbParams().links),
+        links=tuple(replace(link, inertial=replace(
+                        link.inertial, inertia=link.inertial.inertia[:3]
+                        + tuple(f * min(link.inertial.inertia[:3]) for f in (0.2, -0.3, 0.1))))
+                    for link in SuperLimbParams().links),
     ).with_joint("elbow", origin_rpy=(0.1, 0.0, -0.2)),
 }
 

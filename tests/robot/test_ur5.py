@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from robot.limits import JointLimits
-from robot.solvers import daqp_available
 from robot.qp import QPConfig, QPController, QPStatus
+from robot.solvers import daqp_available
 
 erd = pytest.importorskip("example_robot_data")
 TOL = 1e-6
@@ -41,7 +41,7 @@ def test_ur5_reaches_a_target(ur5, solver: str) -> None:
     lim = _limits(ur5)
     ctl = QPController(ur5, "tool0", lim, QPConfig(solver=solver, q_posture=Q0))
     q, v = Q0.copy(), np.zeros(6)
-    target = ctl._evaluate(q, v, ctl.dt).p + np.array([0.15, -0.1, 0.1])
+    target = ctl.evaluate(q, v).p + np.array([0.15, -0.1, 0.1])
     for _ in range(400):
         r = ctl.step(q, v, target)
         assert r.status is QPStatus.OK and _violation(r, lim) <= TOL
@@ -58,7 +58,7 @@ def test_ur5_stops_before_a_narrowed_joint_limit(ur5) -> None:
     q, v = Q0.copy(), np.zeros(6)
     q[2] = -0.2  # braking from 3.15 rad/s at 3 rad/s² needs 1.65 rad: start viable
     v[2] = lim.v_max[2]
-    target = ctl._evaluate(q, np.zeros(6), ctl.dt).p + np.array([-0.4, 0.0, -0.3])  # folds the elbow
+    target = ctl.evaluate(q, np.zeros(6)).p + np.array([-0.4, 0.0, -0.3])  # folds the elbow
     peak = q[2]
     for _ in range(300):
         r = ctl.step(q, v, target)

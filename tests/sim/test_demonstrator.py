@@ -2,11 +2,20 @@
 
 import numpy as np
 import pytest
+from scipy import signal
 
 from learning.lipschitz import pointwise_quotients
 from learning.preprocess import preprocess
-from sim.demonstrator import (ACT_NAMES, CUTTING, MODE_NAMES, OBS_NAMES, VOL_NAMES, GeneratorConfig,
-                              SubjectStyle, generate_demonstrations)
+from sim.demonstrator import (
+    ACT_NAMES,
+    CUTTING,
+    MODE_NAMES,
+    OBS_NAMES,
+    VOL_NAMES,
+    GeneratorConfig,
+    SubjectStyle,
+    generate_demonstrations,
+)
 
 
 @pytest.fixture(scope="module")
@@ -90,15 +99,51 @@ def test_modes_explain_confounding():
     q = pointwise_quotients(w.X, w.Y)
     q_modes = pointwise_quotients(w.X, w.Y, w.mode)
     share, share_modes = np.mean(q > 5), np.mean(q_modes > 5)
-    print(f"share of q > 5: {share:.3f} without modes, {share_modes:.3f} within true modes")
     assert share > 0.25
     assert share_modes < 0.2
     assert share > 2.5 * share_modes
 
 
-def test_single_regime_has_one_mode_and_no_sawing():
+SAW = (SubjectStyle(saw_hz=2.0),)  # one known sawing frequency [Hz]
+
+
+def _saw_band(tr, rate_hz: float = 100.0) -> np.ndarray:
+    """knife_x band-passed around the sawing frequency (1.6–2.4 Hz; the stroke wanders ±15 %)."""
+    sos = signal.butter(4, [1.6, 2.4], btype="bandpass", fs=rate_hz, output="sos")
+    return signal.sosfiltfilt(sos, tr.act[:, 0])
+
+
+def _rms(parts: list[np.ndarray]) -> float:
+    x = np.concatenate(parts)
+    assert x.size > 300
+    return float(np.sqrt(np.mean(x ** 2)))
+
+
+@pytest.fixture(scope="module")
+def saw_power():
+    """RMS [m] of knife_x at the sawing frequency: inside cutting, outside it, and in single-regime data
+    (samples 1 s away from any mode change, so that filter edges and ramps do not count)."""
+    inside, outside = [], []
+    for tr in generate_demonstrations(1, 4, seed=1, config=GeneratorConfig(styles=SAW)):
+        y, cut = _saw_band(tr), tr.mode == CUTTING
+        inside.append(y[cut & np.roll(cut, 100) & np.roll(cut, -100)])
+        outside.append(y[~cut & np.roll(~cut, 100) & np.roll(~cut, -100)])
+    single = [_saw_band(tr)[100:-100] for tr in
+              generate_demonstrations(1, 4, seed=1, config=GeneratorConfig(styles=SAW, single_regime=True))]
+    return _rms(inside), _rms(outside), _rms(single)
+
+
+def test_knife_saws_while_cutting_and_only_then(saw_power):
+    inside, outside, _ = saw_power
+    assert inside > 0.005  # a 2 cm half-stroke: RMS ≈ 1.4 cm before band-passing
+    assert inside > 4 * outside
+
+
+def test_single_regime_has_one_mode_and_no_sawing(saw_power):
     d = generate_demonstrations(1, 2, seed=0, config=GeneratorConfig(single_regime=True))
     assert len(np.unique(np.concatenate([tr.mode for tr in d]))) == 1
+    inside, _, single = saw_power
+    assert single < 0.1 * inside
 
 
 def test_one_hour_per_subject_is_cheap():

@@ -1,6 +1,6 @@
 """torch kernel of the Lipschitz search: the same screens and exact step on CPU or CUDA.
 
-The leaf bookkeeping stays in numpy (``_lipschitz_search``); this kernel holds the
+The leaf bookkeeping stays in numpy (``_search``); this kernel holds the
 float32 features and the float64 data on the device and returns index arrays.
 Reduced-precision float32 products (TF32 / bf16, allowed by
 ``torch.set_float32_matmul_precision``) are accounted for by a larger unit
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from ._lipschitz_bounds import F32_UNIT_ROUNDOFF, Features, thresholds
-from ._lipschitz_exact import pair_norms
+from ._bounds import F32_UNIT_ROUNDOFF, Features, thresholds
+from ._exact import pair_norms
 
 __all__ = ["TorchKernel", "resolve_device", "torch_unit_roundoff"]
 
@@ -42,7 +42,9 @@ class TorchKernel:
         self.f = f
         self.dev = resolve_device(device)
         self.chunk_elems = (1 << 24) if self.dev.type == "cuda" else (1 << 20)
-        t = lambda a: None if a is None else torch.from_numpy(np.ascontiguousarray(a)).to(self.dev)
+        def t(a):
+            return None if a is None else torch.from_numpy(np.ascontiguousarray(a)).to(self.dev)
+
         self.ws, self.zs, self.xs = t(f.ws), t(f.zs), t(f.xs)
         self.na, self.nb, self.nx, self.nbx = t(f.na), t(f.nb), t(f.nx), t(f.nbx)
         self.nx_lo, self.nx_hi, self.nw_lo, self.nw_hi = t(f.nx_lo), t(f.nx_hi), t(f.nw_lo), t(f.nw_hi)
@@ -54,7 +56,7 @@ class TorchKernel:
         return torch.from_numpy(np.ascontiguousarray(a, dtype=np.int64)).to(self.dev)
 
     def _rowfeat(self, ws, nb, xs, na, T):
-        # [−2ŵ, 1, 2Tẑ, −T, b − Ta], see _lipschitz_bounds.row_features.
+        # [−2ŵ, 1, 2Tẑ, −T, b − Ta], see _bounds.row_features.
         one = torch.ones_like(nb)[:, None]
         const = (nb.double() - T.double() * na.double()).float()[:, None]
         return torch.cat([-2.0 * ws, one, (2.0 * T)[:, None] * xs, -T[:, None], const], dim=1)
@@ -96,7 +98,9 @@ class TorchKernel:
         ylb = (Gy + self.nw_lo[r][:, None] + self.nw_lo[c][None, :]) / xub
         yub = Gy + self.nw_hi[r][:, None] + self.nw_hi[c][None, :]
         conv = f.scale_x / f.scale_y
-        lift = lambda best: np.sqrt(np.maximum(best.double().cpu().numpy(), 0.0)) * conv * (1.0 - 1e-5)
+        def lift(best) -> np.ndarray:
+            return np.sqrt(np.maximum(best.double().cpu().numpy(), 0.0)) * conv * (1.0 - 1e-5)
+
         Lr = np.maximum(Lr, lift(ylb.amax(dim=1)))
         Lc = np.maximum(Lc, lift(ylb.amax(dim=0)))
         T = thresholds(Lr, f.scale_x, f.scale_y)

@@ -33,8 +33,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Features", "build_features", "build_leaves", "leaf_upper_ratios", "margin_constant",
-           "F32_UNIT_ROUNDOFF"]
+__all__ = [
+    "F32_UNIT_ROUNDOFF",
+    "Features",
+    "build_features",
+    "build_leaves",
+    "leaf_upper_ratios",
+    "margin_constant",
+]
 
 F32_UNIT_ROUNDOFF = 2.0 ** -24
 _F64_U = 2.0 ** -53
@@ -104,7 +110,7 @@ def _pca_basis(V: np.ndarray, k: int, max_rows: int = 20000) -> np.ndarray:
     Fitted on at most ``max_rows`` evenly spaced rows (deterministic); any
     orthonormal basis gives a valid bound, a good one a tight bound.
     """
-    n, d = V.shape
+    n = V.shape[0]
     step = max(1, n // max_rows)
     S = V[::step]
     C = S.T @ S

@@ -7,9 +7,9 @@ different y give ``inf``; a point with no partner gets 0. The result equals a
 float64 direct-difference computation (every quotient that can be the maximum
 is recomputed by direct differences), while almost all pairs are discarded by
 conservative bounds: a float32 matrix-product screen on a principal-component
-lower bound of ‖Δx‖ with a proven rounding margin (``_lipschitz_bounds``),
+lower bound of ‖Δx‖ with a proven rounding margin (``_bounds``),
 applied once per unordered pair against lower bounds of both points' quotients
-(``_lipschitz_search.symmetric_pass``).
+(``_search.symmetric_pass``).
 
 Memory is O(N·(d + block)) — the float32 copy of X plus a few (tile × chunk)
 screening matrices per thread; time is N²/2 × (one short float32 product) plus
@@ -23,35 +23,92 @@ from __future__ import annotations
 import os
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
-from typing import Literal
+from dataclasses import asdict, dataclass
+from typing import Literal, NamedTuple
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
-from ._lipschitz_bounds import F32_UNIT_ROUNDOFF, build_features
-from ._lipschitz_exact import dense_exact, pair_ratios, update_best
-from ._lipschitz_search import (LeafContext, NumpyKernel, SearchStats, nearest_leaves,
-                                search_leaf, symmetric_pass, warm_leaf)
+from ._bounds import F32_UNIT_ROUNDOFF, build_features
+from ._exact import dense_exact, pair_ratios, update_best
+from ._kernel import NumpyKernel
+from ._search import (
+    LeafContext,
+    PairCounters,
+    nearest_leaves,
+    search_leaf,
+    symmetric_pass,
+    warm_leaf,
+)
 
-__all__ = ["pointwise_quotients", "check_inputs", "last_search_stats"]
-
-_SMALL_GROUP = 512  # groups up to this size are done densely (all pairs, exactly)
-_TIME_NEIGHBOURS = 2  # initial bounds from rows k±1, k±2 of the same group
-_SYMMETRIC = True  # screen each unordered pair once (symmetric_pass); False: per-leaf search
-_WARMUP_LEAVES = 8  # symmetric path: bounds first raised from the nearest leaves (1 = own leaf)
-_SYM_TILE = 256  # rows per tile of the symmetric pass
-_SYM_CHUNK = 4096  # columns per screened chunk of the symmetric pass
-_last_stats: dict = {}
+__all__ = ["QuotientResult", "SearchOptions", "SearchStats", "check_inputs", "pointwise_quotients"]
 
 
-def last_search_stats() -> dict:
-    """Counters of the last ``pointwise_quotients`` call in this process.
+@dataclass(frozen=True)
+class SearchOptions:
+    """Tuning of the exact search. Every setting gives the same quotients and partners
+    (the bounds are conservative); they only change the work done.
 
-    Keys: ``n_pairs`` (unordered pairs within groups), ``pairs_screened`` (ordered
-    pairs screened with the low-dimensional bound), ``pairs_full_screened``
-    (ordered pairs screened with the full-dimensional float32 product),
-    ``pairs_exact`` (pairs recomputed exactly in float64, ordered).
+    Attributes:
+        search: "symmetric" — every unordered pair of a group screened once and both
+            points credited (``_search.symmetric_pass``, after a warm-up that raises
+            the lower bounds from each leaf's ``warmup_leaves`` nearest leaves); or
+            "per_leaf" — each k-d leaf searches its candidate leaves one-sidedly
+            (``_search.search_leaf``), about twice the screening work; the reference
+            the symmetric pass is tested against.
+        small_group: groups up to this size are done densely (all pairs, exactly).
+        time_neighbours: initial bounds from rows k±1 … k±time_neighbours of a group.
+        warmup_leaves: leaves in the warm-up of the symmetric pass (1 = own leaf).
+        tile: rows per tile of the symmetric pass.
+        chunk: columns per screened chunk of the symmetric pass.
     """
-    return dict(_last_stats)
+
+    search: Literal["symmetric", "per_leaf"] = "symmetric"
+    small_group: int = 512
+    time_neighbours: int = 2
+    warmup_leaves: int = 8
+    tile: int = 256
+    chunk: int = 4096
+
+    def __post_init__(self) -> None:
+        if self.search not in ("symmetric", "per_leaf"):
+            raise ValueError(f"search must be 'symmetric' or 'per_leaf', got {self.search!r}")
+        for name in ("small_group", "warmup_leaves", "tile", "chunk"):
+            if int(getattr(self, name)) < 1:
+                raise ValueError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
+        if int(self.time_neighbours) < 0:
+            raise ValueError(f"time_neighbours must be >= 0, got {self.time_neighbours!r}")
+
+
+@dataclass(frozen=True)
+class SearchStats:
+    """Work counters of one :func:`pointwise_quotients` call.
+
+    Attributes:
+        n_pairs: unordered pairs within groups (what a brute force evaluates).
+        pairs_screened: ordered pairs screened with the low-dimensional float32 bound.
+        pairs_full_screened: ordered pairs screened with the full-dimensional float32 product.
+        pairs_exact: ordered pairs recomputed exactly in float64.
+    """
+
+    n_pairs: int
+    pairs_screened: int
+    pairs_full_screened: int
+    pairs_exact: int
+
+    def to_dict(self) -> dict[str, int]:
+        return asdict(self)
+
+
+class QuotientResult(NamedTuple):
+    """What :func:`pointwise_quotients` returns with ``return_stats=True``."""
+
+    q: np.ndarray
+    """(N,) float64 quotients."""
+    partner: np.ndarray
+    """(N,) int64 index attaining q_i (smallest such; -1 where q_i = 0)."""
+    stats: SearchStats
+    """work counters of this call."""
 
 
 def _check_array(A, name: str) -> np.ndarray:
@@ -107,16 +164,8 @@ def _default_jobs() -> int:
 
 
 def _blas_single_thread():
-    """Context limiting BLAS to one thread while our own threads run (no oversubscription).
-
-    threadpoolctl directly: going through sklearn imports sklearn and scipy on
-    the first call (about a second).
-    """
-    try:
-        from threadpoolctl import threadpool_limits
-        return threadpool_limits(limits=1, user_api="blas")
-    except Exception:  # pragma: no cover - threadpoolctl missing
-        return nullcontext()
+    """Context limiting BLAS to one thread while our own threads run (no oversubscription)."""
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 class _torch_single_thread:
@@ -154,7 +203,7 @@ def _time_neighbour_init(X, Y, idx, q, partner, lags: int) -> None:
 def _make_kernel(backend: str, device, f, X, Y):
     if backend == "numpy":
         return NumpyKernel(f, X, Y)
-    from ._lipschitz_torch import TorchKernel
+    from ._torch import TorchKernel
     return TorchKernel(f, X, Y, device=device)
 
 
@@ -184,7 +233,7 @@ def _resolve_backend(backend: str, device) -> tuple[str, object, float]:
                 backend = "numpy"
     if backend == "numpy":
         return "numpy", None, F32_UNIT_ROUNDOFF
-    from ._lipschitz_torch import resolve_device, torch_unit_roundoff
+    from ._torch import resolve_device, torch_unit_roundoff
     dev = resolve_device(device)
     return "torch", dev, torch_unit_roundoff(dev)
 
@@ -192,7 +241,8 @@ def _resolve_backend(backend: str, device) -> tuple[str, object, float]:
 def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, block: int = 256,
                         n_jobs: int | None = None,
                         backend: Literal["auto", "numpy", "torch"] = "auto", device=None,
-                        progress: bool = False, n_components: int | None = None):
+                        progress: bool = False, n_components: int | None = None,
+                        options: SearchOptions | None = None, return_stats: bool = False):
     """Exact point-wise Lipschitz quotients q_i (see module doc for the definition).
 
     Args:
@@ -208,10 +258,17 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
         progress: show a tqdm progress bar (pairs done; ``leave=False``, so it
             disappears when done and does not clutter an outer bar).
         n_components: principal components in the lower bound (default ≤ 12).
+        options: tuning of the search (:class:`SearchOptions`; default: the measured best).
+        return_stats: return a :class:`QuotientResult` ``(q, partner, stats)`` with the
+            work counters of this call (:class:`SearchStats`).
 
     Returns:
-        q (N,) float64, or (q, partner) with partner (N,) int64.
+        q (N,) float64; or (q, partner) with partner (N,) int64; or a
+        :class:`QuotientResult` when ``return_stats``.
     """
+    options = SearchOptions() if options is None else options
+    if not isinstance(options, SearchOptions):
+        raise TypeError(f"options must be a SearchOptions, got {type(options).__name__}")
     X, Y, groups = check_inputs(X, Y, groups)
     N = len(X)
     backend, dev, u = _resolve_backend(backend, device)
@@ -229,7 +286,7 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
         order = np.argsort(groups, kind="stable")
         _, starts = np.unique(groups[order], return_index=True)
         group_idx = np.split(order, starts[1:])
-    stats = SearchStats()
+    stats = PairCounters()
     n_pairs = sum(len(g) * (len(g) - 1) // 2 for g in group_idx)
 
     bar = None
@@ -244,25 +301,26 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
     try:
         with limit, tlimit:
             for idx in group_idx:
-                _one_group(X, Y, idx, q, partner, block=block, n_components=n_components,
+                _one_group(X, Y, idx, q, partner, options=options, block=block, n_components=n_components,
                            backend=backend, device=dev, u=u, pool=pool, bar=bar, stats=stats)
     finally:
         if pool is not None:
             pool.shutdown(wait=True)
         if bar is not None:
             bar.close()
-    _last_stats.clear()
-    _last_stats.update(n_pairs=n_pairs, pairs_screened=stats.pairs_screened,
-                       pairs_full_screened=stats.pairs_full_screened,
-                       pairs_exact=stats.pairs_exact)
+    if return_stats:
+        return QuotientResult(q, partner, SearchStats(
+            n_pairs=n_pairs, pairs_screened=stats.pairs_screened,
+            pairs_full_screened=stats.pairs_full_screened, pairs_exact=stats.pairs_exact))
     return (q, partner) if return_partner else q
 
 
-def _one_group(X, Y, idx, q, partner, *, block, n_components, backend, device, u, pool, bar,
-               stats: SearchStats) -> None:
+def _one_group(X, Y, idx, q, partner, *, options: SearchOptions, block, n_components, backend,
+               device, u, pool, bar,
+               stats: PairCounters) -> None:
     n = len(idx)
     n_pairs = n * (n - 1) // 2
-    if n <= _SMALL_GROUP:
+    if n <= options.small_group:
         dense_exact(X, Y, idx, q, partner)
         stats.pairs_exact += n * (n - 1)
         if bar is not None:
@@ -272,7 +330,7 @@ def _one_group(X, Y, idx, q, partner, *, block, n_components, backend, device, u
         if bar is not None:
             bar.update(n_pairs)
         return
-    _time_neighbour_init(X, Y, idx, q, partner, _TIME_NEIGHBOURS)
+    _time_neighbour_init(X, Y, idx, q, partner, options.time_neighbours)
     f = build_features(X, Y, idx, leaf_size=block, n_components=n_components,
                        full_screen=True, unit_roundoff=u)
     qp = q[f.perm]
@@ -282,16 +340,16 @@ def _one_group(X, Y, idx, q, partner, *, block, n_components, backend, device, u
     sizes = np.diff(f.leaf_start)
     run = map if pool is None else pool.map
 
-    if _SYMMETRIC:
+    if options.search == "symmetric":
         # 1. warm-up: each leaf against its nearest leaves (one-sided) raises the bounds;
         # 2. every unordered pair screened once against those bounds.
         ctx.lb = qp.copy()
-        m = _WARMUP_LEAVES
+        m = options.warmup_leaves
         warm = (lambda a: warm_leaf(ctx, a, m)) if f.xs is not None else \
             (lambda a: search_leaf(ctx, a, nearest_leaves(ctx, a, m)))
         for st in run(warm, range(n_leaves)):
             stats.add(st)
-        stats.add(symmetric_pass(ctx, pool, bar, tile=_SYM_TILE, chunk=_SYM_CHUNK))
+        stats.add(symmetric_pass(ctx, pool, bar, tile=options.tile, chunk=options.chunk))
     else:
         for a, st in enumerate(run(lambda a: search_leaf(ctx, a), range(n_leaves))):
             stats.add(st)

@@ -19,15 +19,13 @@ so Σ_t log p(o_t | o_<t) = log p(o_0..o_T), hmmlearn's ``score``.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 from scipy import linalg
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .modes import TaskModes
-
-__all__ = ["ModeFilter", "forward_filter_log"]
+__all__ = ["HMMFilterParams", "ModeFilter", "forward_filter_log"]
 
 
 def _logsumexp_rows(M: np.ndarray, axis: int) -> np.ndarray:
@@ -63,26 +61,107 @@ def forward_filter_log(log_startprob: np.ndarray, log_transmat: np.ndarray,
     return log_post, log_pred
 
 
-def _full_covars(c: np.ndarray, covariance_type: str, K: int, D: int) -> np.ndarray:
-    """(K, D, D) covariance matrices from hmmlearn's compact ``_covars_``."""
-    if covariance_type == "full":
-        return c.reshape(K, D, D)
-    if covariance_type == "tied":
-        return np.broadcast_to(c.reshape(D, D), (K, D, D))
-    if covariance_type == "diag":
-        return c.reshape(K, D)[:, :, None] * np.eye(D)
-    return np.broadcast_to(c.reshape(K, -1)[:, :1], (K, D))[:, :, None] * np.eye(D)
+def _frozen(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
+    """A read-only float64 copy of ``value`` with the given shape (None = any size)."""
+    a = np.array(value, dtype=float)
+    if a.ndim != len(shape) or any(n is not None and n != m for n, m in zip(shape, a.shape)):
+        want = "(" + ", ".join("?" if n is None else str(n) for n in shape) + ")"
+        raise ValueError(f"HMMFilterParams.{name} must have shape {want}, got {a.shape}")
+    if not np.isfinite(a).all():
+        raise ValueError(f"HMMFilterParams.{name} contains NaN or inf")
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True)
+class HMMFilterParams:
+    """A fitted task-mode HMM as plain read-only arrays: what :class:`ModeFilter` needs.
+
+    The observation model is z = PCA(standardise(o)), b_j(o) = N(z; μ_j, Σ_j):
+    ``(o − scaler_mean) / scaler_scale``, then, if ``pca_components`` is given,
+    ``(· − pca_mean) @ pca_componentsᵀ``.
+
+    Attributes:
+        startprob: (K,) π.  transmat: (K, K) A, rows sum to 1.
+        means: (K, D) μ_j.  covars: (K, D, D) full covariance matrices Σ_j.
+        scaler_mean, scaler_scale: (D_in,) standardisation of the raw observation.
+        pca_mean: (D_in,) or None.  pca_components: (D, D_in) or None (then D = D_in).
+    """
+
+    startprob: np.ndarray
+    transmat: np.ndarray
+    means: np.ndarray
+    covars: np.ndarray
+    scaler_mean: np.ndarray
+    scaler_scale: np.ndarray
+    pca_mean: np.ndarray | None = None
+    pca_components: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        K = np.shape(self.startprob)[0] if np.ndim(self.startprob) == 1 else None
+        means = _frozen("means", self.means, (K, None))
+        K, D = means.shape
+        def set_(name: str, value: object) -> None:
+            object.__setattr__(self, name, value)
+
+        set_("means", means)
+        set_("startprob", _frozen("startprob", self.startprob, (K,)))
+        set_("transmat", _frozen("transmat", self.transmat, (K, K)))
+        set_("covars", _frozen("covars", self.covars, (K, D, D)))
+        D_in = np.shape(self.scaler_mean)[0] if np.ndim(self.scaler_mean) == 1 else None
+        set_("scaler_mean", _frozen("scaler_mean", self.scaler_mean, (D_in,)))
+        D_in = self.scaler_mean.shape[0]
+        set_("scaler_scale", _frozen("scaler_scale", self.scaler_scale, (D_in,)))
+        if (self.pca_mean is None) != (self.pca_components is None):
+            raise ValueError("HMMFilterParams: pca_mean and pca_components go together (both or none)")
+        if self.pca_components is not None:
+            set_("pca_mean", _frozen("pca_mean", self.pca_mean, (D_in,)))
+            set_("pca_components", _frozen("pca_components", self.pca_components, (D, D_in)))
+        elif D != D_in:
+            raise ValueError(f"HMMFilterParams: means have {D} features but the scaler {D_in} "
+                             "(and no PCA maps one onto the other)")
+        if (self.scaler_scale <= 0).any():
+            raise ValueError("HMMFilterParams.scaler_scale must be > 0")
+        for name, p in (("startprob", self.startprob), ("transmat", self.transmat)):
+            if (p < 0).any() or not np.allclose(p.sum(axis=-1), 1.0, atol=1e-8):
+                raise ValueError(f"HMMFilterParams.{name} must be probabilities summing to 1 per row")
+
+    @property
+    def n_modes(self) -> int:
+        return int(self.means.shape[0])
+
+    @property
+    def n_features_in(self) -> int:
+        return int(self.scaler_mean.shape[0])
+
+    def to_dict(self) -> dict[str, np.ndarray]:
+        """The arrays by field name (fields that are None left out), e.g. for ``np.savez``."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
+
+    @classmethod
+    def from_dict(cls, arrays: dict[str, Any]) -> HMMFilterParams:
+        """Inverse of :meth:`to_dict`; unknown keys are an error naming them."""
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(arrays) - names)
+        if unknown:
+            raise ValueError(f"HMMFilterParams: unknown field(s) {unknown} (fields: {sorted(names)})")
+        return cls(**{k: arrays[k] for k in arrays})
 
 
 class ModeFilter:
     """Online, causal task-mode posterior for the control loop.
+
+    Built from a fitted :class:`~learning.modes.TaskModes` (``ModeFilter(modes)`` or
+    ``modes.make_filter()``) or directly from its :class:`HMMFilterParams`
+    (``ModeFilter(params)``, e.g. from a model bundle); ``params`` keeps them.
 
     ``step(o)`` runs one step of the forward recursion (module docstring) on one raw
     observation ``o`` (the same features ``TaskModes.fit`` saw, before scaling): it applies
     the fitted scaler and PCA, evaluates the K Gaussian log densities through Cholesky
     factors precomputed here, and updates the posterior: O(K² + K·D·D_in) per step
     (D = model dimension after PCA; scaler, PCA and each L_j⁻¹ are folded into one
-    D_in × K·D matrix at construction), no hmmlearn call. The result equals ``TaskModes.filter_proba`` on the same prefix.
+    D_in × K·D matrix at construction), no hmmlearn call. The result equals
+    ``TaskModes.filter_proba`` on the same prefix.
 
     With ``fixed_lag = L > 0``, ``step`` returns the fixed-lag smoothed posterior
     p(s_{t−L} | o_0..o_t) (a backward pass over the last L steps, O(L·K²) more); during the
@@ -98,29 +177,31 @@ class ModeFilter:
         n_steps: number of observations since ``reset``.
     """
 
-    def __init__(self, modes: "TaskModes", fixed_lag: int = 0) -> None:
-        from sklearn.utils.validation import check_is_fitted
-
-        check_is_fitted(modes, "model_")
+    def __init__(self, modes: Any, fixed_lag: int = 0) -> None:
+        params = modes if isinstance(modes, HMMFilterParams) else None
+        if params is None:
+            if not hasattr(modes, "filter_params"):
+                raise TypeError("ModeFilter needs a fitted TaskModes or an HMMFilterParams, got "
+                                f"{type(modes).__name__}")
+            params = modes.filter_params()  # raises NotFittedError if not fitted
         if int(fixed_lag) != fixed_lag or fixed_lag < 0:
             raise ValueError(f"fixed_lag must be a non-negative integer, got {fixed_lag!r}")
+        self.params = params
         self.fixed_lag = int(fixed_lag)
-        hmm = modes.model_
-        K = int(hmm.n_components)
+        K = params.n_modes
         self.n_modes = K
-        self.n_features_in = int(modes.n_features_in_)
+        self.n_features_in = params.n_features_in
 
         # Preprocessing as one affine map: z = ((o - m) / s - c_pca) @ Vᵀ  →  z = (o - m) @ P - c.
-        scaler = modes.scaler_
-        P = np.diag(1.0 / scaler.scale_)
+        P = np.diag(1.0 / params.scaler_scale)
         c = np.zeros(self.n_features_in)
-        if modes.pca_ is not None:
-            c = modes.pca_.mean_ @ modes.pca_.components_.T
-            P = P @ modes.pca_.components_.T
+        if params.pca_components is not None:
+            c = params.pca_mean @ params.pca_components.T
+            P = P @ params.pca_components.T
         Dz = P.shape[1]
         self._dz = Dz
         # Emissions: log b_j = −½(Dz log 2π + log|Σ_j|) − ½‖L_j⁻¹(z − μ_j)‖², Σ_j = L_j L_jᵀ.
-        covars = _full_covars(np.asarray(hmm._covars_, dtype=float), hmm.covariance_type, K, Dz)
+        covars = params.covars
         G = np.empty((self.n_features_in, K * Dz))
         h = np.empty(K * Dz)
         lognorm = np.empty(K)
@@ -128,12 +209,12 @@ class ModeFilter:
             L = linalg.cholesky(covars[j], lower=True)
             Linv = linalg.solve_triangular(L, np.eye(Dz), lower=True)
             G[:, j * Dz:(j + 1) * Dz] = P @ Linv.T
-            h[j * Dz:(j + 1) * Dz] = Linv @ (c + hmm.means_[j])
+            h[j * Dz:(j + 1) * Dz] = Linv @ (c + params.means[j])
             lognorm[j] = -0.5 * (Dz * np.log(2 * np.pi)) - np.log(np.diag(L)).sum()
-        self._center = np.array(scaler.mean_, dtype=float)
+        self._center = np.array(params.scaler_mean)
         self._G, self._h, self._lognorm = G, h, lognorm
-        self._A = np.array(hmm.transmat_, dtype=float)
-        self._pi = np.array(hmm.startprob_, dtype=float)
+        self._A = np.array(params.transmat)
+        self._pi = np.array(params.startprob)
         with np.errstate(divide="ignore"):
             self._logA = np.log(self._A)
         self._has_zeros = bool((self._A <= 0).any() or (self._pi <= 0).any())

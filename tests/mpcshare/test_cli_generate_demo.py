@@ -1,4 +1,4 @@
-"""The console script's simulator subcommands: generate and demo."""
+"""The data-producing subcommands: generate and demo."""
 
 import json
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from learning.data import load
-from sim.cli import main
+from mpcshare.cli import main
 
 
 def test_generate_npz_then_inspect(tmp_path, capsys):

@@ -4,7 +4,7 @@ HMM states are found without labels, so their numbering is arbitrary. When
 labels exist, each predicted mode is matched to one true label so that the
 number of agreeing samples is maximal (the Hungarian algorithm on the
 contingency table, ``scipy.optimize.linear_sum_assignment``). True labels < 0
-(``-1`` = unknown, see DESIGN.md) are ignored everywhere.
+(``-1`` = unknown, see docs/design.md) are ignored everywhere.
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ def _labels(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     if pred.shape != true.shape:
         raise ValueError(f"pred has {pred.size} labels but true has {true.size}")
     for name, a in (("pred", pred), ("true", true)):
-        if a.size and not np.issubdtype(a.dtype, np.integer):
-            if not np.all(np.isfinite(a)) or not np.all(a == np.round(a)):
-                raise ValueError(f"{name} labels must be integers")
+        if a.size and not np.issubdtype(a.dtype, np.integer) and (
+                not np.all(np.isfinite(a)) or not np.all(a == np.round(a))):
+            raise ValueError(f"{name} labels must be integers")
     return pred.astype(np.int64), true.astype(np.int64)
 
 

@@ -1,6 +1,6 @@
 """Exact branch-and-bound search of point-wise Lipschitz quotients in one group.
 
-Default path (``pointwise_quotients`` with ``_SYMMETRIC``):
+Default path (``pointwise_quotients`` with ``SearchOptions(search="symmetric")``):
 
 1. ``warm_leaf``: each k-d leaf raises the lower bounds ``lb`` of its rows from
    its 8 nearest leaves with full-dimensional two-sided float32 bounds (no exact
@@ -15,8 +15,8 @@ Default path (``pointwise_quotients`` with ``_SYMMETRIC``):
    Tile-level bounds are not used there: on windowed data they skip almost
    nothing (measured: ≥ 95 % of 64-row × leaf blocks needed even with the final q).
 
-One-sided path (``search_leaf`` alone; also the warm-up for groups without full-d features).
-Per leaf A (rows of a k-d leaf in the feature space of ``_lipschitz_bounds``):
+One-sided path (``search="per_leaf"``: ``search_leaf`` alone; also the warm-up for groups without full-d features).
+Per leaf A (rows of a k-d leaf in the feature space of ``_bounds``):
 
 1. bound every leaf pair (A, B) by ``ub_AB ≥ ‖Δy‖/‖Δx‖`` from the boxes; visit
    the leaves B with ``ub_AB ≥ min_{i∈A} L_i`` in decreasing ``ub_AB``, where
@@ -26,13 +26,13 @@ Per leaf A (rows of a k-d leaf in the feature space of ``_lipschitz_bounds``):
    all their pairs with one float32 product (``S_ij ≥ 0``; conservative by
    construction); when many survive, screen again with the full-dimensional
    float32 product, which is much tighter;
-3. recompute the survivors exactly in float64 (``_lipschitz_exact``) and raise
+3. recompute the survivors exactly in float64 (``_exact``) and raise
    ``L``; the next chunk is screened against the raised bounds.
 
 Rows of A are written only by the task of A, so leaves run in parallel threads
 (numpy releases the GIL in products and ufuncs) and the result does not depend
-on the schedule. ``Kernel`` isolates the array library: numpy here, torch in
-``_lipschitz_torch``.
+on the schedule. The kernel isolates the array library: numpy in ``_kernel``, torch in
+``_torch``.
 """
 
 from __future__ import annotations
@@ -42,158 +42,37 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._lipschitz_bounds import (Features, leaf_boxes, leaf_upper_ratios, row_features,
-                                threshold_scalar, thresholds)
-from ._lipschitz_exact import pair_ratios, update_best
+from ._bounds import (
+    Features,
+    leaf_boxes,
+    leaf_upper_ratios,
+    threshold_scalar,
+    thresholds,
+)
+from ._exact import update_best
 
-__all__ = ["NumpyKernel", "SearchStats", "search_leaf", "LeafContext", "nearest_leaves",
-           "symmetric_pass", "survivors", "warm_leaf"]
-
-_tls = threading.local()  # per-thread boolean buffer of ``survivors``
-
-
-def survivors(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(row, col) positions of the entries ``S ≥ 0`` of a float32 (a × c) matrix.
-
-    Survivors are rare (≪ 1 %): a compare into a reused per-thread boolean
-    buffer and numpy's boolean ``flatnonzero`` (a counting fast path) cost about
-    0.2 ns per entry — cheaper than a segmented max (measured). NaN never survives.
-    """
-    a, c = S.shape
-    buf = getattr(_tls, "buf", None)
-    if buf is None or buf.size < S.size:
-        buf = _tls.buf = np.empty(S.size, dtype=bool)
-    B = buf[:S.size].reshape(a, c)
-    np.greater_equal(S, 0.0, out=B)
-    return np.divmod(np.flatnonzero(B), c)
+__all__ = [
+    "LeafContext",
+    "PairCounters",
+    "nearest_leaves",
+    "search_leaf",
+    "symmetric_pass",
+    "warm_leaf",
+]
 
 
 @dataclass
-class SearchStats:
+class PairCounters:
     """Counters of one search (summed over leaves)."""
 
     pairs_screened: int = 0
     pairs_full_screened: int = 0
     pairs_exact: int = 0
 
-    def add(self, other: "SearchStats") -> None:
+    def add(self, other: PairCounters) -> None:
         self.pairs_screened += other.pairs_screened
         self.pairs_full_screened += other.pairs_full_screened
         self.pairs_exact += other.pairs_exact
-
-
-class NumpyKernel:
-    """Screening and exact evaluation with numpy (float32 products via BLAS)."""
-
-    chunk_elems = 1 << 20  # a·c elements screened at once (≈ 4 MB float32)
-
-    def __init__(self, f: Features, X: np.ndarray, Y: np.ndarray) -> None:
-        self.f, self.X, self.Y = f, X, Y
-
-    def screen(self, rows: np.ndarray, T: np.ndarray, cols: np.ndarray, full: bool = False
-               ) -> tuple[np.ndarray, np.ndarray]:
-        """(row, col) positions (within rows/cols) of pairs with S ≥ 0.
-
-        ``full=False``: low-dimensional z screen; ``full=True``: the same one-product
-        screen with all d coordinates (tight, d/K times the cost).
-        """
-        f = self.f
-        if full:
-            R = row_features(f.ws[rows], f.nbx[rows], f.xs[rows], f.nx[rows], T)
-            S = R @ f.col_x[cols].T
-        else:
-            R = row_features(f.ws[rows], f.nb[rows], f.zs[rows], f.na[rows], T)
-            S = R @ f.col_z[cols].T
-        return survivors(np.ascontiguousarray(S))
-
-    def sym_prepare(self, order: np.ndarray) -> None:
-        """Copy the z-screen features into the order of the symmetric pass."""
-        f = self.f
-        self.o_col = np.ascontiguousarray(f.col_z[order])
-        self.o_ws, self.o_nb = f.ws[order], f.nb[order]
-        self.o_zs, self.o_na = f.zs[order], f.na[order]
-
-    def sym_screen(self, s: int, e: int, T: np.ndarray, c0: int, c1: int
-                   ) -> tuple[np.ndarray, np.ndarray]:
-        """Survivors (positions within [s, e) × [c0, c1) of the pass order) of the z screen."""
-        R = row_features(self.o_ws[s:e], self.o_nb[s:e], self.o_zs[s:e], self.o_na[s:e], T)
-        return survivors(R @ self.o_col[c0:c1].T)
-
-    def sym_tight(self, rows: np.ndarray, cols: np.ndarray, Lr: np.ndarray, Lc: np.ndarray,
-                  cap: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Full-dimensional two-sided float32 screen of rows × cols (leaf-order indices).
-
-        For data where the z screen keeps too many pairs (i.i.d.-like). Returns
-        the survivors (positions) of ``ub‖Δy‖² ≥ T'_i·lb‖Δx‖²`` with T'_i the
-        row threshold capped by ``cap`` (a threshold valid for every column), and
-        the raised lower bounds of the rows and of the columns,
-        max(L, max sqrt(lb‖Δy‖² / ub‖Δx‖²)) — provable lower bounds of q.
-        """
-        f = self.f
-        xr, xc = f.xs[rows], f.xs[cols]
-        G = xr @ xc.T
-        G *= -2.0
-        xub = G + f.nx_hi[rows][:, None]
-        xub += f.nx_hi[cols][None, :]
-        G += f.nx_lo[rows][:, None]
-        G += f.nx_lo[cols][None, :]  # lower bound of ‖Δx̂‖²
-        Gy = f.ws[rows] @ f.ws[cols].T
-        Gy *= -2.0
-        ylb = Gy + f.nw_lo[rows][:, None]
-        ylb += f.nw_lo[cols][None, :]
-        Gy += f.nw_hi[rows][:, None]
-        Gy += f.nw_hi[cols][None, :]  # upper bound of ‖Δŵ‖²
-        ylb /= xub  # lower bound of the squared scaled ratio (xub > 0 by the norm floor)
-        conv = f.scale_x / f.scale_y
-        lift = lambda best: np.sqrt(np.maximum(best.astype(np.float64), 0.0)) * conv * (1.0 - 1e-5)
-        Lr = np.maximum(Lr, lift(ylb.max(axis=1)))
-        Lc = np.maximum(Lc, lift(ylb.max(axis=0)))
-        T = thresholds(Lr, f.scale_x, f.scale_y)
-        if cap is not None:
-            np.minimum(T, threshold_scalar(min(cap, Lc.min()), f.scale_x, f.scale_y), out=T)
-        G *= T[:, None]
-        Gy -= G
-        ri, cj = survivors(Gy)
-        return ri, cj, Lr, Lc
-
-    def sym_release(self) -> None:
-        self.o_col = self.o_ws = self.o_nb = self.o_zs = self.o_na = None
-
-    def tight(self, rows: np.ndarray, cols: np.ndarray, L: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Full-dimensional two-sided float32 bounds of all pairs rows × cols.
-
-        Returns the surviving (row, col) positions and the raised lower bounds
-        L_i ← max(L_i, max_j sqrt(lb‖Δy‖² / ub‖Δx‖²)), which are provable lower
-        bounds of q_i obtained without any exact evaluation.
-        """
-        f = self.f
-        Gx = f.xs[rows] @ f.xs[cols].T
-        Gx *= -2.0
-        xub = Gx + f.nx_hi[rows][:, None]
-        xub += f.nx_hi[cols][None, :]
-        Gx += f.nx_lo[rows][:, None]
-        Gx += f.nx_lo[cols][None, :]  # now: lower bound of ‖Δx̂‖²
-        Gy = f.ws[rows] @ f.ws[cols].T
-        Gy *= -2.0
-        ylb = Gy + f.nw_lo[rows][:, None]
-        ylb += f.nw_lo[cols][None, :]
-        Gy += f.nw_hi[rows][:, None]
-        Gy += f.nw_hi[cols][None, :]  # upper bound of ‖Δŵ‖²
-        ylb /= xub  # lower bound of the squared scaled ratio (xub > 0 by the norm floor)
-        best = ylb.max(axis=1).astype(np.float64)
-        conv = f.scale_x / f.scale_y
-        Lnew = np.sqrt(np.maximum(best, 0.0)) * conv * (1.0 - 1e-5)  # float32 division slack
-        L = np.maximum(L, Lnew)
-        T = thresholds(L, f.scale_x, f.scale_y)
-        Gx *= T[:, None]
-        flat = np.flatnonzero(Gy >= Gx)
-        ri, cj = np.divmod(flat, len(cols))
-        return ri, cj, L
-
-    def exact(self, gi: np.ndarray, gj: np.ndarray) -> np.ndarray:
-        """Exact quotients of pairs given by *original* indices."""
-        return pair_ratios(self.X, self.Y, gi, gj)
 
 
 @dataclass
@@ -223,7 +102,7 @@ def nearest_leaves(ctx: LeafContext, a: int, m: int) -> np.ndarray:
     return near[np.lexsort((near, dc[near]))]
 
 
-def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> SearchStats:
+def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> PairCounters:
     """Complete the quotients of the rows of leaf ``a`` (see module doc).
 
     With ``leaves`` given, only those leaves are searched, in that order (a
@@ -231,7 +110,7 @@ def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> S
     pairs evaluated). Lower bounds found on the way go to ``ctx.lb`` if set.
     """
     f, q, partner, kern = ctx.f, ctx.q, ctx.partner, ctx.kernel
-    st = SearchStats()
+    st = PairCounters()
     s0, e0 = int(f.leaf_start[a]), int(f.leaf_start[a + 1])
     rows_all = np.arange(s0, e0)
     # Local lower bounds: ≥ the exact maxima found so far, ≤ the true q_i.
@@ -307,7 +186,7 @@ def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> S
     return st
 
 
-def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> SearchStats:
+def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> PairCounters:
     """Raise the lower bounds ``ctx.lb`` of leaf ``a``'s rows from its ``m`` nearest leaves.
 
     Only the full-dimensional two-sided float32 bounds are used (no exact
@@ -315,7 +194,7 @@ def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> SearchStats:
     and the symmetric pass evaluates every pair that matters exactly anyway.
     """
     f, lb = ctx.f, ctx.lb
-    st = SearchStats()
+    st = PairCounters()
     rows = np.arange(f.leaf_start[a], f.leaf_start[a + 1])
     near = nearest_leaves(ctx, a, m) if m > 1 else np.array([a])
     cols = np.concatenate([np.arange(f.leaf_start[b], f.leaf_start[b + 1]) for b in near])
@@ -327,7 +206,7 @@ def warm_leaf(ctx: LeafContext, a: int, m: int = 1) -> SearchStats:
 
 
 def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int = 2048,
-                   batch: int = 2048, sym_full_fraction: float = 0.02) -> SearchStats:
+                   batch: int = 2048, sym_full_fraction: float = 0.02) -> PairCounters:
     """Screen every unordered pair once, crediting a surviving pair to both points.
 
     Orientation: a pair (i, j) cannot reach q_i nor q_j when
@@ -341,7 +220,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
     points under a lock (the other thread may own either point); thresholds are
     re-read from the shared bounds before every chunk, so they only tighten.
     The set of maxima does not depend on the schedule: every pair that attains
-    q_i survives whatever the bounds were (see ``_lipschitz_bounds``), so q and the
+    q_i survives whatever the bounds were (see ``_bounds``), so q and the
     partner (smallest index among the maximisers) are the same as the one-sided search.
     """
     f, q, partner, kern, lb = ctx.f, ctx.q, ctx.partner, ctx.kernel, ctx.lb
@@ -366,8 +245,8 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
             if both:
                 lb[gj] = np.maximum(lb[gj], q[gj])
 
-    def task(s: int) -> tuple[SearchStats, int]:
-        st = SearchStats()
+    def task(s: int) -> tuple[PairCounters, int]:
+        st = PairCounters()
         e = min(s + tile, n)
         rows = order[s:e]
         spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
@@ -436,7 +315,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
         flush()
         return st, (e - s) * (e - s - 1) // 2 + (e - s) * (n - e)
 
-    total = SearchStats()
+    total = PairCounters()
     starts = list(range(0, n, tile))
     try:
         results = map(task, starts) if pool is None else pool.map(task, starts)

@@ -3,7 +3,7 @@
 For a pair (i, j) the quotient is ``r_ij = ‖y_i − y_j‖ / ‖x_i − x_j‖`` (Euclidean,
 units of y per unit of x), computed by direct differences in float64 — never by
 the ``‖a‖² + ‖b‖² − 2a·b`` expansion, which cancels for close pairs. Conventions
-(DESIGN.md): a pair identical in x and in y carries no evidence and is skipped
+(docs/design.md): a pair identical in x and in y carries no evidence and is skipped
 (returned as NaN here); identical x with different y gives ``inf``.
 
 The running maximum keeps, per point, the largest quotient seen and the
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["pair_norms", "pair_ratios", "update_best", "dense_exact"]
+__all__ = ["dense_exact", "pair_norms", "pair_ratios", "update_best"]
 
 _PAIR_CHUNK = 1 << 15  # pairs per gather; bounds temporary memory to chunk·d·8 B
 _TINY = 1e-150  # below/above these the sum of squares may under/overflow

@@ -1,0 +1,111 @@
+"""The ``analyze`` subcommand and the analysis options it shares with ``demo``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Sequence
+
+from learning.analysis_report import AnalysisReport
+from learning.data import Demonstrations
+
+from .base import (
+    Command,
+    CommandError,
+    load_or_fail,
+    nonnegative_float,
+    positive_float,
+    positive_int,
+    prepare_output_folder,
+)
+from .data import DATA_HELP
+
+__all__ = ["ANALYZE_COMMAND", "add_analysis_arguments", "analysis_config", "run_analysis", "print_headline"]
+
+
+def add_analysis_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of the predictability analysis (shared by ``analyze`` and ``demo``)."""
+    g = p.add_argument_group("analysis")
+    g.add_argument("--rate", type=positive_float, default=10.0, help="rate after downsampling [Hz] (default 10)")
+    g.add_argument("--window", type=nonnegative_float, default=1.0, help="causal window [s] (default 1)")
+    g.add_argument("--scope", choices=["sensor", "channel"], default="sensor",
+                   help="standardise per sensor to unit RMS magnitude (the paper) or per channel")
+    g.add_argument("--modes", type=positive_int, default=4, help="number of HMM task modes (default 4)")
+    g.add_argument("-K", "--K", dest="K", type=positive_float, nargs="+", default=[5.0, 10.0],
+                   help="thresholds K for the voluntary share (default 5 10)")
+    g.add_argument("--n-random", type=positive_int, default=20,
+                   help="random segmentations to compare the HMM against (default 20)")
+    g.add_argument("--search-windows", type=nonnegative_float, nargs="*", default=[0.5, 1.0, 2.0],
+                   help="window lengths [s] for the search for missing information")
+    g.add_argument("--search-modes", type=positive_int, nargs="*", default=[2, 3, 4, 5, 6],
+                   help="numbers of modes for the search for missing information")
+    g.add_argument("--no-search", action="store_true", help="skip the search for missing information")
+    g.add_argument("--select-modes", action="store_true",
+                   help="also choose the number of modes by held-out likelihood over trials (+BIC)")
+    g.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
+
+
+def analysis_config(args: argparse.Namespace):
+    """The :class:`learning.analysis.AnalysisConfig` of parsed arguments."""
+    from learning.analysis import AnalysisConfig
+
+    return AnalysisConfig(
+        target_hz=args.rate, window_s=args.window, scope=args.scope, n_modes=args.modes,
+        K=tuple(args.K), n_random=args.n_random,
+        search_windows=() if args.no_search else tuple(args.search_windows),
+        search_modes=() if args.no_search else tuple(args.search_modes),
+        select_modes=args.select_modes, seed=args.seed)
+
+
+def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
+                 mode_names: Sequence[str] | None = None) -> AnalysisReport:
+    """Run the analysis with progress output and write report.json, report.md and plots.
+
+    Raises :class:`CommandError` when the data cannot be analysed with these
+    settings (``learning.analysis.AnalysisError``: rate, trials shorter than the window).
+    """
+    from learning.analysis import AnalysisError, analyze
+    from mpcshare.report import write_analysis_report
+
+    try:
+        result = analyze(demos, analysis_config(args), progress=True)
+    except AnalysisError as exc:
+        raise CommandError(f"cannot analyse the data: {exc}") from exc
+    write_analysis_report(result, out, mode_names=mode_names)
+    return result.summary
+
+
+def print_headline(report: AnalysisReport) -> None:
+    """The few lines a person reads first: quotients, modes, the two tests."""
+    from mpcshare.report import fmt, fmt_p
+
+    q = report.quotients
+    print(f"quotients without modes: median {fmt(q.p50)}, p90 {fmt(q.p90)}, max {fmt(q.max)}")
+    m = report.modes
+    if m.agreement is not None:
+        print(f"HMM modes: {m.n_modes}, agreement with labels {100 * m.agreement:.1f} %, ARI {m.ari:.3f}")
+    t = report.segmentation_test
+    print(f"HMM vs random segmentation: median q {t.hmm_median_q:.2f} vs {t.random_median_q:.2f}, "
+          f"{fmt_p(t.p_value)}")
+    for K, v in report.voluntary_share.items():
+        print(f"voluntary share at K = {K}: {100 * v.without_modes:.1f} % without modes, "
+              f"{100 * v.with_modes:.1f} % with modes (paired {fmt_p(v.p_value)})")
+
+
+def _analyze_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("data", help=DATA_HELP)
+    p.add_argument("--out", required=True, help="output folder for report.json, report.md and plots")
+    add_analysis_arguments(p)
+
+
+def _analyze(args: argparse.Namespace) -> int:
+    out = prepare_output_folder(args.out)
+    demos = load_or_fail(args.data)
+    report = run_analysis(demos, args, out)
+    print_headline(report)
+    print(f"report: {out / 'report.md'}")
+    return 0
+
+
+ANALYZE_COMMAND = Command("analyze", "predictability analysis: Lipschitz quotients, HMM modes, report",
+                          _analyze_args, _analyze)
