@@ -3,8 +3,20 @@
 - :mod:`mpcshare.cli` — the ``mpcshare`` command line (registry :data:`mpcshare.cli.COMMANDS`);
 - :mod:`mpcshare.commands` — its subcommands (``generate``, ``inspect``, ``analyze``, ``demo``);
 - :mod:`mpcshare.report` — analysis reports (JSON, Markdown) and plots.
+- :mod:`mpcshare.bundle` — model bundles (:func:`load_bundle`, re-exported here lazily,
+  so that ``import mpcshare`` does not import torch or scikit-learn).
+- :mod:`mpcshare.training`, :mod:`mpcshare.sweep` — training a bundle, the K trade-off.
 
 ``python -m mpcshare`` runs the command line. Design: ``docs/design.md``.
 """
 
 __version__ = "0.1.0"
+
+__all__ = ["load_bundle", "__version__"]
+
+
+def __getattr__(name: str):
+    if name == "load_bundle":
+        from mpcshare.bundle import load_bundle
+        return load_bundle
+    raise AttributeError(f"module 'mpcshare' has no attribute {name!r}")

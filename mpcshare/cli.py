@@ -11,6 +11,7 @@ Exit status: 0 success, 1 unusable input (a clear message on stderr), 2 usage er
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from typing import Sequence
 
@@ -26,6 +27,7 @@ from .commands.base import (
 )
 from .commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from .commands.demo import DEMO_COMMAND
+from .commands.train import TRAIN_COMMAND
 
 __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "positive_int", "positive_float",
            "nonnegative_float", "prepare_output_folder", "load_or_fail"]
@@ -35,6 +37,7 @@ COMMANDS: tuple[Command, ...] = (
     GENERATE_COMMAND,
     INSPECT_COMMAND,
     ANALYZE_COMMAND,
+    TRAIN_COMMAND,
     DEMO_COMMAND,
 )
 
@@ -62,6 +65,16 @@ def _merge(extra: Sequence[Command]) -> tuple[Command, ...]:
     return tuple(merged) + tuple(c for c in extra if c.name in by_name)
 
 
+def prefer_offscreen_gl() -> None:
+    """Render MuJoCo offscreen through EGL when ``MUJOCO_GL`` is unset and there is no display.
+
+    MuJoCo reads the variable once, at its first import; the simulator's modules are
+    imported by the subcommands that need them, after this.
+    """
+    if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+        os.environ["MUJOCO_GL"] = "egl"
+
+
 def main(argv: Sequence[str] | None = None, commands: Sequence[Command] = ()) -> int:
     """Parse ``argv`` (default: ``sys.argv[1:]``) and run the subcommand; return the exit status.
 
@@ -70,6 +83,7 @@ def main(argv: Sequence[str] | None = None, commands: Sequence[Command] = ()) ->
     """
     parser = build_parser(_merge(commands))
     args = parser.parse_args(argv)
+    prefer_offscreen_gl()
     try:
         return int(args._run(args))
     except CommandError as exc:

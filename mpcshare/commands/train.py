@@ -1,0 +1,146 @@
+"""``mpcshare train``: fit a model bundle, or run the K trade-off sweep.
+
+- ``mpcshare train DATA --percentile 90 --out MODEL_DIR`` writes a bundle
+  (:mod:`mpcshare.bundle`) and prints a summary of the held-out metrics;
+- ``mpcshare train DATA --sweep --out DIR`` writes ``sweep.json``, ``sweep.md`` and
+  ``sweep.png`` (:mod:`mpcshare.sweep`).
+
+Unusable data (too few or too short trials, no act channels, a rate that cannot be
+downsampled to the model rate) gives one message and exit status 1; bad option values
+exit with 2 (argparse). The output path is checked before any training starts.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from .base import (
+    Command,
+    CommandError,
+    load_or_fail,
+    nonnegative_float,
+    positive_float,
+    positive_int,
+    prepare_output_folder,
+)
+
+__all__ = ["TRAIN_COMMAND"]
+
+
+def _percentile(text: str) -> float:
+    value = nonnegative_float(text)
+    if value > 100:
+        raise argparse.ArgumentTypeError(f"expected a percentile in [0, 100], got {text!r}")
+    return value
+
+
+def _fraction(text: str) -> float:
+    value = positive_float(text)
+    if value >= 1:
+        raise argparse.ArgumentTypeError(f"expected a fraction in (0, 1), got {text!r}")
+    return value
+
+
+def _add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("data", help="an NPZ file or a CSV folder (format: DESIGN.md)")
+    p.add_argument("--out", required=True,
+                   help="bundle folder (absent, empty or an older bundle); with --sweep the folder "
+                        "for sweep.json, sweep.md, sweep.png")
+    p.add_argument("--percentile", type=_percentile, default=90.0,
+                   help="K = this percentile of the within-mode quotients (default 90)")
+    p.add_argument("--sweep", action="store_true",
+                   help="the trade-off sweep over --percentiles instead of one bundle")
+    p.add_argument("--percentiles", type=_percentile, nargs="+", default=[100, 90, 80, 70, 60, 50],
+                   help="percentiles of the sweep (default 100 90 80 70 60 50)")
+    g = p.add_argument_group("training")
+    g.add_argument("--modes", type=positive_int, default=4, help="HMM task modes (default 4)")
+    g.add_argument("--window", type=nonnegative_float, default=1.0, help="causal window [s] (default 1)")
+    g.add_argument("--rate", type=positive_float, default=10.0, help="model rate [Hz] (default 10)")
+    g.add_argument("--heldout", type=_fraction, default=0.25,
+                   help="share of trials held out for evaluation (default 0.25)")
+    g.add_argument("--epochs", type=positive_int, default=80, help="maximum LSTM epochs (default 80)")
+    g.add_argument("--hmm-restarts", type=positive_int, default=3, help="EM restarts (default 3)")
+    g.add_argument("--baselines", action="store_true",
+                   help="also train the LSTM on all points as a baseline (the sweep always does)")
+    g.add_argument("--device", choices=["cpu", "cuda", "auto"], default="cpu",
+                   help="torch device of the LSTM (default cpu; auto = CUDA when present)")
+    g.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+
+
+def _config(args: argparse.Namespace):
+    from mpcshare.training import TrainConfig
+
+    return TrainConfig(percentile=args.percentile, model_hz=args.rate, window_s=args.window,
+                       n_modes=args.modes, hmm_restarts=args.hmm_restarts, heldout_fraction=args.heldout,
+                       max_epochs=args.epochs, lstm_baseline=args.baselines, device=args.device,
+                       seed=args.seed)
+
+
+def _fmt(x) -> str:
+    if x is None:
+        return "–"
+    return "inf" if isinstance(x, float) and math.isinf(x) else f"{x:.4g}"
+
+
+def print_metrics(metrics: dict) -> None:
+    """A few lines on the held-out metrics of a bundle."""
+    t = metrics["training"]
+    pred = metrics["predictor"]
+    print(f"K = {_fmt(t['K'])} (percentile {t['percentile']:g}); reactive share: training "
+          f"{100 * t['reactive_share_train']:.1f} %, held-out {100 * metrics['heldout_reactive_share']:.1f} %")
+    print(f"predictor RMSE (standardised): on R {_fmt(pred['rmse_reactive'])}, all {_fmt(pred['rmse_all'])}, "
+          f"where the gate acts {_fmt(pred.get('rmse_gated'))}")
+    for name, b in metrics["baselines"].items():
+        print(f"  baseline {name}: on R {_fmt(b['rmse_reactive'])}, all {_fmt(b['rmse_all'])}")
+    g = metrics["gate"]["overall"]
+    print(f"gate: accuracy {_fmt(g['accuracy'])}, F1 {_fmt(g['f1'])}, Brier {_fmt(g['brier'])}; "
+          f"voluntary share {100 * metrics['voluntary_share']:.1f} %, effort "
+          f"{_fmt(metrics['voluntary_effort'])} {metrics['effort_units']}")
+    consts = t["gates"]["constant_modes"]
+    for mode, c in consts.items():
+        print(f"  mode {mode}: constant gate {c['value']} ({c['reason']})")
+    print(f"time: {t['total_s']:.1f} s")
+
+
+def _run(args: argparse.Namespace) -> int:
+    from mpcshare.bundle import BundleError, check_bundle_target
+    from mpcshare.training import TrainingError
+
+    if args.sweep:
+        out = prepare_output_folder(args.out)
+    else:
+        try:
+            out = check_bundle_target(args.out)
+        except BundleError as exc:
+            raise CommandError(f"--out {exc}") from None
+    demos = load_or_fail(args.data)
+    try:
+        config = _config(args)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
+    try:
+        if args.sweep:
+            from mpcshare.sweep import run_sweep
+            result = run_sweep(demos, config, percentiles=args.percentiles, out=out,
+                               progress=not args.quiet)
+            print(result.conclusion)
+            print(f"sweep: {out / 'sweep.md'}")
+            return 0
+        from mpcshare.bundle import save_bundle
+        from mpcshare.training import train_bundle
+        bundle = train_bundle(demos, config, progress=not args.quiet)
+    except TrainingError as exc:
+        raise CommandError(f"cannot train on {args.data}: {exc}") from None
+    try:
+        save_bundle(bundle, out)
+    except BundleError as exc:
+        raise CommandError(f"cannot write the bundle: {exc}") from None
+    print_metrics(bundle.metrics)
+    print(f"bundle: {out}")
+    return 0
+
+
+TRAIN_COMMAND = Command("train", "train gates and the reactive predictor into a model bundle, "
+                                 "or sweep the threshold K (--sweep)", _add_arguments, _run)

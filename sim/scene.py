@@ -1,0 +1,254 @@
+"""The MuJoCo eating scene: a swaying torso wearing the SuperLimb, a table, a plate, food, the fork.
+
+Frames (all right-handed, metres):
+
+* **world**: the seat under the wearer's sternum at the neutral posture, x
+  forward, y to the wearer's left, z up;
+* **torso** (a mocap body) = the model world frame of :mod:`robot.superlimb`
+  (the Pinocchio model's ``world``); the arm's subtree
+  (:func:`robot.superlimb.mjcf_arm_body`) is mounted in it on the right side;
+* **plate**: origin at the plate's centre on its top surface, z up, x away from
+  the wearer (fixed in the world at ``SceneConfig.plate_position``).
+
+The torso sways kinematically (breathing and posture, :meth:`SceneConfig.torso_pose`):
+
+    p_torso(t) = Σ_k A_k · sin(2π f_k t + φ_k)                    [m]
+    pitch(t)  = P · sin(2π f_posture t + φ_posture)                [rad]
+
+with f = 0.25 Hz (breathing: chest-wall excursion of a few mm, e.g. De Groote
+et al. 1997, J Appl Physiol 83:1531) and 0.05 Hz (seated postural drift, about
+a centimetre; e.g. Kuo 2005). Mocap motion is not felt as an inertial load by the
+arm (accelerations ≈ (2π·0.25)²·4 mm ≈ 0.01 m/s², a thousandth of g).
+
+The base pose the controller receives is ``T_plate_torso = T_world_plate⁻¹ ·
+T_world_torso`` (``p_plate = R p_model + t``), as the paper's motion capture.
+Physics: 1 kHz, MuJoCo's semi-implicit ``Euler`` integrator (the joint servo
+of :mod:`sim.servo` predicts its step exactly), contacts disabled (the knife
+and fork forces of the demonstration are logged, not simulated: the knife
+would otherwise push against the plate through the servo).
+
+To render headless, ``MUJOCO_GL=egl`` must be set before MuJoCo is first imported
+(MuJoCo reads it once); the ``mpcshare`` command line and the test suite set it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from robot.superlimb import (
+    TOOL_FRAME,
+    SuperLimbParams,
+    mjcf_actuators,
+    mjcf_arm_body,
+    rpy_to_matrix,
+)
+
+__all__ = ["EatingScene", "SceneConfig", "build_scene_xml", "pose_matrix"]
+
+
+def pose_matrix(R: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """4×4 homogeneous transform [[R, p], [0, 1]]."""
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+def _rot_y(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """Settings of the scene (lengths [m], frequencies [Hz], angles [rad]).
+
+    Attributes:
+        params: the SuperLimb (mount on the right side of the chest).
+        plate_position: plate frame origin in the world (= torso at rest): 0.40 m in
+            front of the sternum, 0.10 m to the right (the knife side), 0.21 m above
+            the seat; chosen so that every knife tip of the default demonstrations
+            is reachable with a 3 cm margin (tests/sim/test_reach.py).
+        plate_radius, plate_height: plate geometry.
+        table_height: table top above the seat (below the plate).
+        breathing_hz, breathing_amplitude_m: breathing sway (x, y, z) of the torso.
+        posture_hz, posture_amplitude_m, posture_pitch_rad: slow postural sway.
+        timestep: physics step [s] (1 kHz).
+        control_period: controller period [s] (100 Hz), a multiple of ``timestep``.
+    """
+
+    params: SuperLimbParams = field(default_factory=SuperLimbParams)
+    plate_position: tuple[float, float, float] = (0.40, -0.10, 0.21)
+    plate_radius: float = 0.12
+    plate_height: float = 0.015
+    table_height: float = 0.195
+    breathing_hz: float = 0.25
+    breathing_amplitude_m: tuple[float, float, float] = (0.004, 0.0, 0.003)
+    posture_hz: float = 0.05
+    posture_amplitude_m: tuple[float, float, float] = (0.010, 0.006, 0.0)
+    posture_pitch_rad: float = 0.015
+    timestep: float = 0.001
+    control_period: float = 0.01
+
+    def __post_init__(self) -> None:
+        if not (self.timestep > 0 and self.control_period > 0):
+            raise ValueError(f"timestep and control_period must be > 0, got {self.timestep}, {self.control_period}")
+        ratio = self.control_period / self.timestep
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise ValueError(f"control_period {self.control_period} s must be a multiple of timestep {self.timestep} s")
+        for name in ("breathing_hz", "posture_hz", "plate_radius", "plate_height"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"SceneConfig.{name} must be >= 0, got {getattr(self, name)}")
+
+    @property
+    def substeps(self) -> int:
+        """Physics steps per control period."""
+        return round(self.control_period / self.timestep)
+
+    def torso_pose(self, t: float, phases: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Torso position (3,) [m] and rotation (3, 3) in the world at time t [s] (module equation).
+
+        ``phases`` (2,) [rad]: breathing and posture phase (drawn from the episode seed).
+        """
+        wb = 2.0 * math.pi * self.breathing_hz * t + phases[0]
+        wp = 2.0 * math.pi * self.posture_hz * t + phases[1]
+        sb, sp = math.sin(wb), math.sin(wp)
+        ab, ap = self.breathing_amplitude_m, self.posture_amplitude_m
+        p = np.array([ab[0] * sb + ap[0] * sp, ab[1] * sb + ap[1] * sp, ab[2] * sb + ap[2] * sp])
+        return p, _rot_y(self.posture_pitch_rad * sp)
+
+
+_FOOD = ((-0.03, 0.03), (0.04, -0.02), (0.0, -0.05), (0.05, 0.05))  # piece centres on the plate [m]
+
+
+def build_scene_xml(config: SceneConfig | None = None) -> str:
+    """The scene's MJCF (see module docstring): torso (mocap) with the arm, table, plate, food, fork (mocap)."""
+    c = config or SceneConfig()
+    p = c.params
+    px, py, pz = c.plate_position
+    food = "".join(
+        f'      <geom name="food{i}" type="box" size="0.012 0.012 0.008" pos="{x} {y} 0.008" rgba="0.8 0.55 0.3 1"/>\n'
+        for i, (x, y) in enumerate(_FOOD))
+    arm = mjcf_arm_body(p, indent=6)
+    return f"""<mujoco model="superlimb_eating">
+  <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>
+  <option timestep="{c.timestep!r}" gravity="0 0 {-p.gravity!r}" integrator="Euler">
+    <flag contact="disable"/>
+  </option>
+  <visual><global offwidth="640" offheight="480"/></visual>
+  <worldbody>
+    <light pos="0.4 0 1.5" dir="0 0 -1" directional="true"/>
+    <camera name="side" pos="{px + 0.35} {py - 0.75} {pz + 0.45}" xyaxes="0.9 0.44 0 -0.2 0.4 0.9"/>
+    <camera name="front" pos="{px + 0.9} {py} {pz + 0.5}" xyaxes="0 1 0 -0.45 0 0.9"/>
+    <geom name="floor" type="plane" size="2 2 0.1" pos="0 0 -0.47" rgba="0.5 0.5 0.5 1"/>
+    <geom name="table" type="box" size="0.35 0.5 {(c.table_height + 0.47) / 2!r}"
+          pos="{px + 0.1!r} {py!r} {(c.table_height - 0.47) / 2!r}" rgba="0.55 0.4 0.25 1"/>
+    <geom name="seat" type="box" size="0.2 0.2 0.02" pos="-0.05 0 -0.02" rgba="0.3 0.3 0.35 1"/>
+    <body name="plate" pos="{px!r} {py!r} {pz!r}">
+      <geom name="plate_geom" type="cylinder" size="{c.plate_radius!r} {c.plate_height / 2!r}"
+            pos="0 0 {-c.plate_height / 2!r}" rgba="0.95 0.95 0.95 1"/>
+      <site name="plate_frame" pos="0 0 0" size="0.005" rgba="0 0 1 1"/>
+{food}    </body>
+    <body name="torso" mocap="true" pos="0 0 0">
+      <geom name="trunk" type="capsule" fromto="-0.05 0 0.08 -0.05 0 0.55" size="0.14" rgba="0.4 0.5 0.7 0.6"/>
+      <geom name="head" type="sphere" size="0.1" pos="-0.03 0 0.8" rgba="0.9 0.75 0.65 0.6"/>
+      <geom name="left_arm" type="capsule" fromto="-0.05 0.2 0.5 0.25 0.15 0.3" size="0.04" rgba="0.9 0.75 0.65 0.6"/>
+{arm}    </body>
+    <body name="fork" mocap="true" pos="{px} {py} {pz}">
+      <geom name="fork_handle" type="capsule" fromto="-0.04 0.07 0.13 -0.008 0.014 0.026" size="0.006"
+            rgba="0.3 0.3 0.3 1"/>
+      <geom name="fork_tines" type="box" size="0.012 0.01 0.002" pos="-0.004 0.007 0.013" rgba="0.8 0.8 0.85 1"/>
+      <site name="fork_tip" pos="0 0 0" size="0.004" rgba="0 1 0 1"/>
+    </body>
+  </worldbody>
+  <actuator>
+{mjcf_actuators(p, indent=4)}  </actuator>
+</mujoco>
+"""
+
+
+class EatingScene:
+    """The compiled scene with handles to its bodies, joints and sites.
+
+    ``model``, ``data``: MuJoCo objects; ``qadr``/``dofadr``: the arm's joint
+    addresses in qpos/qvel; ``phases``: the torso sway phases of this episode.
+    """
+
+    def __init__(self, config: SceneConfig | None = None, seed: int = 0) -> None:
+        self.config = c = config or SceneConfig()
+        self.model = mujoco.MjModel.from_xml_string(build_scene_xml(c))
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        names = c.params.joint_names
+        jids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, n) for n in names]
+        self.qadr = np.array([m.jnt_qposadr[j] for j in jids])
+        self.dofadr = np.array([m.jnt_dofadr[j] for j in jids])
+        if m.nv != 3 or list(self.dofadr) != [0, 1, 2]:
+            raise RuntimeError(f"scene must have exactly the arm's 3 DOFs, got nv={m.nv}")
+        self.torso_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "torso")
+        self.fork_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "fork")
+        self.plate_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "plate")
+        self.torso_mocap = int(m.body_mocapid[self.torso_body])
+        self.fork_mocap = int(m.body_mocapid[self.fork_body])
+        self.tip_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, TOOL_FRAME)
+        self.plate_p = np.array(c.plate_position, dtype=float)  # plate frame = world axes, shifted
+        self.phases = np.random.default_rng(seed).uniform(0.0, 2.0 * math.pi, 2)
+        self._ph0, self._ph1 = float(self.phases[0]), float(self.phases[1])
+        self._quat = np.zeros(4)
+
+    # ------------------------------------------------------------------ poses
+    def base_pose(self, t: float) -> np.ndarray:
+        """4×4 T_plate_torso at time t [s]: ``p_plate = R p_model + t`` (the controller's ``base_pose``)."""
+        p, R = self.config.torso_pose(t, self.phases)
+        return pose_matrix(R, p - self.plate_p)
+
+    def set_time(self, t: float) -> None:
+        """Move the torso mocap body to its sway pose at time t [s] (takes effect at the next kinematics).
+
+        Same pose as :meth:`SceneConfig.torso_pose` (pitch about y: quaternion
+        (cos θ/2, 0, sin θ/2, 0)), in plain floats: it runs at every physics step.
+        """
+        c = self.config
+        sb = math.sin(2.0 * math.pi * c.breathing_hz * t + self._ph0)
+        sp = math.sin(2.0 * math.pi * c.posture_hz * t + self._ph1)
+        ab, ap = c.breathing_amplitude_m, c.posture_amplitude_m
+        self.data.mocap_pos[self.torso_mocap] = (ab[0] * sb + ap[0] * sp, ab[1] * sb + ap[1] * sp,
+                                                 ab[2] * sb + ap[2] * sp)
+        half = 0.5 * c.posture_pitch_rad * sp
+        self.data.mocap_quat[self.torso_mocap] = (math.cos(half), 0.0, math.sin(half), 0.0)
+
+    def set_fork(self, pose: np.ndarray) -> None:
+        """Place the fork tip at ``pose`` = (x, y, z [m], roll, pitch, yaw [rad]) in the plate frame.
+
+        Non-finite entries (a lost marker) leave the fork where it was.
+        """
+        pose = np.asarray(pose, dtype=float)
+        if pose.shape != (6,) or not np.isfinite(pose).all():
+            return
+        mujoco.mju_mat2Quat(self._quat, rpy_to_matrix(pose[3:]).reshape(-1))
+        self.data.mocap_pos[self.fork_mocap] = pose[:3] + self.plate_p
+        self.data.mocap_quat[self.fork_mocap] = self._quat
+
+    def tip_in_plate(self) -> np.ndarray:
+        """Knife tip [m] in the plate frame from MuJoCo's kinematics (valid after mj_step1 / mj_forward)."""
+        return self.data.site_xpos[self.tip_site] - self.plate_p
+
+    def torso_to_plate(self, base_pose: np.ndarray, points_model: np.ndarray) -> np.ndarray:
+        """Points (N, 3) in the torso (model world) frame → plate frame with ``base_pose``."""
+        return points_model @ base_pose[:3, :3].T + base_pose[:3, 3]
+
+    def plate_to_torso(self, base_pose: np.ndarray, points_plate: np.ndarray) -> np.ndarray:
+        """Points (N, 3) in the plate frame → torso (model world) frame: R⁻¹(p − t)."""
+        return (points_plate - base_pose[:3, 3]) @ base_pose[:3, :3]
+
+    def set_state(self, q: np.ndarray, v: np.ndarray, t: float = 0.0) -> None:
+        """Arm state (q [rad], v [rad/s]) and the torso at time t; recomputes the kinematics."""
+        self.data.time = t
+        self.data.qpos[self.qadr] = q
+        self.data.qvel[self.dofadr] = v
+        self.set_time(t)
+        mujoco.mj_forward(self.model, self.data)

@@ -1,0 +1,192 @@
+"""Joint servo at the physics rate: tracks the controller's command within every limit, in MuJoCo.
+
+Between two controller steps (period T = 10 ms) the servo follows the commanded
+constant-acceleration segment that ends at (q_cmd, v_cmd) [rad, rad/s]:
+
+    q_ref(s) = q_cmd − v_cmd·r + ½·a_cmd·r²,   v_ref(s) = v_cmd − a_cmd·r,   r = t_end − s,
+
+with a PD law on top of the feed-forward acceleration (as a motor driver's
+position loop):  a_des = a_cmd + k_p·(q_ref − q) + k_d·(v_ref − v).
+
+**Limits in the physics.** MuJoCo's ``Euler`` integrator is semi-implicit: with
+zero joint damping, one step h [s] gives exactly
+
+    v⁺ = v + h·M(q)⁻¹·(τ − b(q, v)),      q⁺ = q + h·v⁺
+
+(M: ``mj_fullM`` incl. armature; b: ``qfrc_bias``, gravity + Coriolis).  So the
+servo chooses the next velocity v⁺ inside the *viable* interval
+
+    −v_max ≤ v⁺ ≤ v_max,     v⁺ ≤ u(q_max − q),     −v⁺ ≤ u(q − q_min),
+    u(gap) = −A·h + sqrt(A²h² + 2A·gap)     (A: braking acceleration),
+
+which keeps q⁺ + v⁺²/(2A) ≤ q_max: from there, braking at A (semi-implicit
+steps v ← v − A·h, q ← q + h·v, the last one partial) stops within v⁺²/(2A)
+(:func:`viable_next_velocity`; the set is invariant under braking).  The
+robot package's :func:`robot.constraints.viable_velocity_bound` is the same idea
+for the controller's *exact* constant-acceleration integration (q⁺ = q + h(v + v⁺)/2)
+and does not hold for MuJoCo's step, hence this variant.  Then τ = M·a + b; if
+|τ| exceeds τ_max the small QP  min ‖a − a_des‖²  s.t. the viable box and
+|M·a + b| ≤ τ_max  (DAQP through :mod:`robot.solvers`) picks the nearest
+feasible a.  It is always feasible when braking is: the servo checks every step
+that braking a_b = clip(−v/h, ±A) needs at most τ_max (``brake_infeasible``
+counts the steps where it would not), as the SuperLimb's A were chosen for.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from robot.solvers import make_backend
+from robot.superlimb import SuperLimbParams
+
+__all__ = ["JointServo", "ServoConfig", "viable_next_velocity"]
+
+
+def viable_next_velocity(gap: float, A: float, h: float) -> float:
+    """Largest v⁺ [rad/s] toward a limit ``gap`` [rad] away (≥ 0) under semi-implicit steps h [s].
+
+    Solves q + h·v⁺ + v⁺²/(2A) ≤ q_lim for v⁺:  v⁺ ≤ −A·h + sqrt(A²h² + 2A·gap).
+    A negative gap (beyond the limit) gives gap/h < 0: the velocity that brings
+    q⁺ back onto the limit in one step.
+    """
+    if gap <= 0.0:
+        return gap / h
+    return -A * h + math.sqrt(A * A * h * h + 2.0 * A * gap)
+
+
+@dataclass(frozen=True)
+class ServoConfig:
+    """Servo gains: natural frequency ``omega`` [rad/s] and damping ratio ``zeta`` of the PD loop.
+
+    k_p = ω², k_d = 2ζω.  ω = 2π·25 Hz: a stiff position loop as a harmonic-drive
+    servo's, well inside the 1 kHz step (k_d·h ≈ 0.3).
+    """
+
+    omega: float = 2.0 * math.pi * 25.0
+    zeta: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (self.omega > 0 and self.zeta > 0):
+            raise ValueError(f"ServoConfig needs omega > 0 and zeta > 0, got {self.omega}, {self.zeta}")
+
+
+class JointServo:
+    """Computes the joint torques [N·m] of one physics step from MuJoCo's current state.
+
+    Call :meth:`set_segment` at each controller step, then, every physics step,
+    ``mj_step1`` → :meth:`torque` → write ``ctrl`` → ``mj_step2``.  Counters:
+    ``qp_steps`` (torque limit active, QP used), ``fallback_steps`` (QP failed,
+    braking with clipped torque), ``brake_infeasible`` (see module docstring).
+    """
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, params: SuperLimbParams | None = None,
+                 config: ServoConfig | None = None) -> None:
+        p = params or SuperLimbParams()
+        self.model, self.data, self.config = model, data, config or ServoConfig()
+        if model.nv != 3 or model.nq != 3 or model.nu != 3:
+            raise ValueError(f"JointServo drives a 3-DOF arm as the whole state (nq = nv = nu = 3), model has "
+                             f"nq={model.nq}, nv={model.nv}, nu={model.nu}")
+        if model.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
+            raise ValueError("JointServo predicts MuJoCo's semi-implicit Euler step: set integrator=\"Euler\"")
+        if np.any(model.dof_damping != 0):
+            raise ValueError("JointServo assumes zero joint damping (Euler treats damping implicitly)")
+        self.h = float(model.opt.timestep)
+        self.q_min, self.q_max = p.lower.tolist(), p.upper.tolist()
+        self.v_max, self.A = p.velocity_limit.tolist(), p.braking_acceleration.tolist()
+        self.tau_max = p.torque_limit
+        self._tau_max_l = self.tau_max.tolist()
+        self.kp = self.config.omega ** 2
+        self.kd = 2.0 * self.config.zeta * self.config.omega
+        self._M = np.zeros((3, 3))
+        # per-step scratch arrays (no allocation on the fast path)
+        self._a, self._lo, self._hi, self._a_des = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+        self._tau, self._tau_brake, self._a_brake = np.zeros(3), np.zeros(3), np.zeros(3)
+        # beyond this distance to a limit the viable bound exceeds v_max: v_max²/(2A) + v_max·h [rad]
+        self._free_gap = [vm * vm / (2.0 * a) + vm * self.h for vm, a in zip(self.v_max, self.A)]
+        self._qp = make_backend("auto", 3, 6, 1e-12)
+        self._G = np.zeros((6, 3))
+        self.qp_steps = self.fallback_steps = self.brake_infeasible = 0
+        self.hold()
+
+    def set_segment(self, q_cmd: np.ndarray, v_cmd: np.ndarray, a_cmd: np.ndarray, t_end: float) -> None:
+        """The commanded segment ending at t_end [s] in state (q_cmd, v_cmd) with acceleration a_cmd."""
+        self._seg_l = ([float(x) for x in q_cmd], [float(x) for x in v_cmd], [float(x) for x in a_cmd],
+                       float(t_end))
+
+    def hold(self) -> None:
+        """Stop and hold the current position (used when a command is not usable)."""
+        self._seg_l = (self.data.qpos[:3].tolist(), [0.0] * 3, [0.0] * 3, float(self.data.time))
+
+    def torque(self) -> np.ndarray:
+        """τ (3,) [N·m] for the state in ``data`` (after ``mj_step1``); within ±τ_max always.
+
+        Plain-float arithmetic on the fast path: for 3 joints at 1 kHz, numpy's
+        per-call overhead would cost more than the physics step itself.  Far from
+        a position limit (gap ≥ v_max²/(2A) + v_max·h) the viable bound cannot be
+        below v_max and is not evaluated.  Braking feasibility is checked where
+        the servo may rely on it: whenever the viable box or the torque limit is active.
+        """
+        d, h = self.data, self.h
+        q, v = d.qpos.tolist(), d.qvel.tolist()  # nq = nv = 3 (checked in __init__)
+        q_c, v_c, a_c, t_end = self._seg_l
+        r = max(t_end - d.time, 0.0)
+        kp, kd, vmax, A, free = self.kp, self.kd, self.v_max, self.A, self._free_gap
+        a, lo, hi, a_des = self._a, self._lo, self._hi, self._a_des
+        active = False
+        for i in range(3):
+            qi, vi = q[i], v[i]
+            ad = a_c[i] + kp * (q_c[i] - v_c[i] * r + 0.5 * a_c[i] * r * r - qi) + kd * (v_c[i] - a_c[i] * r - vi)
+            gap_up, gap_lo = self.q_max[i] - qi, qi - self.q_min[i]
+            v_up = vmax[i] if gap_up >= free[i] else min(vmax[i], viable_next_velocity(gap_up, A[i], h))
+            v_lo = -vmax[i] if gap_lo >= free[i] else max(-vmax[i], -viable_next_velocity(gap_lo, A[i], h))
+            if v_lo > v_up:  # only beyond a position limit: head back at the speed limit
+                v_lo = v_up = vmax[i] if qi < self.q_min[i] else -vmax[i]
+            lo_i, hi_i = (v_lo - vi) / h, (v_up - vi) / h
+            lo[i], hi[i], a_des[i] = lo_i, hi_i, ad
+            if ad < lo_i:
+                ad, active = lo_i, True
+            elif ad > hi_i:
+                ad, active = hi_i, True
+            a[i] = ad
+        tau = self._tau
+        mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
+        tau += d.qfrc_bias
+        t0, t1, t2 = tau.tolist()
+        tmax = self._tau_max_l
+        fits = abs(t0) <= tmax[0] and abs(t1) <= tmax[1] and abs(t2) <= tmax[2]
+        if active or not fits:
+            self._check_brake(v)
+        if fits:
+            return tau.copy()
+        mujoco.mj_fullM(self.model, d, self._M)
+        return self._constrained(self._M.copy(), d.qfrc_bias[:3].copy(), a_des.copy(), lo.copy(), hi.copy())
+
+    def _check_brake(self, v: list[float]) -> None:
+        """Count the step if braking a_b = clip(−v/h, ±A) would need more than τ_max."""
+        ab = self._a_brake
+        for i in range(3):
+            ab[i] = min(max(-v[i] / self.h, -self.A[i]), self.A[i])
+        tb = self._tau_brake
+        mujoco.mj_mulM(self.model, self.data, tb, ab)
+        tb += self.data.qfrc_bias[:3]
+        if np.any(np.abs(tb) > self.tau_max):
+            self.brake_infeasible += 1
+
+    def _constrained(self, M: np.ndarray, bias: np.ndarray, a_des: np.ndarray, lo: np.ndarray,
+                     hi: np.ndarray) -> np.ndarray:
+        """Nearest a to a_des in the viable box with |M a + b| ≤ τ_max; braking if the QP fails."""
+        self.qp_steps += 1
+        self._G[:3], self._G[3:] = M, -M
+        h_rows = np.concatenate([self.tau_max - bias, self.tau_max + bias])
+        out = self._qp.solve(np.eye(3), -a_des, lo, hi, self._G, h_rows)
+        if out.x is not None:
+            a = np.minimum(np.maximum(out.x, lo), hi)
+            tau = M @ a + bias
+            if np.all(np.abs(tau) <= self.tau_max + 1e-9):
+                return np.clip(tau, -self.tau_max, self.tau_max)
+        self.fallback_steps += 1
+        return np.clip(M @ np.clip(self._a_brake, lo, hi) + bias, -self.tau_max, self.tau_max)
