@@ -19,7 +19,7 @@ from learning.atomic import atomic_open
 
 from .experiments import Comparison
 
-__all__ = ["write_comparison", "comparison_markdown", "comparison_findings"]
+__all__ = ["comparison_findings", "comparison_markdown", "write_comparison"]
 
 _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("tracking_p95_m", "tracking p95 [mm]", 1e3, "{:.1f}"),
@@ -78,6 +78,8 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
              *[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
     if plot_name:
         lines += [f"![strategies]({plot_name})", ""]
+    if comp.video:
+        lines += [f"The gate on trial {comp.trials[0]} (offscreen MuJoCo render):", "", f"![the gate]({comp.video})", ""]
     return "\n".join(lines)
 
 

@@ -23,7 +23,8 @@ from learning.data import Demonstrations
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
 
-__all__ = ["StrategyRun", "DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "compare_strategies", "pool_metrics"]
+__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "pool_metrics",
+           "render_clip"]
 
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
@@ -58,10 +59,11 @@ class Comparison:
     duration_s: float | None
     runs: list[dict[str, Any]]
     run_files: dict[str, list[str]] = field(default_factory=dict)
+    video: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
-                "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files}
+                "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video}
 
 
 def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.ndarray],
@@ -75,6 +77,7 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
     """
     if not metrics:
         raise ValueError("no episodes to pool")
+    metrics = [{k: (float("nan") if v is None else v) for k, v in m.items()} for m in metrics]
     n = np.array([len(s) for s in step_times], dtype=float)
     w = n / n.sum()
 
@@ -83,6 +86,7 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
 
     steps = np.concatenate([np.asarray(s, dtype=float) for s in step_times])
     wall = sum(s / m["realtime_factor"] for s, m in zip(sim_seconds, metrics) if m["realtime_factor"] > 0)
+    rtf = float(sum(sim_seconds) / wall) if wall > 0 else float("nan")
     return {
         "tracking_rmse_m": float(math.sqrt(np.sum(w * np.array([m["tracking_rmse_m"] ** 2 for m in metrics])))),
         "tracking_p95_m": mean("tracking_p95_m"),
@@ -93,7 +97,7 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
         "limit_violations": int(sum(int(m["limit_violations"]) for m in metrics)),
         "step_p50_ms": float(np.percentile(steps, 50) * 1e3),
         "step_p99_ms": float(np.percentile(steps, 99) * 1e3),
-        "realtime_factor": float(sum(sim_seconds) / wall) if wall > 0 else float("nan"),
+        "realtime_factor": rtf,
     }
 
 
@@ -135,7 +139,8 @@ def compare_strategies(bundle: Any, demos: Demonstrations, trial_ids: Sequence[i
         for tid in trial_ids:
             t0 = time.perf_counter()
             controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta)
-            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed)
+            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed,
+                                  obs_names=list(demos.obs_names), act_names=list(demos.act_names))
             m = episode_metrics(episode)
             metrics.append(m)
             steps.append(np.asarray(episode.step_time, dtype=float))
@@ -152,3 +157,24 @@ def compare_strategies(bundle: Any, demos: Demonstrations, trial_ids: Sequence[i
         pooled[run.name] = pool_metrics(metrics, steps, seconds)
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files)
+
+
+def render_clip(bundle: Any, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
+                strategy: str = "gate", seed: int = 0, beta: float = 0.5,
+                make_controller: Callable[..., Any] | None = None) -> tuple[str | None, str | None]:
+    """Render the first ``seconds`` of ``strategy`` on one trial (offscreen OpenGL).
+
+    Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
+    when no MP4 encoder is installed) or None, and why not.
+    """
+    if make_controller is None:
+        from .controller import SharedController
+
+        make_controller = SharedController.from_bundle
+    trial = next((tr for tr in demos.trials if tr.trial_id == int(trial_id)), None)
+    if trial is None:
+        raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
+    controller = make_controller(bundle, strategy=strategy, use_mpc=True, beta=beta)
+    episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False,
+                          obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+    return episode.info.get("video"), episode.info.get("render_message")
