@@ -79,7 +79,8 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
     if plot_name:
         lines += [f"![strategies]({plot_name})", ""]
     if comp.video:
-        lines += [f"The gate on trial {comp.trials[0]} (offscreen MuJoCo render):", "", f"![the gate]({comp.video})", ""]
+        lines += [f"The gate on trial {comp.trials[0]} (offscreen MuJoCo render):", "",
+                  f"![the gate]({comp.video})", ""]
     return "\n".join(lines)
 
 
