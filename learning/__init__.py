@@ -7,6 +7,12 @@
 - :mod:`learning.predictability` — thresholds, voluntary shares, segmentation tests, model order.
 - :mod:`learning.modes` — HMM task modes offline (``TaskModes``) and online (``ModeFilter``).
 - :mod:`learning.analysis` — the paper's analysis end to end (``analyze``).
+- :mod:`learning.gate` — per-mode calibrated gates ``ModeGates`` and ``gate_metrics``.
+- :mod:`learning.predictor` — the LSTM reactive predictor ``ReactivePredictor`` with its
+  NumPy ``PredictorStream`` (:mod:`learning.predictor_stream`);
+  :mod:`learning.predictor_baseline` (ridge on the window),
+  :mod:`learning.predictor_metrics` (RMSE per physical channel group),
+  :mod:`learning.sequences` (per-trial sequence sets: checks, chunks, padding).
 
 Imports only numpy, scipy, scikit-learn, threadpoolctl, hmmlearn, torch and tqdm.
 """

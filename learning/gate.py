@@ -4,12 +4,13 @@ Song & Asada train one binary classifier per task mode j on the labels
 ``Z_t = 1[q_{s_j}(t) ≤ K]`` (the within-mode Lipschitz quotient at or below the
 threshold K). :class:`ModeGates` holds those classifiers:
 
-- default ``kernel="rbf"``: ``Pipeline(StandardScaler, SVC(rbf, class_weight="balanced"))``
-  inside ``CalibratedClassifierCV(method="sigmoid", cv=n_folds)`` (Platt scaling, one
-  pipeline + sigmoid per fold, probabilities averaged over the folds), so that the
+- default ``kernel="rbf"``: ``Pipeline(StandardScaler, CalibratedClassifierCV(SVC(rbf,
+  class_weight="balanced"), method="sigmoid", cv=n_folds))`` — the scaler is fitted on the
+  mode's training rows, then Platt scaling (one SVM + sigmoid per fold, each sigmoid fitted
+  on the fold it did not train on, probabilities averaged over the folds) so that the
   arbitration can use a probability margin, not only a 0/1 decision;
-- ``kernel="nystroem"``: the same with ``Nystroem(rbf) → LinearSVC`` in place of the
-  exact SVC (the approximation the issue allows where the SVM is too slow);
+- ``kernel="nystroem"``: the same with ``Pipeline(Nystroem(rbf), LinearSVC)`` in place of
+  the exact SVC (the approximation the issue allows where the SVM is too slow);
 - a mode with fewer than ``min_class_count`` points of one class gets a *constant*
   gate (its majority value); a mode without any training point gets the constant 0
   (hand over to the wearer — the safe choice). Both are recorded with the reason in
@@ -22,16 +23,17 @@ measures the accuracy cost of that against larger subsamples and the Nyström mo
 :meth:`ModeGates.proba_one` is the 10 Hz control-tick path. scikit-learn's per-call
 validation costs far more than the arithmetic for one row, so the fitted pipelines are
 evaluated in NumPy (written here because sklearn has no per-row fast path):
-``z = (x − μ)/σ``; ``f = Σ_i a_i exp(−γ‖z − s_i‖²) + b`` (RBF) or
-``f = w·(φ(z)) + b`` with ``φ(z) = exp(−γ‖z − c_k‖²)_k · N`` (Nyström);
-``p = 1/(1 + exp(A f + B))`` per fold, averaged over the folds. It is tested equal to
-:meth:`predict_proba` to 1e-9.
+``z = (x − μ)/σ``; per fold k ``f_k = Σ_i a_ki exp(−γ‖z − s_i‖²) + b_k`` over the
+support vectors (RBF; vectors shared by folds evaluated once) or over the Nyström
+components with weights ``Nᵀw_k`` (``N`` = ``normalization_``);
+``p = mean_k 1/(1 + exp(A_k f_k + B_k))``. It is tested equal to :meth:`predict_proba`
+to 1e-9.
 """
 
 from __future__ import annotations
 
-import math
 import numbers
+from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -40,7 +42,7 @@ from sklearn.base import BaseEstimator
 from sklearn.calibration import CalibratedClassifierCV
 from sklearn.kernel_approximation import Nystroem
 from sklearn.metrics import accuracy_score, brier_score_loss, f1_score
-from sklearn.model_selection import StratifiedKFold, train_test_split
+from sklearn.model_selection import StratifiedKFold
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC, LinearSVC
@@ -63,32 +65,34 @@ class ConstantGate:
 
 
 @dataclass(frozen=True)
-class _FoldArrays:
-    """One calibrated fold as plain arrays (see the module docstring for the equations)."""
+class _FastGate:
+    """A fitted calibrated gate as plain arrays (equations in the module docstring).
+
+    All folds share the scaler and γ, so their kernel centres are stacked into one
+    matrix (RBF support vectors that several folds share are stored once) and each
+    fold's decision value is one row of ``weights``.
+    """
 
     mean: np.ndarray          # (D,) scaler μ
     inv_scale: np.ndarray     # (D,) 1/σ
-    centers: np.ndarray       # (S, D) support vectors (rbf) or Nyström components, scaled space
-    centers_sq: np.ndarray    # (S,) ‖c‖²
+    centers: np.ndarray       # (U, D) distinct support vectors (rbf) or all folds' Nyström components
+    centers_sq: np.ndarray    # (U,) ‖c‖²
     gamma: float
-    weights: np.ndarray       # (S,) dual coefficients (rbf) or (S,) N·w folded (Nyström)
-    intercept: float
-    sig_a: float              # Platt: p = 1/(1 + exp(A f + B))
-    sig_b: float
+    weights: np.ndarray       # (k, U) per fold: dual coefficients (rbf) or Nᵀw (Nyström), 0 elsewhere
+    intercepts: np.ndarray    # (k,)
+    sig_a: np.ndarray         # (k,) Platt: p_k = 1/(1 + exp(A_k f_k + B_k))
+    sig_b: np.ndarray         # (k,)
 
     def proba(self, x: np.ndarray) -> float:
         z = (x - self.mean) * self.inv_scale
         d2 = self.centers_sq - 2.0 * (self.centers @ z) + z @ z
-        f = float(self.weights @ np.exp(-self.gamma * np.maximum(d2, 0.0))) + self.intercept
-        return _sigmoid_neg(self.sig_a * f + self.sig_b)
-
-
-def _sigmoid_neg(v: float) -> float:
-    """1/(1 + exp(v)), written to avoid overflow (equals scipy.special.expit(−v))."""
-    if v >= 0:
-        e = math.exp(-v)
-        return e / (1.0 + e)
-    return 1.0 / (1.0 + math.exp(v))
+        np.maximum(d2, 0.0, out=d2)
+        d2 *= -self.gamma
+        f = self.weights @ np.exp(d2, out=d2) + self.intercepts
+        v = self.sig_a * f + self.sig_b
+        # 1/(1 + e^v) = e^{−v}/(1 + e^{−v}); pick the form whose exponent is ≤ 0 (no overflow)
+        e = np.exp(-np.abs(v))
+        return float(np.mean(np.where(v >= 0, e, 1.0) / (1.0 + e)))
 
 
 def check_gate_inputs(windows: Any, modes: Any, n_modes: int | None,
@@ -118,6 +122,19 @@ def check_gate_inputs(windows: Any, modes: Any, n_modes: int | None,
     return X, m
 
 
+def _stratified_subsample(rows: np.ndarray, y: np.ndarray, cap: int, min_count: int,
+                          rng: np.random.Generator) -> np.ndarray:
+    """``cap`` of ``rows`` drawn without replacement, each class in proportion to its share
+    (rounded) but never fewer than ``min(n_class, min_count)`` rows; sorted."""
+    n_pos = int(y.sum())
+    k_pos = round(cap * n_pos / rows.size)
+    k_pos = min(max(k_pos, min(n_pos, min_count)), n_pos, cap - min(rows.size - n_pos, min_count))
+    k_neg = cap - k_pos
+    pos, neg = rows[y == 1], rows[y == 0]
+    return np.sort(np.concatenate([rng.choice(pos, k_pos, replace=False),
+                                   rng.choice(neg, k_neg, replace=False)]))
+
+
 def _check_labels(labels: Any, n: int) -> np.ndarray:
     y_raw = np.asarray(labels)
     if y_raw.shape != (n,):
@@ -140,14 +157,15 @@ class ModeGates(BaseEstimator):
         gamma: RBF width on the standardised windows; ``"scale"`` = 1/(D · var(z)) of
             the mode's standardised training rows (sklearn's rule, resolved at fit).
         max_samples_per_mode: rows kept per mode for fitting (stratified, seeded
-            subsample); None keeps all.
+            subsample that keeps at least ``min_class_count`` rows of each class); None
+            keeps all.
         min_class_count: a mode with fewer points of either class gets a constant gate.
         n_folds: calibration folds (Platt scaling on held-out folds); ≤ min_class_count.
         n_components: Nyström components (``kernel="nystroem"`` only).
         seed: seeds the subsample, the folds and the Nyström components.
 
     Fitted attributes: ``n_modes_``, ``n_features_in_``, ``gates_`` (list per mode:
-    a ``CalibratedClassifierCV`` or a :class:`ConstantGate`), ``constant_modes_``
+    a fitted ``Pipeline(scale, gate=CalibratedClassifierCV)`` or a :class:`ConstantGate`), ``constant_modes_``
     (dict mode → {"value", "reason", "n_positive", "n_negative"}), ``n_train_`` (rows
     used per mode), ``train_rows_`` (per mode, the indices of those rows into the fitted
     arrays), ``gamma_`` (per mode, None for constant modes).
@@ -187,17 +205,17 @@ class ModeGates(BaseEstimator):
         if not (isinstance(self.n_components, numbers.Integral) and self.n_components >= 1):
             raise ValueError(f"n_components must be an integer ≥ 1, got {self.n_components!r}")
 
-    def _new_classifier(self, gamma: float, seed: int) -> CalibratedClassifierCV:
+    def _new_classifier(self, gamma: float, seed: int) -> Pipeline:
+        svm: Any
         if self.kernel == "rbf":
-            steps = [("scale", StandardScaler()),
-                     ("svm", SVC(kernel="rbf", C=float(self.C), gamma=gamma, class_weight="balanced"))]
+            svm = SVC(kernel="rbf", C=float(self.C), gamma=gamma, class_weight="balanced")
         else:
-            steps = [("scale", StandardScaler()),
-                     ("features", Nystroem(kernel="rbf", gamma=gamma, n_components=int(self.n_components),
-                                           random_state=seed)),
-                     ("svm", LinearSVC(C=float(self.C), class_weight="balanced", random_state=seed))]
+            svm = Pipeline([("features", Nystroem(kernel="rbf", gamma=gamma, n_components=int(self.n_components),
+                                                  random_state=seed)),
+                            ("svm", LinearSVC(C=float(self.C), class_weight="balanced", random_state=seed))])
         folds = StratifiedKFold(n_splits=int(self.n_folds), shuffle=True, random_state=seed)
-        return CalibratedClassifierCV(Pipeline(steps), method="sigmoid", cv=folds)
+        return Pipeline([("scale", StandardScaler()),
+                         ("gate", CalibratedClassifierCV(svm, method="sigmoid", cv=folds))])
 
     def fit(self, windows: Any, modes: Any, labels: Any, n_modes: int) -> ModeGates:
         """Fit one calibrated gate per mode on ``windows`` (N, D), ``modes`` (N,) in
@@ -244,8 +262,8 @@ class ModeGates(BaseEstimator):
             keep = rows
             cap = self.max_samples_per_mode
             if cap is not None and rows.size > cap:
-                keep, _ = train_test_split(rows, train_size=int(cap), stratify=yj, random_state=seed_j)
-                keep = np.sort(keep)
+                keep = _stratified_subsample(rows, yj, int(cap), int(self.min_class_count),
+                                             np.random.default_rng(seed_j))
             Xj, yk = X[keep], y[keep]
             gamma = float(self.gamma) if self.gamma != "scale" else self._scale_gamma(Xj)
             gates.append(self._new_classifier(gamma, seed_j).fit(Xj, yk))
@@ -259,7 +277,7 @@ class ModeGates(BaseEstimator):
         self.gamma_ = gammas
         self.n_modes_ = n_modes
         self.n_features_in_ = int(X.shape[1])
-        self._fast = [None if isinstance(g, ConstantGate) else self._fold_arrays(g) for g in gates]
+        self._fast = [None if isinstance(g, ConstantGate) else self._fast_gate(g) for g in gates]
 
     @staticmethod
     def _scale_gamma(X: np.ndarray) -> float:
@@ -268,34 +286,48 @@ class ModeGates(BaseEstimator):
         var = float(z.var())
         return 1.0 / (X.shape[1] * var) if var > 0 else 1.0
 
-    def _fold_arrays(self, clf: CalibratedClassifierCV) -> list[_FoldArrays]:
-        """Extract each calibrated fold's parameters for :meth:`proba_one`."""
-        folds = []
-        for cc in clf.calibrated_classifiers_:
-            pipe = cc.estimator
-            scaler: StandardScaler = pipe.named_steps["scale"]
-            svm = pipe.named_steps["svm"]
-            if list(svm.classes_) != [0, 1] or len(cc.calibrators) != 1:
-                raise RuntimeError(f"unexpected classes {svm.classes_} in a gate; expected [0, 1]")
-            cal = cc.calibrators[0]
-            scale = scaler.scale_ if scaler.scale_ is not None else np.ones_like(scaler.mean_)
+    def _fast_gate(self, pipe: Pipeline) -> _FastGate:
+        """Extract the fitted pipeline's parameters for :meth:`proba_one`."""
+        scaler: StandardScaler = pipe.named_steps["scale"]
+        cal: CalibratedClassifierCV = pipe.named_steps["gate"]
+        if list(cal.classes_) != [0, 1]:
+            raise RuntimeError(f"unexpected classes {cal.classes_} in a gate; expected [0, 1]")
+        blocks, coefs, intercepts, sig_a, sig_b = [], [], [], [], []
+        gamma = None
+        for cc in cal.calibrated_classifiers_:
+            est = cc.estimator
             if self.kernel == "rbf":
-                centers = np.array(svm.support_vectors_, dtype=float)
-                weights = np.array(svm.dual_coef_[0], dtype=float)
-                intercept = float(svm.intercept_[0])
-                gamma = float(svm.gamma)
+                blocks.append(np.asarray(est.support_vectors_, dtype=float))
+                coefs.append(np.asarray(est.dual_coef_[0], dtype=float))
+                intercepts.append(float(est.intercept_[0]))
+                gamma = float(est.gamma)
             else:
-                ny: Nystroem = pipe.named_steps["features"]
-                centers = np.array(ny.components_, dtype=float)
-                # f = w · (k(z) @ N.T) + b = (N.T @ w) · k(z) + b
-                weights = np.array(ny.normalization_.T @ svm.coef_[0], dtype=float)
-                intercept = float(svm.intercept_[0])
+                ny: Nystroem = est.named_steps["features"]
+                svm: LinearSVC = est.named_steps["svm"]
+                blocks.append(np.asarray(ny.components_, dtype=float))
+                # f = w · (k(z) @ Nᵀ) + b = (N w)ᵀ-weighted kernel values + b, N = normalization_
+                coefs.append(np.asarray(ny.normalization_.T @ svm.coef_[0], dtype=float))
+                intercepts.append(float(svm.intercept_[0]))
                 gamma = float(ny.gamma)
-            folds.append(_FoldArrays(
-                mean=np.array(scaler.mean_, dtype=float), inv_scale=1.0 / np.asarray(scale, dtype=float),
-                centers=centers, centers_sq=np.einsum("ij,ij->i", centers, centers), gamma=gamma,
-                weights=weights, intercept=intercept, sig_a=float(cal.a_), sig_b=float(cal.b_)))
-        return folds
+            sig_a.append(float(cc.calibrators[0].a_))
+            sig_b.append(float(cc.calibrators[0].b_))
+        stacked = np.vstack(blocks)
+        if self.kernel == "rbf":  # a training row is a support vector of several folds: keep it once
+            centers, where = np.unique(stacked, axis=0, return_inverse=True)
+            where = where.ravel()
+        else:
+            centers, where = stacked, np.arange(stacked.shape[0])
+        W = np.zeros((len(blocks), centers.shape[0]))
+        start = 0
+        for k, (blk, c) in enumerate(zip(blocks, coefs)):
+            np.add.at(W[k], where[start:start + blk.shape[0]], c)
+            start += blk.shape[0]
+        scale = scaler.scale_ if scaler.scale_ is not None else np.ones_like(scaler.mean_)
+        return _FastGate(mean=np.array(scaler.mean_, dtype=float), inv_scale=1.0 / np.asarray(scale, dtype=float),
+                         centers=np.ascontiguousarray(centers),
+                         centers_sq=np.einsum("ij,ij->i", centers, centers), gamma=float(gamma),
+                         weights=W, intercepts=np.array(intercepts), sig_a=np.array(sig_a),
+                         sig_b=np.array(sig_b))
 
     # --------------------------------------------------------------- inference
 
@@ -304,14 +336,17 @@ class ModeGates(BaseEstimator):
         check_is_fitted(self, "gates_")
         X, m = check_gate_inputs(windows, modes, self.n_modes_, self.n_features_in_)
         out = np.empty(X.shape[0])
-        for j, gate in enumerate(self.gates_):
-            rows = np.flatnonzero(m == j)
-            if rows.size == 0:
-                continue
-            if isinstance(gate, ConstantGate):
-                out[rows] = float(gate.value)
-            else:
-                with threadpool_limits(1):
+        # BLAS threads only matter (and only hurt) for large Nyström batches; entering the
+        # limit costs milliseconds, so small batches skip it
+        ctx = threadpool_limits(1) if X.shape[0] >= 1000 else nullcontext()
+        with ctx:
+            for j, gate in enumerate(self.gates_):
+                rows = np.flatnonzero(m == j)
+                if rows.size == 0:
+                    continue
+                if isinstance(gate, ConstantGate):
+                    out[rows] = float(gate.value)
+                else:
                     out[rows] = gate.predict_proba(X[rows])[:, 1]
         return out
 
@@ -335,13 +370,14 @@ class ModeGates(BaseEstimator):
         j = int(mode)
         if j != mode or not 0 <= j < self.n_modes_:
             raise ValueError(f"mode must be an integer in 0..{self.n_modes_ - 1}, got {mode!r}")
-        folds = self._fast[j]
-        if folds is None:
+        fast = getattr(self, "_fast", None)
+        if fast is None:  # e.g. an object restored by an older pickle
+            fast = self._fast = [None if isinstance(g, ConstantGate) else self._fast_gate(g)
+                                 for g in self.gates_]
+        gate = fast[j]
+        if gate is None:
             return float(self.gates_[j].value)
-        p = 0.0
-        for f in folds:
-            p += f.proba(x)
-        return p / len(folds)
+        return gate.proba(x)
 
     def describe(self) -> dict[str, Any]:
         """JSON-able summary: kernel, per-mode training rows, gamma and constant gates."""

@@ -17,10 +17,10 @@ the masked MSE of the validation trials (run whole, from the zero state, as
 :meth:`ReactivePredictor.predict` does) decides early stopping; the best epoch's
 weights are kept.
 
-Online, :meth:`ReactivePredictor.make_stream` gives a :class:`PredictorStream` that
-applies the equations above in NumPy (float64) one step at a time, carrying (h, c);
-it equals :meth:`ReactivePredictor.predict` over the same sequence (tested to 1e-5).
-Written by hand because a PyTorch call costs tens of µs of dispatch per step.
+Online, :meth:`ReactivePredictor.make_stream` gives a
+:class:`learning.predictor_stream.PredictorStream` that applies the equations above in
+NumPy (float64) one step at a time, carrying (h, c); it equals
+:meth:`ReactivePredictor.predict` over the same sequence (tested to 1e-5).
 
 Reproducibility: the weights' initialisation and the chunk order come from ``seed``
 (torch's CPU generator inside ``torch.random.fork_rng``, so the global RNG is left
@@ -46,6 +46,7 @@ from tqdm.auto import tqdm
 
 from .predictor_baseline import RidgeWindowBaseline
 from .predictor_metrics import rmse_by_channel, rmse_by_group
+from .predictor_stream import PredictorStream
 from .sequences import check_sequence_set, chunk_sequences, pad_sequences
 
 __all__ = ["PredictorStream", "ReactivePredictor", "RidgeWindowBaseline", "rmse_by_channel",
@@ -77,64 +78,22 @@ def _resolve_device(device: str) -> torch.device:
     return torch.device(device)
 
 
+MAX_ABS_VALUE = 1e6
+
+
+def _check_magnitude(arrays: list[np.ndarray], what: str) -> None:
+    """Training runs in float32 on standardised data; refuse values beyond ±MAX_ABS_VALUE
+    (squared errors of such values lose all precision or overflow float32)."""
+    for i, a in enumerate(arrays):
+        big = np.flatnonzero(np.abs(a).max(axis=1) > MAX_ABS_VALUE)
+        if big.size:
+            raise ValueError(f"{what}[{i}] row {big[0]} has a value beyond ±{MAX_ABS_VALUE:g}: the "
+                             f"predictor expects standardised inputs and targets")
+
+
 def _masked_mse(out: torch.Tensor, y: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
     """Σ w_t ‖out_t − y_t‖² / (Σ w_t · d_u): mean squared error over the masked steps."""
     return ((out - y) ** 2 * w.unsqueeze(-1)).sum() / (w.sum() * y.shape[-1])
-
-
-class PredictorStream:
-    """Step-by-step LSTM inference in NumPy (float64) carrying (h, c) between calls.
-
-    ``step(x (d_in,)) -> (d_u,)`` standardised action; ``reset()`` returns to the zero
-    state (the state :meth:`ReactivePredictor.predict` starts from). A wrong shape or a
-    non-finite input raises ValueError and leaves the state unchanged.
-
-    Per step: ``z = W [x; h] + b`` with the rows of the i, f, o gates pre-scaled by ½, so
-    that one ``tanh`` gives all four gates (σ(v) = ½ + ½·tanh(v/2)); then
-    ``c = f ⊙ c + i ⊙ g``, ``h = o ⊙ tanh(c)``, ``û = W_y h + b_y``.
-    """
-
-    def __init__(self, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray, w_out: np.ndarray,
-                 b_out: np.ndarray) -> None:
-        H, d = int(w_hh.shape[1]), int(w_ih.shape[1])
-        W = np.hstack([w_ih, w_hh]).astype(float)   # rows in torch order i, f, g, o
-        b = np.asarray(bias, dtype=float)
-        order = np.r_[0:2 * H, 3 * H:4 * H, 2 * H:3 * H]   # → i, f, o, g
-        scale = np.r_[np.full(3 * H, 0.5), np.ones(H)]
-        self._W = np.ascontiguousarray(W[order] * scale[:, None])
-        self._b = b[order] * scale
-        self._w_out = np.ascontiguousarray(w_out, dtype=float)
-        self._b_out = np.asarray(b_out, dtype=float).copy()
-        self._v = np.zeros(d + H)
-        self.hidden_size, self.input_dim, self.output_dim = H, d, int(w_out.shape[0])
-        self.reset()
-
-    def reset(self) -> None:
-        """Zero hidden and cell state."""
-        self.h = np.zeros(self.hidden_size)
-        self.c = np.zeros(self.hidden_size)
-
-    def step(self, x: np.ndarray) -> np.ndarray:
-        """One LSTM cell update and the read-out (class docstring)."""
-        x = np.asarray(x, dtype=float)
-        if x.shape != (self.input_dim,):
-            raise ValueError(f"stream input must have shape ({self.input_dim},), got {x.shape}")
-        if not math.isfinite(x.sum()):
-            raise ValueError("stream input is not finite; state left unchanged")
-        H, d, v = self.hidden_size, self.input_dim, self._v
-        v[:d] = x
-        v[d:] = self.h
-        z = self._W @ v
-        z += self._b
-        np.tanh(z, out=z)
-        gates = z[:3 * H]
-        gates *= 0.5
-        gates += 0.5
-        c = gates[H:2 * H] * self.c
-        c += gates[:H] * z[3 * H:]
-        self.c = c
-        self.h = gates[2 * H:3 * H] * np.tanh(c)
-        return self._w_out @ self.h + self._b_out
 
 
 class ReactivePredictor(BaseEstimator):
@@ -148,6 +107,8 @@ class ReactivePredictor(BaseEstimator):
         learning_rate, weight_decay: Adam settings; grad_clip: max gradient norm (0 = none).
         max_epochs, patience: early stopping stops after ``patience`` epochs without a
             validation improvement; the best epoch's weights are kept.
+        lr_patience: halve the learning rate after this many epochs without a validation
+            improvement (``ReduceLROnPlateau``); 0 = constant rate.
         val_fraction: share of trials held out for early stopping when ``fit`` gets no
             validation sequences (at least 1 trial, split with ``seed``).
         num_threads: torch CPU threads during ``fit`` (None = torch's setting). Default 1:
@@ -162,9 +123,9 @@ class ReactivePredictor(BaseEstimator):
     None when validation sequences were given).
     """
 
-    def __init__(self, hidden_size: int = 28, batch_size: int = 64, chunk_len: int = 100,
+    def __init__(self, hidden_size: int = 28, batch_size: int = 64, chunk_len: int = 50,
                  burn_in: int = 20, learning_rate: float = 1e-2, weight_decay: float = 0.0,
-                 grad_clip: float = 1.0, max_epochs: int = 150, patience: int = 15,
+                 grad_clip: float = 1.0, max_epochs: int = 200, patience: int = 20, lr_patience: int = 5,
                  val_fraction: float = 0.2, num_threads: int | None = 1, seed: int = 0,
                  device: str = "cpu") -> None:
         self.hidden_size = hidden_size
@@ -176,6 +137,7 @@ class ReactivePredictor(BaseEstimator):
         self.grad_clip = grad_clip
         self.max_epochs = max_epochs
         self.patience = patience
+        self.lr_patience = lr_patience
         self.val_fraction = val_fraction
         self.num_threads = num_threads
         self.seed = seed
@@ -185,7 +147,7 @@ class ReactivePredictor(BaseEstimator):
 
     def _check_params(self) -> None:
         for name, lo in (("hidden_size", 1), ("batch_size", 1), ("chunk_len", 1), ("burn_in", 0),
-                         ("max_epochs", 1), ("patience", 1)):
+                         ("max_epochs", 1), ("patience", 1), ("lr_patience", 0)):
             v = getattr(self, name)
             if not (isinstance(v, numbers.Integral) and v >= lo):
                 raise ValueError(f"{name} must be an integer ≥ {lo}, got {v!r}")
@@ -218,17 +180,23 @@ class ReactivePredictor(BaseEstimator):
         ms = ms if ms is not None else [np.ones(x.shape[0], bool) for x in xs]
         if not any(m.any() for m in ms):
             raise ValueError("no training step has mask True: nothing to fit")
+        _check_magnitude(xs, "sequences")
+        _check_magnitude(ys, "targets")
         if (val_sequences is None) != (val_targets is None):
             raise ValueError("give both val_sequences and val_targets, or neither")
-        self.val_trials_: list[int] | None = None
+        if val_masks is not None and val_sequences is None:
+            raise ValueError("val_masks given without val_sequences")
+        val_trials: list[int] | None = None
         if val_sequences is not None:
             vx, vy, vm = check_sequence_set(val_sequences, val_targets, val_masks, what="val_sequences",
                                             d_in=xs[0].shape[1], d_out=ys[0].shape[1])
             vm = vm if vm is not None else [np.ones(x.shape[0], bool) for x in vx]
+            _check_magnitude(vx, "val_sequences")
+            _check_magnitude(vy, "val_targets")
         elif len(xs) >= 2:
             n_val = min(max(round(len(xs) * self.val_fraction), 1), len(xs) - 1)
             val = set(np.random.default_rng(self.seed).permutation(len(xs))[:n_val].tolist())
-            self.val_trials_ = sorted(val)
+            val_trials = sorted(val)
             vx, vy, vm = ([a[i] for i in sorted(val)] for a in (xs, ys, ms))
             xs, ys, ms = ([a[i] for i in range(len(xs)) if i not in val] for a in (xs, ys, ms))
             if not any(m.any() for m in ms):
@@ -241,8 +209,7 @@ class ReactivePredictor(BaseEstimator):
             warnings.warn("the validation trials have no step with mask True: no early stopping",
                           UserWarning, stacklevel=2)
             vx = vy = vm = None
-        self.input_dim_, self.output_dim_ = int(xs[0].shape[1]), int(ys[0].shape[1])
-        self.device_ = _resolve_device(self.device)
+        device = _resolve_device(self.device)
         t0 = time.perf_counter()
         old_threads = torch.get_num_threads()
         if self.num_threads is not None:
@@ -250,21 +217,31 @@ class ReactivePredictor(BaseEstimator):
         try:
             with torch.random.fork_rng(devices=[]):
                 torch.manual_seed(int(self.seed))
-                self._train(xs, ys, ms, vx, vy, vm, progress)
+                net, history, best_epoch = self._train(xs, ys, ms, vx, vy, vm, device, progress)
         finally:
             torch.set_num_threads(old_threads)
+        # fitted attributes only once training has succeeded (nothing half-written)
+        self.input_dim_, self.output_dim_ = int(xs[0].shape[1]), int(ys[0].shape[1])
+        self.device_, self.net_, self.history_ = device, net, history
+        self.best_epoch_, self.n_epochs_ = best_epoch, len(history["train_loss"])
+        self.val_trials_ = val_trials
         self.fit_time_s_ = time.perf_counter() - t0
         self._cache_numpy()
         return self
 
-    def _train(self, xs, ys, ms, vx, vy, vm, progress: bool) -> None:
-        dev = self.device_
-        net = _Net(self.input_dim_, int(self.hidden_size), self.output_dim_).to(dev)
+    def _train(self, xs: list[np.ndarray], ys: list[np.ndarray], ms: list[np.ndarray],
+               vx: list[np.ndarray] | None, vy: list[np.ndarray] | None, vm: list[np.ndarray] | None,
+               dev: torch.device, progress: bool) -> tuple[_Net, dict[str, list[float]], int]:
+        """Adam on shuffled chunks, early stopping on the validation loss; returns the best
+        network (eval mode), the loss history and the best epoch."""
+        net = _Net(int(xs[0].shape[1]), int(self.hidden_size), int(ys[0].shape[1])).to(dev)
         X, Y, W = (torch.from_numpy(a).to(dev) for a in chunk_sequences(xs, ys, ms, int(self.chunk_len),
                                                                  int(self.burn_in)))
         val = None if vx is None else tuple(torch.from_numpy(a).to(dev) for a in pad_sequences(vx, vy, vm))
         opt = torch.optim.Adam(net.parameters(), lr=float(self.learning_rate),
                                weight_decay=float(self.weight_decay))
+        sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=int(self.lr_patience))
+                 if self.lr_patience else None)
         gen = torch.Generator().manual_seed(int(self.seed))
         history: dict[str, list[float]] = {"train_loss": [], "val_loss": []}
         best, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
@@ -285,11 +262,17 @@ class ReactivePredictor(BaseEstimator):
                 ws = float(W[b].sum())
                 tot, wsum = tot + loss.item() * ws, wsum + ws
             history["train_loss"].append(tot / wsum)
+            if not math.isfinite(tot / wsum):
+                bar.close()
+                raise RuntimeError(f"training diverged: the loss is not finite at epoch {epoch}; lower "
+                                   f"learning_rate (now {self.learning_rate})")
             if val is not None:
                 net.eval()
                 with torch.no_grad():
                     v = float(_masked_mse(net(val[0]), val[1], val[2]))
                 history["val_loss"].append(v)
+                if sched is not None:
+                    sched.step(v)
                 if v < best:
                     best, best_epoch, best_state = v, epoch, copy.deepcopy(net.state_dict())
                 elif epoch - best_epoch >= int(self.patience):
@@ -301,10 +284,7 @@ class ReactivePredictor(BaseEstimator):
         bar.close()
         net.load_state_dict(best_state)
         net.eval()
-        self.net_ = net
-        self.history_ = history
-        self.best_epoch_ = best_epoch
-        self.n_epochs_ = len(history["train_loss"])
+        return net, history, best_epoch
 
     def _cache_numpy(self) -> None:
         """float64 copies of the weights for :meth:`predict` and the stream."""

@@ -66,7 +66,7 @@ def check_sequence_set(sequences: Any, targets: Any = None, masks: Any = None, *
 
 
 def chunk_sequences(xs: list[np.ndarray], ys: list[np.ndarray], ms: list[np.ndarray], chunk_len: int,
-            burn_in: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                    burn_in: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Cut sequences into chunks ``[s − burn_in, s + chunk_len)`` (clipped at 0 and T), right-padded.
 
     The loss weight is the mask on ``[s, s + chunk_len)`` and 0 on the burn-in and padding
@@ -91,7 +91,7 @@ def chunk_sequences(xs: list[np.ndarray], ys: list[np.ndarray], ms: list[np.ndar
 
 
 def pad_sequences(xs: list[np.ndarray], ys: list[np.ndarray], ms: list[np.ndarray]
-         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Whole sequences right-padded to the longest, with loss weights = mask (0 on padding)."""
     T = max(x.shape[0] for x in xs)
     X = np.zeros((len(xs), T, xs[0].shape[1]), np.float32)

@@ -58,7 +58,7 @@ def test_gates_on_demonstrations_with_one_class_mode_and_empty_mode(demo_windows
     # the fitted gates separate the labels on their training data better than chance
     for j in (0, 2, 3):
         sel = w.mode == j
-        assert g.gates_[j].__class__.__name__ == "CalibratedClassifierCV"
+        assert type(g.gates_[j].named_steps["gate"]).__name__ == "CalibratedClassifierCV"
         assert brier_score_loss(Z[sel], p[sel]) < brier_score_loss(Z[sel], np.full(sel.sum(), Z[sel].mean()))
     d = g.describe()
     assert d["constant_modes"]["1"]["value"] == 1 and len(d["n_train"]) == n_modes
@@ -118,7 +118,14 @@ def test_subsample_is_stratified_seeded_and_capped():
         rows = g1.train_rows_[j]
         assert np.all(m[rows] == j) and np.unique(rows).size == 500
         assert abs(y[rows].sum() - 500 * y[m == j].mean()) <= 1.0
-        assert len(g1.gates_[j].calibrated_classifiers_) == g1.n_folds
+        assert len(g1.gates_[j].named_steps["gate"].calibrated_classifiers_) == g1.n_folds
+    # a rare class keeps at least min_class_count rows (its proportional share would be 2)
+    yr = np.zeros_like(y)
+    yr[np.flatnonzero(m == 0)[:25]] = 1
+    yr[np.flatnonzero(m == 1)[:-25]] = 1
+    rare = ModeGates(max_samples_per_mode=200, min_class_count=20).fit(X, m, yr, 2)
+    assert yr[rare.train_rows_[0]].sum() == 20 and (1 - yr[rare.train_rows_[1]]).sum() == 20
+    assert rare.n_train_ == [200, 200]
     full = ModeGates(max_samples_per_mode=None).fit(X, m, y, 2)
     assert full.n_train_ == [int((m == 0).sum()), int((m == 1).sum())]
 

@@ -30,7 +30,9 @@ def memory_task(n_trials: int, T: int, seed: int):
         x[0] = e[0]
         for t in range(1, T):
             x[t] = 0.7 * x[t - 1] + 0.71 * e[t]
-        lag = lambda a, k: np.vstack([np.repeat(a[:1], k, 0), a[:-k]])
+        def lag(a, k):
+            return np.vstack([np.repeat(a[:1], k, 0), a[:-k]])
+
         y = np.column_stack([0.8 * x[:, 0] - 0.6 * lag(x, 2)[:, 1], np.tanh(lag(x, 1)[:, 2]) + 0.5 * x[:, 3]])
         xs.append(x)
         ys.append(y)
@@ -199,12 +201,27 @@ def test_bad_input_errors():
     if not torch.cuda.is_available():
         with pytest.raises(ValueError, match="no CUDA device"):
             ReactivePredictor(device="cuda").fit(xs, ys, progress=False)
+    with pytest.raises(ValueError, match="val_masks given without val_sequences"):
+        m.fit(xs, ys, val_masks=[np.ones(40, bool)])
+    with pytest.raises(ValueError, match=r"targets\[2\] row 5 has a value beyond ±1e\+06"):
+        m.fit(xs, [ys[0], ys[1], np.where(np.arange(40)[:, None] == 5, 1e7, ys[2])])
+    assert not hasattr(m, "net_") and not hasattr(m, "input_dim_")  # failed fits leave nothing
     with pytest.warns(UserWarning, match="one training trial"):
         one = ReactivePredictor(**{**SMALL, "max_epochs": 2}).fit(xs[:1], ys[:1], progress=False)
     assert one.n_epochs_ == 2 and one.val_trials_ is None
     fitted = ReactivePredictor(**{**SMALL, "max_epochs": 1}).fit(xs, ys, progress=False)
     with pytest.raises(ValueError, match="has 3 input channels, expected 5"):
         fitted.predict(xs[0][:, :3])
+
+
+def test_divergence_is_reported(monkeypatch):
+    import learning.predictor as lp
+    xs, ys = memory_task(2, 30, seed=9)
+    monkeypatch.setattr(lp, "_masked_mse", lambda out, y, w: (out * float("nan")).sum())
+    m = ReactivePredictor(**{**SMALL, "max_epochs": 3})
+    with pytest.raises(RuntimeError, match="loss is not finite at epoch 1"):
+        m.fit(xs, ys, progress=False)
+    assert not hasattr(m, "net_")
 
 
 def test_ridge_baseline_respects_masks_and_shapes():
