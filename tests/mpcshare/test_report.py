@@ -4,7 +4,13 @@ import json
 
 import pytest
 
-from mpcshare.report import fmt, fmt_p, fmt_p_value, plot_demonstrations, write_json_atomic
+from mpcshare.report import (
+    fmt,
+    fmt_p,
+    fmt_p_value,
+    plot_demonstrations,
+    write_json_atomic,
+)
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 
