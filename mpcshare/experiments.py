@@ -160,9 +160,9 @@ def compare_strategies(bundle: Any, demos: Demonstrations, trial_ids: Sequence[i
 
 
 def render_clip(bundle: Any, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
-                strategy: str = "gate", seed: int = 0, beta: float = 0.5,
+                strategy: str = "gate", use_mpc: bool = True, seed: int = 0, beta: float = 0.5,
                 make_controller: Callable[..., Any] | None = None) -> tuple[str | None, str | None]:
-    """Render the first ``seconds`` of ``strategy`` on one trial (offscreen OpenGL).
+    """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
 
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
     when no MP4 encoder is installed) or None, and why not.
@@ -174,7 +174,7 @@ def render_clip(bundle: Any, demos: Demonstrations, trial_id: int, path: str | P
     trial = next((tr for tr in demos.trials if tr.trial_id == int(trial_id)), None)
     if trial is None:
         raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
-    controller = make_controller(bundle, strategy=strategy, use_mpc=True, beta=beta)
+    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta)
     episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False,
                           obs_names=list(demos.obs_names), act_names=list(demos.act_names))
     return episode.info.get("video"), episode.info.get("render_message")

@@ -97,7 +97,9 @@ def run_comparison(bundle: Any, demos: Demonstrations, out: Path, args: argparse
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta)
     if args.video:
-        video, message = render_clip(bundle, demos, trial_ids[0], out / "gate_trial.mp4", seed=args.sim_seed,
+        shown = next((r for r in runs if r.name == "gate"), runs[0])
+        video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
+                                     strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
                                      beta=args.beta)
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
