@@ -120,7 +120,7 @@ def _demo(args: argparse.Namespace) -> int:
     sim_out = prepare_output_folder(out / "sim")
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed)
     if not args.no_video:
-        video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=10.0,
+        video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
                                      seed=args.seed)
         comp.video = None if video is None else str(Path(video).relative_to(sim_out))
         print(f"video: {video}" if video else f"no video: {message}")
