@@ -23,7 +23,7 @@ __all__ = ["comparison_findings", "comparison_markdown", "write_comparison"]
 
 _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("tracking_p95_m", "tracking p95 [mm]", 1e3, "{:.1f}"),
-            ("voluntary_effort", "effort [rad/s]", 1.0, "{:.3f}"),
+            ("voluntary_effort", "effort [rad]", 1.0, "{:.3f}"),
             ("reactive_share", "reactive share", 100.0, "{:.0f} %"),
             ("handovers", "hand-overs", 1.0, "{:.0f}"),
             ("conflict_share", "conflicts", 100.0, "{:.1f} %"),
@@ -65,7 +65,8 @@ def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
     return out
 
 
-def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.png") -> str:
+def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.png",
+                        trial_plot: str | None = None) -> str:
     """The Markdown section: table, findings, plot."""
     head = "| run | " + " | ".join(c[1] for c in _COLUMNS) + " |"
     rule = "|---|" + "---|" * len(_COLUMNS)
@@ -78,6 +79,9 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
              *[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
     if plot_name:
         lines += [f"![strategies]({plot_name})", ""]
+    if trial_plot:
+        lines += ["A trial: the knife tip against the wearer's intent, α and β, the shoulder:", "",
+                  f"![a trial]({trial_plot})", ""]
     if comp.video:
         lines += [f"The gate on trial {comp.trials[0]} (offscreen MuJoCo render):", "",
                   f"![the gate]({comp.video})", ""]
@@ -86,7 +90,7 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
 
 def _plot(comp: Comparison, path: Path) -> None:
     names = list(comp.strategies)
-    keys = (("tracking_rmse_m", "tracking RMS [mm]", 1e3), ("voluntary_effort", "effort [rad/s]", 1.0),
+    keys = (("tracking_rmse_m", "tracking RMS [mm]", 1e3), ("voluntary_effort", "effort: mean ‖θ‖ [rad]", 1.0),
             ("conflict_share", "conflicts [%]", 100.0), ("reactive_share", "reactive share [%]", 100.0))
     fig = Figure(figsize=(11, 3.2), constrained_layout=True)
     for ax, (key, label, scale) in zip(fig.subplots(1, len(keys)), keys):
@@ -104,6 +108,16 @@ def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
     with atomic_open(out / "comparison.json", "w") as f:
         json.dump(obj, f, indent=2, allow_nan=True)
     _plot(comp, out / "comparison.png")
+    trial_plot = None
+    shown = "gate" if comp.run_files.get("gate") else next((k for k, v in comp.run_files.items() if v), None)
+    if shown is not None:
+        from sim.closed_loop import Episode
+
+        from .episode_plot import plot_episode
+
+        episode = Episode.load(out / comp.run_files[shown][0])
+        trial_plot = "trial.png"
+        plot_episode(episode, out / trial_plot, title=f"{shown}, trial {comp.trials[0]}")
     with atomic_open(out / "comparison.md", "w") as f:
-        f.write("# Closed-loop comparison of strategies\n\n" + comparison_markdown(comp))
+        f.write("# Closed-loop comparison of strategies\n\n" + comparison_markdown(comp, trial_plot=trial_plot))
     return obj
