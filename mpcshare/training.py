@@ -72,6 +72,10 @@ class TrainConfig:
             the per-mode subsample it is fitted on.
         lstm_baseline: also train the LSTM on all points (baseline; doubles LSTM time).
         device: torch device of the LSTM ("cpu", "cuda").
+        zero_phase_targets: the actions (quotients' outputs, the LSTM's targets) are
+            downsampled with a zero-phase filter, the observations causally (see
+            :func:`learning.resample.causal_downsample`): the model learns the knife at
+            t, not the knife a filter delay earlier. False: both causal.
         seed: seed of everything random.
     """
 
@@ -94,6 +98,7 @@ class TrainConfig:
     gate_max_samples: int | None = 2000
     lstm_baseline: bool = False
     device: str = "cpu"
+    zero_phase_targets: bool = True
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -293,8 +298,9 @@ def prepare_training_data(demos: Demonstrations, config: TrainConfig,
     train_raw, held_raw = split_by_trial(demos, config.heldout_fraction, seed=config.seed)
     fit_raw, val_raw = split_by_trial(train_raw, config.val_fraction, seed=config.seed + 1)
     try:
-        low_train = causal_downsample(train_raw, config.model_hz)
-        low_held = causal_downsample(held_raw, config.model_hz)
+        zp = config.zero_phase_targets
+        low_train = causal_downsample(train_raw, config.model_hz, zero_phase_act=zp)
+        low_held = causal_downsample(held_raw, config.model_hz, zero_phase_act=zp)
     except ValueError as exc:
         raise TrainingError(str(exc)) from None
     pre = Preprocessor(obs=Standardizer("sensor", field="obs").fit(low_train),
