@@ -27,6 +27,7 @@ from .commands.base import (
 )
 from .commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from .commands.demo import DEMO_COMMAND
+from .commands.sim import SIM_COMMAND
 from .commands.train import TRAIN_COMMAND
 
 __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "positive_int", "positive_float",
@@ -38,6 +39,7 @@ COMMANDS: tuple[Command, ...] = (
     INSPECT_COMMAND,
     ANALYZE_COMMAND,
     TRAIN_COMMAND,
+    SIM_COMMAND,
     DEMO_COMMAND,
 )
 

@@ -1,23 +1,33 @@
-"""The ``demo`` subcommand: the main job on the default data set, into one folder.
+"""The ``demo`` subcommand: the main job on the default data set, from data to closed loop.
 
-generate (3 subjects × 10 min by default) → data summary and a plot of a trial →
-the predictability analysis with its report (see ``mpcshare analyze``).
+1. generate the default demonstrations (3 subjects × 10 min, seed 0) → ``demos.npz``;
+2. data summary and a plot of a trial;
+3. the predictability analysis → ``analysis/`` (see ``mpcshare analyze``);
+4. train the gates and the reactive predictor → the bundle ``model/`` (``mpcshare train``);
+5. the K trade-off → ``sweep/`` (``mpcshare train --sweep``; ``--no-sweep`` skips it);
+6. the closed-loop comparison of strategies in MuJoCo → ``sim/`` (``mpcshare sim``),
+   with a short video of the gate when offscreen OpenGL works;
+
+then one report: ``report.md``, ``report.html`` (self-contained) and ``report.json``.
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 from learning.atomic import atomic_open
 from learning.data import save
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
 
 from .analysis import add_analysis_arguments, print_headline, run_analysis
-from .base import Command, positive_float, positive_int, prepare_output_folder
+from .base import Command, CommandError, positive_float, positive_int, prepare_output_folder
 from .data import format_summary
 
 __all__ = ["DEMO_COMMAND"]
+
+_STAGES = 6
 
 
 def _demo_args(p: argparse.ArgumentParser) -> None:
@@ -25,32 +35,111 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--subjects", type=positive_int, default=3, help="subjects in the default data (default 3)")
     p.add_argument("--minutes", type=positive_float, default=10.0, help="minutes per subject (default 10)")
     p.add_argument("--data-seed", type=int, default=0, help="seed of the default data (default 0)")
+    p.add_argument("--percentile", type=float, default=90.0,
+                   help="K at this percentile of the within-mode quotients (default 90)")
+    p.add_argument("--no-sweep", action="store_true", help="skip the K trade-off sweep")
+    p.add_argument("--sim-trials", type=positive_int, default=2, help="held-out trials to simulate (default 2)")
+    p.add_argument("--sim-duration", type=positive_float, default=30.0,
+                   help="seconds simulated per trial and strategy (default 30)")
+    p.add_argument("--no-video", action="store_true", help="do not render the video of the gate")
     add_analysis_arguments(p)
 
 
+def _stage(k: int, text: str) -> None:
+    print(f"[{k}/{_STAGES}] {text}", flush=True)
+
+
 def _demo(args: argparse.Namespace) -> int:
+    from mpcshare.bundle import load_bundle, save_bundle
+    from mpcshare.comparison_report import write_comparison
+    from mpcshare.demo_report import write_demo_report
+    from mpcshare.experiments import compare_strategies, render_clip
     from mpcshare.report import plot_demonstrations, write_json_atomic
+    from mpcshare.training import TrainConfig, TrainingError, train_bundle
 
     out = prepare_output_folder(args.out)
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+
+    def lap(name: str, t0: float) -> None:
+        timings[name] = time.perf_counter() - t0
+
     t0 = time.perf_counter()
-    print(f"[1/3] generating {args.subjects} subjects x {args.minutes:g} min of demonstrations")
+    _stage(1, f"generating {args.subjects} subjects x {args.minutes:g} min of demonstrations")
     demos = generate_demonstrations(args.subjects, args.minutes, seed=args.data_seed,
                                     config=GeneratorConfig(rate_hz=100.0))
     save(demos, out / "demos.npz")
+    lap("generate", t0)
+
+    t0 = time.perf_counter()
+    _stage(2, "summarising and plotting the data")
     summary = demos.summary()
     summary["mode_names"] = list(MODE_NAMES)
     write_json_atomic(summary, out / "data_summary.json")
+    summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, MODE_NAMES)
+                  + "\n```\n\n![a trial](data_trial.png)\n")
     with atomic_open(out / "data_summary.md") as f:
-        f.write("# Demonstrations\n\n```\n" + format_summary(demos, MODE_NAMES)
-                + "\n```\n\n![a trial](data_trial.png)\n")
-    print("[2/3] plotting the data")
+        f.write(summary_md)
     plot_demonstrations(demos, out / "data_trial.png", mode_names=MODE_NAMES)
-    print("[3/3] predictability analysis")
-    report = run_analysis(demos, args, out, mode_names=MODE_NAMES)
-    print_headline(report)
-    print(f"done in {time.perf_counter() - t0:.0f} s; open {out / 'report.md'}")
+    lap("data", t0)
+
+    t0 = time.perf_counter()
+    _stage(3, "predictability analysis")
+    analysis = run_analysis(demos, args, prepare_output_folder(out / "analysis"), mode_names=MODE_NAMES)
+    print_headline(analysis)
+    lap("analysis", t0)
+
+    t0 = time.perf_counter()
+    _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
+    config = TrainConfig(percentile=args.percentile, seed=args.seed)
+    try:
+        bundle = train_bundle(demos, config, progress=True)
+    except TrainingError as exc:
+        raise CommandError(f"cannot train on the demonstrations: {exc}") from None
+    bundle.config["data_path"] = str((out / "demos.npz").resolve())
+    save_bundle(bundle, out / "model")
+    bundle = load_bundle(out / "model")  # what `mpcshare sim --model` would see
+    lap("training", t0)
+
+    sweep = None
+    if not args.no_sweep:
+        from mpcshare.sweep import run_sweep
+
+        t0 = time.perf_counter()
+        _stage(5, "the trade-off between accuracy and effort (K sweep)")
+        result = run_sweep(demos, config, out=prepare_output_folder(out / "sweep"), progress=True)
+        print(result.conclusion)
+        sweep = {"rows": result.rows, "conclusion": result.conclusion}
+        lap("sweep", t0)
+    else:
+        _stage(5, "K sweep skipped (--no-sweep)")
+
+    t0 = time.perf_counter()
+    ids = bundle.heldout_trials[:args.sim_trials]
+    _stage(6, f"closed loop in MuJoCo: 5 strategies x {len(ids)} held-out trial(s) x {args.sim_duration:g} s")
+    sim_out = prepare_output_folder(out / "sim")
+    comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed)
+    if not args.no_video:
+        video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
+                                     seed=args.seed)
+        comp.video = None if video is None else str(Path(video).relative_to(sim_out))
+        print(f"video: {video}" if video else f"no video: {message}")
+    comparison = write_comparison(comp, sim_out)
+    lap("closed loop", t0)
+
+    timings["total"] = time.perf_counter() - t_start
+    missing = write_demo_report(out, data_summary_md=summary_md, analysis=analysis.to_dict(),
+                                training=bundle.metrics, comparison=comparison, timings_s=timings,
+                                data_summary=summary, sweep=sweep)
+    if missing:
+        print(f"report.html: could not embed {missing}")
+    from mpcshare.comparison_report import comparison_findings
+
+    for line in comparison_findings(comparison["strategies"]):
+        print(line)
+    print(f"done in {timings['total']:.0f} s; open {out / 'report.html'} (or report.md)")
     return 0
 
 
-DEMO_COMMAND = Command("demo", "the main job on the default data: generate, summarise, analyse, report",
+DEMO_COMMAND = Command("demo", "the main job on the default data: generate, analyse, train, simulate, report",
                        _demo_args, _demo)

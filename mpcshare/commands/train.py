@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from .base import (
     Command,
@@ -131,6 +132,7 @@ def _run(args: argparse.Namespace) -> int:
         from mpcshare.bundle import save_bundle
         from mpcshare.training import train_bundle
         bundle = train_bundle(demos, config, progress=not args.quiet)
+        bundle.config["data_path"] = str(Path(args.data).resolve())  # `mpcshare sim`'s default --data
     except TrainingError as exc:
         raise CommandError(f"cannot train on {args.data}: {exc}") from None
     try:

@@ -1,0 +1,141 @@
+"""The ``sim`` subcommand: closed-loop comparison of strategies on held-out trials.
+
+``mpcshare sim --model MODEL_DIR [--data DATA] --out DIR`` loads a bundle, takes the
+held-out trials (of ``--data``, default: the data set the bundle was trained on,
+as recorded by ``mpcshare train``), simulates each strategy (``voluntary``,
+``reactive``, ``gate``, ``blend``, and the gate without MPC) on each trial in MuJoCo
+beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
+``comparison.png``, the run files (``runs/*.npz``) and, with ``--video``, a video of
+the gate on the first trial.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+from learning.data import Demonstrations
+
+from .base import Command, CommandError, load_or_fail, positive_float, positive_int, prepare_output_folder
+
+__all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "run_comparison"]
+
+_RUN_NAMES = ("voluntary", "reactive", "gate", "blend", "gate_no_mpc")
+
+
+def add_sim_arguments(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``sim`` and ``demo``."""
+    p.add_argument("--trials", type=positive_int, default=None,
+                   help="simulate at most this many held-out trials (default: all)")
+    p.add_argument("--duration", type=positive_float, default=None,
+                   help="simulate only the first DURATION seconds of each trial (default: whole trials)")
+    p.add_argument("--runs", nargs="+", choices=_RUN_NAMES, default=list(_RUN_NAMES),
+                   help="strategies to simulate (default: all five)")
+    p.add_argument("--beta", type=float, default=0.5, help="β while the robot acts (default 0.5)")
+    p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
+    p.add_argument("--video", action="store_true", help="render the gate on the first trial (offscreen OpenGL)")
+
+
+def _add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--model", required=True, help="model bundle folder (from `mpcshare train`)")
+    p.add_argument("--data", default=None,
+                   help="an NPZ file or CSV folder (default: the data the bundle was trained on)")
+    p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
+                   help="use the data's CHANNEL as the bundle's channel NAME (e.g. fork_x=obs_3)")
+    p.add_argument("--out", required=True, help="output folder")
+    add_sim_arguments(p)
+
+
+def _parse_map(items: Any) -> dict[str, str]:
+    mapping: dict[str, str] = {}
+    for item in items:
+        name, sep, channel = str(item).partition("=")
+        if not sep or not name or not channel:
+            raise CommandError(f"--map {item!r}: expected NAME=CHANNEL")
+        mapping[name] = channel
+    return mapping
+
+
+def align_channels(demos: Demonstrations, bundle: Any, mapping: dict[str, str] | None = None) -> Demonstrations:
+    """The data's trials with their obs columns in the bundle's order (raises CommandError naming what is missing).
+
+    ``mapping``: bundle channel name → the data's channel name, for data whose channels
+    are named otherwise. Act channels are renamed the same way; the knife position
+    channels (``knife_x/y/z``) must then be present (the wearer's intent).
+    """
+    mapping = dict(mapping or {})
+    reverse = {v: k for k, v in mapping.items()}
+    obs_names = [reverse.get(n, n) for n in demos.obs_names]
+    act_names = [reverse.get(n, n) for n in demos.act_names]
+    missing = [n for n in bundle.obs_names if n not in obs_names]
+    if missing:
+        raise CommandError(f"the data has no obs channel(s) {missing} that the bundle needs "
+                           f"(data obs: {list(demos.obs_names)}); map them with --map NAME=CHANNEL")
+    tip = [n for n in ("knife_x", "knife_y", "knife_z") if n not in act_names]
+    if tip:
+        raise CommandError(f"the data has no knife tip channel(s) {tip} (data act: {list(demos.act_names)}); "
+                           f"map them with --map knife_x=CHANNEL ...")
+    order = [obs_names.index(n) for n in bundle.obs_names]
+    trials = [type(tr)(obs=tr.obs[:, order], act=tr.act, t=tr.t, trial_id=tr.trial_id, subject=tr.subject,
+                       mode=tr.mode, voluntary=tr.voluntary) for tr in demos.trials]
+    return Demonstrations(trials, demos.rate_hz, list(bundle.obs_names), act_names, list(demos.vol_names))
+
+
+def run_comparison(bundle: Any, demos: Demonstrations, out: Path, args: argparse.Namespace,
+                   trial_ids: list[int]) -> dict[str, Any]:
+    """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
+    from mpcshare.comparison_report import write_comparison
+    from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
+
+    if abs(demos.rate_hz - bundle.rate_hz) > 1e-9 * bundle.rate_hz:
+        raise CommandError(f"the data is at {demos.rate_hz:g} Hz, the bundle was trained at {bundle.rate_hz:g} Hz")
+    runs = [r for r in DEFAULT_RUNS if r.name in args.runs]
+    print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
+          f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'})")
+    comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
+                              seed=args.sim_seed, beta=args.beta)
+    if args.video:
+        shown = next((r for r in runs if r.name == "gate"), runs[0])
+        video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
+                                     strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
+                                     beta=args.beta)
+        comp.video = None if video is None else str(Path(video).relative_to(out))
+        print(f"video: {video}" if video else f"no video: {message}")
+    return write_comparison(comp, out)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from mpcshare.bundle import BundleError, load_bundle
+
+    out = prepare_output_folder(args.out)
+    mapping = _parse_map(args.map)
+    try:
+        bundle = load_bundle(args.model)
+    except BundleError as exc:
+        raise CommandError(str(exc)) from None
+    data = args.data or bundle.config.get("data_path")
+    if not data:
+        raise CommandError("the bundle does not record its training data; pass --data")
+    if args.data is None and not Path(data).exists():
+        raise CommandError(f"the bundle's training data {data} is gone; pass --data")
+    demos = align_channels(load_or_fail(str(data)), bundle, mapping)
+    ids = set(demos.trial_ids)
+    trial_ids = [t for t in bundle.heldout_trials if t in ids] if args.data is None else \
+        ([t for t in bundle.heldout_trials if t in ids] or sorted(ids))
+    if not trial_ids:
+        raise CommandError(f"none of the bundle's held-out trials {bundle.heldout_trials} is in {data}")
+    trial_ids = trial_ids[:args.trials] if args.trials else trial_ids
+    t0 = time.perf_counter()
+    obj = run_comparison(bundle, demos, out, args, trial_ids)
+    from mpcshare.comparison_report import comparison_findings
+
+    for line in comparison_findings(obj["strategies"]):
+        print(line)
+    print(f"done in {time.perf_counter() - t0:.0f} s; open {out / 'comparison.md'}")
+    return 0
+
+
+SIM_COMMAND = Command("sim", "closed-loop MuJoCo comparison of strategies on held-out trials",
+                      _add_arguments, _run)

@@ -1,0 +1,180 @@
+"""Closed-loop comparison of arbitration strategies on held-out demonstrations.
+
+Each *run* is a strategy of :class:`mpcshare.controller.SharedController` (``voluntary``,
+``reactive``, ``gate``, ``blend``, and the gate without MPC); each is simulated on the
+same held-out trials, with the same wearer and the same seed, by
+:func:`sim.closed_loop.run_episode`. Per run the episode metrics of
+:func:`sim.metrics.episode_metrics` are pooled over trials (:func:`pool_metrics`) and
+written to ``comparison.json`` (top-level ``strategies``: name → metrics; ``trials``;
+``duration_s``; ``run_files``), ``comparison.md`` and ``comparison.png``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from learning.data import Demonstrations
+from sim.closed_loop import run_episode
+from sim.metrics import episode_metrics
+
+__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "pool_metrics",
+           "render_clip"]
+
+METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
+                                "handovers", "conflict_share", "limit_violations", "step_p50_ms",
+                                "step_p99_ms", "realtime_factor")
+
+
+@dataclass(frozen=True)
+class StrategyRun:
+    """One simulated configuration: a name for the tables, the arbitration strategy, MPC on/off."""
+
+    name: str
+    strategy: str
+    use_mpc: bool = True
+
+
+DEFAULT_RUNS: tuple[StrategyRun, ...] = (
+    StrategyRun("voluntary", "voluntary"),
+    StrategyRun("reactive", "reactive"),
+    StrategyRun("gate", "gate"),
+    StrategyRun("blend", "blend"),
+    StrategyRun("gate_no_mpc", "gate", use_mpc=False),
+)
+
+
+@dataclass
+class Comparison:
+    """Pooled metrics per run, per-trial metrics and the run files written."""
+
+    strategies: dict[str, dict[str, float]]
+    per_trial: dict[str, dict[str, dict[str, float]]]
+    trials: list[int]
+    duration_s: float | None
+    runs: list[dict[str, Any]]
+    run_files: dict[str, list[str]] = field(default_factory=dict)
+    video: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
+                "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video}
+
+
+def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.ndarray],
+                 sim_seconds: Sequence[float]) -> dict[str, float]:
+    """Pool per-trial metrics into one row.
+
+    Tracking RMS: √(Σ_k n_k·rms_k² / Σ_k n_k) (n_k control steps of trial k); p95 and the
+    shares and effort: means weighted by n_k; counts (hand-overs, limit violations):
+    sums; step-time percentiles over all steps pooled; real-time factor: total
+    simulated time / total wall time.
+    """
+    if not metrics:
+        raise ValueError("no episodes to pool")
+    metrics = [{k: (float("nan") if v is None else v) for k, v in m.items()} for m in metrics]
+    n = np.array([len(s) for s in step_times], dtype=float)
+    w = n / n.sum()
+
+    def mean(key: str) -> float:
+        return float(np.sum(w * np.array([m[key] for m in metrics], dtype=float)))
+
+    steps = np.concatenate([np.asarray(s, dtype=float) for s in step_times])
+    wall = sum(s / m["realtime_factor"] for s, m in zip(sim_seconds, metrics) if m["realtime_factor"] > 0)
+    rtf = float(sum(sim_seconds) / wall) if wall > 0 else float("nan")
+    return {
+        "tracking_rmse_m": float(math.sqrt(np.sum(w * np.array([m["tracking_rmse_m"] ** 2 for m in metrics])))),
+        "tracking_p95_m": mean("tracking_p95_m"),
+        "voluntary_effort": mean("voluntary_effort"),
+        "reactive_share": mean("reactive_share"),
+        "handovers": int(sum(int(m["handovers"]) for m in metrics)),
+        "conflict_share": mean("conflict_share"),
+        "limit_violations": int(sum(int(m["limit_violations"]) for m in metrics)),
+        "step_p50_ms": float(np.percentile(steps, 50) * 1e3),
+        "step_p99_ms": float(np.percentile(steps, 99) * 1e3),
+        "realtime_factor": rtf,
+    }
+
+
+def compare_strategies(bundle: Any, demos: Demonstrations, trial_ids: Sequence[int], *,
+                       runs: Sequence[StrategyRun] = DEFAULT_RUNS, duration_s: float | None = None,
+                       out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
+                       make_controller: Callable[..., Any] | None = None,
+                       log: Callable[[str], None] | None = print) -> Comparison:
+    """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
+
+    ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
+    bundle's channels and rate) holding those trials; ``duration_s``: simulate only the
+    first seconds of each trial (None: whole trials). With ``out``, each episode's run
+    file is written to ``out/runs/<run>_trial<id>.npz``. ``make_controller(bundle,
+    strategy=..., use_mpc=..., beta=...)`` builds a controller (default:
+    :meth:`SharedController.from_bundle`).
+    """
+    if make_controller is None:
+        from .controller import SharedController
+
+        make_controller = SharedController.from_bundle
+    known = set(demos.trial_ids)
+    missing = [int(t) for t in trial_ids if int(t) not in known]
+    if missing or not len(trial_ids):
+        raise ValueError(f"trials {missing or list(trial_ids)} not in the data (it has {sorted(known)[:20]})")
+    names = [r.name for r in runs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"run names must be unique, got {names}")
+    by_id = {tr.trial_id: tr for tr in demos.trials}
+    runs_dir = Path(out) / "runs" if out is not None else None
+    if runs_dir is not None:
+        runs_dir.mkdir(parents=True, exist_ok=True)
+    pooled: dict[str, dict[str, float]] = {}
+    per_trial: dict[str, dict[str, dict[str, float]]] = {}
+    files: dict[str, list[str]] = {}
+    for run in runs:
+        metrics, steps, seconds = [], [], []
+        per_trial[run.name], files[run.name] = {}, []
+        for tid in trial_ids:
+            t0 = time.perf_counter()
+            controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta)
+            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed,
+                                  obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+            m = episode_metrics(episode)
+            metrics.append(m)
+            steps.append(np.asarray(episode.step_time, dtype=float))
+            seconds.append(float(episode.t[-1] - episode.t[0]) + float(np.median(np.diff(episode.t))))
+            per_trial[run.name][str(int(tid))] = {k: m[k] for k in METRIC_KEYS}
+            if runs_dir is not None:
+                path = runs_dir / f"{run.name}_trial{int(tid)}.npz"
+                episode.save(path)
+                files[run.name].append(str(path.relative_to(Path(out))))
+            if log is not None:
+                log(f"  {run.name:12s} trial {int(tid)}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
+                    f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
+                    f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
+        pooled[run.name] = pool_metrics(metrics, steps, seconds)
+    return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
+                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files)
+
+
+def render_clip(bundle: Any, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
+                strategy: str = "gate", use_mpc: bool = True, seed: int = 0, beta: float = 0.5,
+                make_controller: Callable[..., Any] | None = None) -> tuple[str | None, str | None]:
+    """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
+
+    Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
+    when no MP4 encoder is installed) or None, and why not.
+    """
+    if make_controller is None:
+        from .controller import SharedController
+
+        make_controller = SharedController.from_bundle
+    trial = next((tr for tr in demos.trials if tr.trial_id == int(trial_id)), None)
+    if trial is None:
+        raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
+    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta)
+    episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False,
+                          obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+    return episode.info.get("video"), episode.info.get("render_message")
