@@ -7,6 +7,10 @@ stage 0, τ_k, and v, φ⁺, φ⁻ of x_k from stage 1 on), the terminal rows la
 the order fatrop's structure detection reads.  Cost and constraints are those
 of :mod:`mpcshare.mpc_problem` (exact Hessian here, solved to convergence), so
 these solvers are the reference the real-time iteration is measured against.
+Tolerances are absolute on a cost of order 1e4 (w_p = 1e4 /m²): fatrop's
+1e-5 is where its dual infeasibility stalls; sqpmethod (exact Hessian,
+regularised, DAQP subproblems, no line search) does not reach 1e-5 within
+100 iterations here and reports failure (measured in ``benchmarks/bench_mpc.py``).
 """
 
 from __future__ import annotations
@@ -22,14 +26,12 @@ from .symbolic import SymbolicArm
 _OPTIONS = {
     "ipopt": {"ipopt": {"print_level": 0, "tol": 1e-8, "max_iter": 200, "warm_start_init_point": "yes",
                         "mu_init": 1e-3, "sb": "yes"}, "print_time": False},
-    "fatrop": {"structure_detection": "auto", "fatrop": {"print_level": 0, "tol": 1e-8, "max_iter": 200},
+    "fatrop": {"structure_detection": "auto", "fatrop": {"print_level": 0, "tol": 1e-5, "max_iter": 200},
                "print_time": False},
-    "sqpmethod": {"qpsol": "osqp", "qpsol_options": {"osqp": {"verbose": False, "eps_abs": 1e-9, "eps_rel": 1e-9,
-                                                              "polish": True, "max_iter": 10000},
-                                                     "error_on_fail": False},
-                  "convexify_strategy": "regularize", "max_iter": 50, "print_header": False,
-                  "print_iteration": False, "print_status": False, "print_time": False, "tol_pr": 1e-8,
-                  "tol_du": 1e-8},
+    "sqpmethod": {"qpsol": "daqp", "qpsol_options": {"error_on_fail": False},
+                  "convexify_strategy": "regularize", "max_iter": 100, "print_header": False,
+                  "print_iteration": False, "print_status": False, "print_time": False, "tol_pr": 1e-6,
+                  "tol_du": 1e-5},
 }
 
 
