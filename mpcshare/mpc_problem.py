@@ -171,7 +171,11 @@ class CondensedProblem:
                 S[k, 3:, 3 * j:3 * j + 3] = dt * eye
         self.S = S
         self._S_now, self._S_next, self._Sq_next = S[:H], S[1:], np.ascontiguousarray(S[1:, :3, :])
-        self._k_dt = (np.arange(H + 1) * dt)[:, None]
+        self._S_flat = S.reshape(6 * (H + 1), n_w)
+        Phi = np.zeros((H + 1, 6, 6))  # x_k = Φ_k·x0 at zero acceleration: q0 + k·dt·v0, v0
+        Phi[:, :, :] = np.eye(6)
+        Phi[:, :3, 3:] = (np.arange(H + 1) * dt)[:, None, None] * eye
+        self._Phi = Phi.reshape(6 * (H + 1), 6)
         self._diag = np.arange(H)
         # regularisation residuals r_reg = J_reg·w − b(a_prev): √w_a·a_k and √w_j·(a_k − a_{k−1})
         D = np.eye(n_w) - np.eye(n_w, k=-3)
@@ -187,9 +191,8 @@ class CondensedProblem:
         self.n_w, self.n_g = n_w, 12 * H
 
     def states(self, w: np.ndarray, q0: np.ndarray, v0: np.ndarray) -> np.ndarray:
-        """X (H+1, 6): x_k = (q_k, v_k) of the plan w from (q0, v0)."""
-        s0 = np.hstack([q0 + self._k_dt * v0, np.broadcast_to(v0, (self.horizon + 1, 3))])
-        return s0 + self.S @ w
+        """X (H+1, 6): x_k = (q_k, v_k) of the plan w from (q0, v0), X = Φ·x0 + S·w."""
+        return (self._Phi @ np.concatenate([q0, v0]) + self._S_flat @ w).reshape(self.horizon + 1, 6)
 
     def evaluate(self, w: np.ndarray, X: np.ndarray, p_ref: np.ndarray) -> dict[str, np.ndarray]:
         """Per-node values and Jacobians at the plan (w, X (H+1, 6)), arrays (H, rows[, cols]) (views)."""

@@ -119,10 +119,12 @@ class DaqpQP:
     def solve(self, H: np.ndarray, c: np.ndarray, A: np.ndarray, lbA: np.ndarray, ubA: np.ndarray,
               lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray | None = None) -> QPOutcome:
         n = self.n
-        np.clip(ubx, -1e30, 1e30, out=self._upper[:n])
-        np.clip(ubA, -1e30, 1e30, out=self._upper[n:])
-        np.clip(lbx, -1e30, 1e30, out=self._lower[:n])
-        np.clip(lbA, -1e30, 1e30, out=self._lower[n:])
+        self._upper[:n] = ubx
+        self._upper[n:] = ubA
+        self._lower[:n] = lbx
+        self._lower[n:] = lbA
+        np.minimum(self._upper, 1e30, out=self._upper)  # ±inf → DAQP's infinity
+        np.maximum(self._lower, -1e30, out=self._lower)
         try:
             x, _, flag, info = self._solve(H, c, A, self._upper, self._lower, self._sense, **self._settings)
         except Exception as exc:  # noqa: BLE001 — a solver error must not escape the control loop
