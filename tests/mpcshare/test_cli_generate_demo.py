@@ -50,15 +50,26 @@ def test_demo_refuses_an_output_path_that_is_a_file(tmp_path, capsys):
     assert "exists and is not a folder" in capsys.readouterr().err
 
 
-def test_demo_writes_summary_plots_and_report(tmp_path):
+def test_demo_runs_every_stage_into_one_report(tmp_path):
     out = tmp_path / "demo"
-    code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "2", "--n-random", "2",
-                 "--no-search"])
+    code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "4", "--n-random", "2",
+                 "--no-search", "--no-sweep", "--sim-trials", "1", "--sim-duration", "3", "--no-video"])
     assert code == 0
     summary = json.loads((out / "data_summary.json").read_text())
     assert summary["mode_names"] == ["cutting", "repositioning", "collecting", "removing"]
     assert (out / "data_trial.png").stat().st_size > 10_000
     assert (out / "demos.npz").exists()
+    analysis = json.loads((out / "analysis" / "report.json").read_text())
+    assert analysis["candidates"] == []
+    assert (out / "model" / "bundle.json").exists()
+    comparison = json.loads((out / "sim" / "comparison.json").read_text())
+    assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_no_mpc"}
+    assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
     report = json.loads((out / "report.json").read_text())
-    assert report["candidates"] == []
-    assert (out / "report.md").exists()
+    assert report["analysis"]["n_samples"] == analysis["n_samples"]
+    assert report["comparison"]["trials"] == comparison["trials"]
+    md = (out / "report.md").read_text()
+    assert md.startswith("# mpcshare demo") and "## Summary" in md and "## 4. Closed loop in MuJoCo" in md
+    page = (out / "report.html").read_text()
+    assert "<img" in page and 'src="data:image/png;base64,' in page
+    assert 'src="analysis/' not in page and 'src="sim/' not in page  # every plot embedded

@@ -1,0 +1,98 @@
+"""`mpcshare sim`, the strategy comparison and the self-contained HTML report."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from learning.data import Demonstrations, load, save
+from mpcshare.cli import main
+from mpcshare.experiments import METRIC_KEYS, pool_metrics
+from mpcshare.html_report import markdown_to_html
+from sim.closed_loop import Episode
+from sim.demonstrator import generate_demonstrations
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    root = tmp_path_factory.mktemp("simcmd")
+    data = root / "demos.npz"
+    save(generate_demonstrations(2, 4.0, seed=2), data)
+    model = root / "model"
+    assert main(["train", str(data), "--out", str(model), "--epochs", "5", "--quiet"]) == 0
+    return data, model
+
+
+def test_sim_runs_held_out_trials_and_writes_the_comparison(trained, tmp_path):
+    data, model = trained
+    out = tmp_path / "sim"
+    assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "2",
+                 "--runs", "voluntary", "gate_no_mpc"]) == 0
+    comp = json.loads((out / "comparison.json").read_text())
+    bundle_info = json.loads((model / "bundle.json").read_text())
+    assert set(comp["strategies"]) == {"voluntary", "gate_no_mpc"}
+    assert comp["trials"] == bundle_info["heldout_trials"][:1]  # held-out trials by default
+    for metrics in comp["strategies"].values():
+        assert set(METRIC_KEYS) <= set(metrics)
+        assert metrics["limit_violations"] == 0
+        assert metrics["reactive_share"] is not None
+    assert comp["strategies"]["voluntary"]["reactive_share"] == 0.0
+    run = Episode.load(out / comp["run_files"]["gate_no_mpc"][0])
+    assert run.t.size == 200 and run.q.shape[1] == 3
+    assert (out / "comparison.md").read_text().count("|") > 20 and (out / "trial.png").exists()
+
+
+def test_sim_maps_renamed_channels_and_names_what_is_missing(trained, tmp_path, capsys):
+    data, model = trained
+    demos = load(data)
+    renamed = Demonstrations(demos.trials, demos.rate_hz, [f"sensor{i}" for i in range(demos.obs_dim)],
+                             list(demos.act_names), list(demos.vol_names))
+    other = tmp_path / "renamed.npz"
+    save(renamed, other)
+    code = main(["sim", "--model", str(model), "--data", str(other), "--out", str(tmp_path / "a"),
+                 "--trials", "1", "--duration", "1", "--runs", "gate_no_mpc"])
+    assert code == 1
+    assert "fork_x" in capsys.readouterr().err
+    mapping = [f"{name}=sensor{i}" for i, name in enumerate(demos.obs_names)]
+    code = main(["sim", "--model", str(model), "--data", str(other), "--out", str(tmp_path / "b"),
+                 "--trials", "1", "--duration", "1", "--runs", "gate_no_mpc", "--map", *mapping])
+    assert code == 0
+    assert json.loads((tmp_path / "b" / "comparison.json").read_text())["strategies"]["gate_no_mpc"]
+
+
+def test_sim_refuses_a_missing_bundle(tmp_path, capsys):
+    assert main(["sim", "--model", str(tmp_path / "nope"), "--out", str(tmp_path / "o")]) == 1
+    assert "nope" in capsys.readouterr().err
+
+
+def test_pooled_metrics_equal_the_metrics_of_the_pooled_steps():
+    rng = np.random.default_rng(0)
+    errors = [rng.normal(0, 0.01, n) for n in (300, 100)]
+    steps = [rng.uniform(0.0005, 0.002, e.size) for e in errors]
+    alphas = [rng.uniform(size=e.size) > 0.3 for e in errors]
+    per = [{"tracking_rmse_m": math.sqrt(np.mean(e**2)), "tracking_p95_m": 0.0, "voluntary_effort": 0.1,
+            "reactive_share": float(a.mean()), "handovers": 2, "conflict_share": 0.0, "limit_violations": 0,
+            "step_p50_ms": 0.0, "step_p99_ms": 0.0, "realtime_factor": 5.0} for e, a in zip(errors, alphas)]
+    pooled = pool_metrics(per, steps, [3.0, 1.0])
+    all_e, all_a, all_s = np.concatenate(errors), np.concatenate(alphas), np.concatenate(steps)
+    assert pooled["tracking_rmse_m"] == pytest.approx(math.sqrt(np.mean(all_e**2)), rel=1e-12)
+    assert pooled["reactive_share"] == pytest.approx(all_a.mean(), rel=1e-12)
+    assert pooled["step_p99_ms"] == pytest.approx(np.percentile(all_s, 99) * 1e3, rel=1e-12)
+    assert pooled["handovers"] == 4 and pooled["realtime_factor"] == pytest.approx(5.0)
+    with pytest.raises(ValueError, match="no episodes"):
+        pool_metrics([], [], [])
+
+
+def test_html_report_embeds_local_images_and_lists_missing_ones(tmp_path):
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2, 2))
+    fig.subplots().plot([0, 1], [1, 0])
+    fig.savefig(tmp_path / "p.png")
+    page, missing = markdown_to_html("# T\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n![plot](p.png)\n\n![gone](q.png)\n",
+                                     tmp_path)
+    assert "<table>" in page and 'src="data:image/png;base64,' in page
+    assert missing == ["q.png"] and "file not found" in page
