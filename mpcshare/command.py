@@ -66,7 +66,9 @@ class ControllerConfig:
     max_acceleration: float = 2.0
     max_jerk: float = 30.0
     mpc_deadline_s: float = 0.003
-    mpc_every: int = 1
+    # every 2nd step: in the closed loop (default data, 30 s, gate) the tracking error is the same
+    # as every step (20.2 mm) and the real-time factor 4.1-4.3x instead of 3.4x (same process).
+    mpc_every: int = 2
     on_threshold: float = 0.6
     off_threshold: float = 0.4
     min_dwell_s: float = 0.5
