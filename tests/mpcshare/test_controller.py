@@ -217,8 +217,10 @@ class _FakeMPC:
                                          ("raise", "mpc_failed")])
 def test_mpc_paths(mode, status):
     demos, bundle = demos_and_bundle(0)
+    from mpcshare.controller import ControllerConfig
+
     mpc = _FakeMPC(mode)
-    ctl = SharedController.from_bundle(bundle, strategy="gate", mpc=mpc)
+    ctl = SharedController.from_bundle(bundle, strategy="gate", mpc=mpc, config=ControllerConfig(mpc_every=1))
     cmds = _run(ctl, demos.trials[0], 60)
     assert mpc.calls == 60 and cmds[-1].status == status and "mpc" in cmds[-1].timings
     for c in cmds:
