@@ -76,13 +76,15 @@ class SegmentationTest:
     Units are trials (``unit`` = "trial", ``n_trials`` of them): per trial, the median q
     within HMM modes and within the time-free ``reference`` grouping of the same features
     (same number of groups); one-sided Wilcoxon signed-rank test over trials of
-    ln(reference / HMM) − ``min_effect`` (``statistic``, ``p_value``). ``effect_size`` is the
-    median over trials of ln(reference / HMM) (> 0: modes lower q), ``ci_low``/``ci_high``
-    its ``ci_level`` percentile-bootstrap interval over trials. ``significant`` (the claim):
-    ``reachable`` (at least ``min_trials`` trials, else p < ``alpha`` is impossible: 2⁻ⁿ is
-    the smallest p), p < ``alpha`` and effect > ``min_effect``. The medians ``*_median_q``
-    are over all windows. ``random_*``: the same test against random groups of equal sizes
-    (``n_random`` draws, ``random_method``), the paper's reference, reported only.
+    ln(reference / HMM) − ``min_effect`` (``statistic``, ``reference_p_value``).
+    ``effect_size`` is the median over trials of ln(reference / HMM) (> 0: modes lower q),
+    ``ci_low``/``ci_high`` its ``ci_level`` percentile-bootstrap interval over trials.
+    ``random_*``: the same test against random groups of equal sizes (``n_random`` draws,
+    ``random_method``), the paper's reference. ``significant`` (the claim): ``reachable``
+    (at least ``min_trials`` trials, else p < ``alpha`` is impossible: 2⁻ⁿ is the smallest p)
+    and both tests with p < ``alpha`` and effect > ``min_effect``; ``p_value`` = the larger
+    of the two p-values (intersection–union test). The medians ``*_median_q`` are over all
+    windows.
     """
 
     test: str
@@ -90,6 +92,7 @@ class SegmentationTest:
     n_trials: int
     statistic: float
     p_value: float
+    reference_p_value: float
     reference: str
     hmm_median_q: float
     reference_median_q: float
@@ -113,7 +116,8 @@ class SegmentationTest:
 
     def to_dict(self) -> dict[str, Any]:
         return {"test": self.test, "unit": self.unit, "n_trials": self.n_trials,
-                "statistic": self.statistic, "p_value": self.p_value, "reference": self.reference,
+                "statistic": self.statistic, "p_value": self.p_value,
+                "reference_p_value": self.reference_p_value, "reference": self.reference,
                 "hmm_median_q": self.hmm_median_q, "reference_median_q": self.reference_median_q,
                 "random_median_q": self.random_median_q, "effect_size": self.effect_size,
                 "effect_size_name": self.effect_size_name,

@@ -59,7 +59,9 @@ def test_analyze_writes_report_and_plots(data_file, tmp_path, capsys):
     assert code == 0
     report = json.loads((out / "report.json").read_text())
     assert report["modes"]["agreement"] > 0.9
-    assert report["segmentation_test"]["p_value"] < 1e-3
+    t = report["segmentation_test"]  # the claim's test is over trials (issue 13)
+    assert t["unit"] == "trial" and t["n_trials"] == 20 and t["reachable"]
+    assert t["random"]["p_value"] < 1e-3 and 0 <= t["p_value"] <= 1
     assert len(report["candidates"]) == 1
     md = (out / "report.md").read_text()
     assert "Voluntary share" in md and "Wilcoxon" in md and "trials" in md and "bootstrap CI" in md
