@@ -5,10 +5,10 @@
 2. point-wise quotients q_i without modes; K at percentiles 50…100;
 3. HMM task modes fitted on the per-sample observations (not the windows: see
    :mod:`learning.modes`); quotients within modes, within the time-free reference
-   grouping of the same features (size-matched k-means by default) and within random
-   groups of equal sizes (the paper's reference, reported); the claim "modes add
-   information" is the one-sided Wilcoxon signed-rank test over *trials* of per-trial
-   median quotients, HMM vs reference (:mod:`learning.reference`);
+   grouping of the same features (a Gaussian mixture by default) and within random
+   groups of equal sizes (the paper's reference); the claim "modes add information"
+   is the one-sided Wilcoxon signed-rank test over *trials* of per-trial median
+   quotients, HMM vs reference and HMM vs random groups, both (:mod:`learning.reference`);
 4. the voluntary share per trial at each K, without modes, within modes, within the
    reference and within random groups, with the paired one-sided Wilcoxon test over
    trials (modes vs reference);

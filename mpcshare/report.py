@@ -259,6 +259,10 @@ def _markdown(report: AnalysisReport, mode_names: Sequence[str] | None) -> str:
         "",
         f"{m.n_modes} modes; occupancy " + ", ".join(f"{100 * o:.0f}%" for o in m.occupancy) + ".",
     ]
+    if m.restart_logliks:
+        ll = m.restart_logliks
+        lines.append(f"EM restarts: {len(ll)}, training log-likelihoods {min(ll):.6g} … {max(ll):.6g} nats "
+                     f"(spread {max(ll) - min(ll):.3g}; the best without empty states is kept).")
     if m.agreement is not None:
         lines.append(f"Agreement with the ground-truth labels: **{100 * m.agreement:.1f} %** "
                      f"(Hungarian matching), adjusted Rand index {m.ari:.3f}.")
