@@ -327,8 +327,9 @@ def _claim_lines(t) -> list[str]:
         f"{fmt_p(t.reference_p_value, 3)} against the reference, {fmt_p(t.random_p_value, 3)} against "
         f"random groups; the claim needs both below {t.alpha:g} ({fmt_p(t.p_value, 3)}).",
         "",
-        f"Effect: median over trials of ln(reference / HMM) = {t.effect_size:.3f} (modes lower the "
-        f"per-trial median q by {pct:.1f} %), {100 * t.ci_level:.0f} % bootstrap CI over trials "
+        f"Effect: median over trials of ln(reference / HMM) = {t.effect_size:.3f} (modes "
+        f"{'lower' if pct >= 0 else 'raise'} the per-trial median q by {abs(pct):.1f} %), "
+        f"{100 * t.ci_level:.0f} % bootstrap CI over trials "
         f"[{t.ci_low:.3f}, {t.ci_high:.3f}] ({lo:.1f} % to {hi:.1f} %). Median q over all windows: "
         f"{t.hmm_median_q:.3g} within HMM modes, {t.reference_median_q:.3g} within the reference, "
         f"{t.random_median_q:.3g} within {t.n_random} random groupings of equal sizes ({t.random_method}).",
