@@ -7,7 +7,9 @@ against a time-free reference grouping, p < 0.001, effect > ln 1.1). Every refer
 of :data:`learning.reference.REFERENCES` is tested on the same HMM modes, so the choice of
 the default is made on these numbers. Power: data with hidden regimes against cue
 strength — the default demonstrations (``sim.demonstrator``) and weaker-cue variants
-(``overlap`` up, ``contrast`` down), 20 trials of 30 s.
+(``overlap`` up, ``contrast`` down), 20 trials of 30 s; and three regimes that change
+the action map while the observation shows them only through a weak cue
+(``sim.hidden_regime``, cue/noise 0.25–2), 12 trials of 1 min.
 
 Prints one JSON object (false-claim rate per reference, p-value histogram of the
 default reference, claim rate per family and cue strength) and writes the p-value
@@ -30,6 +32,7 @@ from learning.analysis import SIGNIFICANCE, AnalysisConfig, analyze
 from learning.lipschitz import pointwise_quotients
 from learning.reference import REFERENCES, reference_segmentation, trial_test
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
+from sim.hidden_regime import HiddenRegimeConfig, generate_hidden_regime
 from sim.regime_free import calibration_family, generate_regime_free
 
 CONFIG = AnalysisConfig(n_random=1, search_windows=(), search_modes=(), hmm_restarts=3)
@@ -37,6 +40,7 @@ BINS = np.array([0.0, 1e-3, 0.01, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 
 DEMO_CUES = [("default (overlap 0.6)", {}), ("overlap 0.75", {"overlap": 0.75}),
              ("overlap 0.9", {"overlap": 0.9}), ("overlap 0.97", {"overlap": 0.97}),
              ("contrast 0.75", {"contrast": 0.75}), ("contrast 0.3", {"contrast": 0.3})]
+HIDDEN_CUES = (0.075, 0.15, 0.3, 0.6)  # against noise 0.3
 
 
 def _tests(res) -> dict:
@@ -87,6 +91,13 @@ def power(seeds: int) -> dict[str, list[dict]]:
             for s in range(seeds)]
         _log(f"{name}: " + "; ".join(f"{ref} {sum(r[ref]['claimed'] for r in v)}/{len(v)}"
                                      for ref in (*REFERENCES, "random")))
+    hidden = AnalysisConfig(**{**CONFIG.__dict__, "n_modes": 3, "scope": "channel"})
+    for cue in HIDDEN_CUES:
+        cfg = HiddenRegimeConfig(cue=cue)
+        out[f"hidden regime, cue/noise {cue / cfg.noise:g}"] = v = [
+            _tests(analyze(generate_hidden_regime(cfg, seed=200 + s), hidden)) for s in range(seeds)]
+        _log(f"hidden cue {cue}: " + "; ".join(f"{ref} {sum(r[ref]['claimed'] for r in v)}/{len(v)}"
+                                               for ref in (*REFERENCES, "random")))
     return out
 
 
@@ -104,6 +115,8 @@ def main() -> None:
     warnings.simplefilter("ignore")
     t0 = time.perf_counter()
     rows = false_claims(a.sets, a.seed)
+    if not rows:
+        raise SystemExit("--sets must be >= 1")
     t1 = time.perf_counter()
     pw = power(a.power_seeds) if a.power_seeds > 0 else {}
     t2 = time.perf_counter()
