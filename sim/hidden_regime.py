@@ -4,11 +4,12 @@ A slow leader signal z(t) (unit RMS, critically damped low-pass of white noise) 
 hidden regime s(t) ∈ {0, 1, 2} (semi-Markov, gamma(4) dwell times of mean ``dwell_s``,
 each switch to another regime) produce
 
-    o_t = [0.3 z, 0.2 z, −0.25 z, cue·c_{s,1}, cue·c_{s,2}, 0] + ε_o,   ε_o ~ N(0, noise²)
+    o_t = [0.3 z, 0.2 z, −0.25 z, cue·c_{s,1}, cue·c_{s,2}, 0] + ε_o
     u_t = C_s z_t + b_s + ε_u                                           (C_s, b_s ~ N(0, 1))
 
-with c_s three unit vectors 120° apart. The regime changes the action map; the
-observation carries it only through the cue, a distance √3·cue between regimes
+with c_s three unit vectors 120° apart; ε_o has std ``z_noise`` on the three leader
+channels and ``noise`` on the three cue channels. The regime changes the action map;
+the observation carries it only through the cue, a distance √3·cue between regimes
 against the noise: at cue/noise ≲ 0.5 one observation barely tells the regimes apart,
 time does. Channels are on different scales: analyse with ``scope="channel"``.
 """
@@ -35,6 +36,7 @@ class HiddenRegimeConfig:
 
     cue: float = 0.15
     noise: float = 0.3
+    z_noise: float = 0.02
     act_noise: float = 0.02
     drift_s: float = 2.0
     dwell_s: float = 8.0
@@ -45,7 +47,7 @@ class HiddenRegimeConfig:
     def __post_init__(self) -> None:
         if int(self.n_trials) != self.n_trials or self.n_trials < 1:
             raise ValueError(f"n_trials must be a positive integer, got {self.n_trials!r}")
-        for name in ("cue", "noise", "act_noise"):
+        for name in ("cue", "noise", "z_noise", "act_noise"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         for name in ("drift_s", "dwell_s", "trial_s", "rate_hz"):
@@ -75,7 +77,7 @@ def generate_hidden_regime(config: HiddenRegimeConfig | None = None, seed: int =
         z = _drift(rng, n, 1, c.drift_s, c.rate_hz)[:, 0]
         s = _regimes(rng, n, c.dwell_s * c.rate_hz)
         obs = np.column_stack([np.outer(z, _LOADINGS), c.cue * _CUES[s], np.zeros(n)])
-        obs += rng.normal(0, c.noise, obs.shape)
+        obs += rng.normal(0, 1, obs.shape) * np.repeat([c.z_noise, c.noise], 3)
         act = C[s] * z[:, None] + b[s] + rng.normal(0, c.act_noise, (n, 3))
         t = k * (c.trial_s + 10.0) + np.arange(n) / c.rate_hz
         trials.append(Trial(obs=obs, act=act, t=t, trial_id=k, subject=0, mode=s))
