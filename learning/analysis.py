@@ -4,13 +4,17 @@
    normalised by √L (:func:`learning.preprocess.causal_windows` with ``rms=True``);
 2. point-wise quotients q_i without modes; K at percentiles 50…100;
 3. HMM task modes fitted on the per-sample observations (not the windows: see
-   :mod:`learning.modes`); quotients within modes; the same within random
-   segmentations of equal group sizes; one-sided Mann–Whitney test;
-4. the voluntary share per trial at each K, without and with modes, with the
-   paired one-sided Wilcoxon test over trials;
+   :mod:`learning.modes`); quotients within modes, within the time-free reference
+   grouping of the same features (a Gaussian mixture by default) and within random
+   groups of equal sizes (the paper's reference); the claim "modes add information"
+   is the one-sided Wilcoxon signed-rank test over *trials* of per-trial median
+   quotients, HMM vs reference and HMM vs random groups, both (:mod:`learning.reference`);
+4. the voluntary share per trial at each K, without modes, within modes, within the
+   reference and within random groups, with the paired one-sided Wilcoxon test over
+   trials (modes vs reference);
 5. a search for missing information: every (window length, number of modes)
-   candidate ranked by how far its modes lower the quotients *beyond* what a
-   random segmentation of the same group sizes does.
+   candidate ranked by how far its modes lower the per-trial median quotients
+   *beyond* the time-free reference grouping.
 
 :func:`analyze` returns an :class:`AnalysisResult`: the findings as an
 :class:`~learning.analysis_report.AnalysisReport` (``summary``; ``report`` is its
@@ -32,15 +36,9 @@ from .analysis_report import AnalysisReport, Candidate, ModesSummary, QuotientSt
 from .data import Demonstrations
 from .lipschitz import pointwise_quotients
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
-from .predictability import (
-    compare_segmentation,
-    compare_voluntary_shares,
-    paired_wilcoxon,
-    random_segmentation,
-    threshold_from_percentile,
-    voluntary_share,
-)
+from .predictability import paired_wilcoxon, threshold_from_percentile, voluntary_share
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
+from .reference import REFERENCES, min_trials_for, mode_evidence
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]
 
@@ -49,6 +47,7 @@ class AnalysisError(ValueError):
     """The data cannot be analysed with these settings (the message says which and why)."""
 
 SIGNIFICANCE = 1e-3  # p-value below which the report claims that modes lower the quotients
+MIN_EFFECT = math.log(1.1)  # smallest effect of interest: modes lower per-trial median q by > 10 %
 
 
 @dataclass(frozen=True)
@@ -63,8 +62,14 @@ class AnalysisConfig:
         n_modes: HMM task modes.
         K: thresholds for the voluntary share (the paper: 5 and 10).
         percentiles: percentiles of q reported as candidate K.
-        n_random: random segmentations compared against the HMM.
+        n_random: random segmentations compared against the HMM (the paper's reference).
         random_method: "permutation" (random groups of equal sizes) or "contiguous".
+        reference: the time-free grouping the claim is tested against, "gmm" (default:
+            the HMM's emission model without the Markov chain), "kmeans-sized" or "kmeans"
+            (:mod:`learning.reference`; the choice is the calibration study's).
+        min_effect: smallest effect of interest δ: the claim needs per-trial median q
+            lowered by more than the factor e^δ (default ln 1.1; see
+            :mod:`learning.reference` for the calibration behind it).
         search_windows, search_modes: the candidate grid of the search (empty: no search).
         search_random: random segmentations per search candidate.
         hmm_restarts: EM restarts of each HMM fit.
@@ -82,6 +87,8 @@ class AnalysisConfig:
     percentiles: tuple[float, ...] = (50.0, 60.0, 70.0, 80.0, 90.0, 95.0, 99.0, 100.0)
     n_random: int = 20
     random_method: str = "permutation"
+    reference: str = "gmm"
+    min_effect: float = MIN_EFFECT
     search_windows: tuple[float, ...] = (0.5, 1.0, 2.0)
     search_modes: tuple[int, ...] = (2, 3, 4, 5, 6)
     search_random: int = 3
@@ -102,6 +109,10 @@ class AnalysisConfig:
             raise ValueError(f"K must be a non-empty list of positive thresholds, got {self.K}")
         if self.n_random < 1:
             raise ValueError(f"n_random must be >= 1, got {self.n_random}")
+        if self.reference not in REFERENCES:
+            raise ValueError(f"reference must be one of {REFERENCES}, got {self.reference!r}")
+        if not self.min_effect >= 0:
+            raise ValueError(f"min_effect must be >= 0, got {self.min_effect}")
         if any(m < 1 for m in self.search_modes):
             raise ValueError(f"search_modes must be >= 1, got {self.search_modes}")
 
@@ -114,8 +125,11 @@ class AnalysisResult:
         summary: the findings (``report`` is ``summary.to_dict()``, the report.json content).
         windows: the preprocessed data at ``config.window_s``.
         q: (N,) quotients without modes; q_modes: (N,) within HMM modes;
+        q_reference: (N,) within the time-free reference grouping;
         q_random: (n_random, N) within random segmentations.
         modes: (N,) HMM mode of each window row (Viterbi).
+        features: (N_samples, D) standardised per-sample observations (the HMM's input);
+        sample_modes: (N_samples,) their HMM modes (``modes = sample_modes[windows.source_index]``).
         true_modes: (N,) ground-truth labels or None.
         mode_model: the fitted :class:`TaskModes`.
         shares: {K: (trial ids, shares without modes, shares with modes)}.
@@ -126,8 +140,11 @@ class AnalysisResult:
     windows: WindowedData
     q: np.ndarray
     q_modes: np.ndarray
+    q_reference: np.ndarray
     q_random: np.ndarray
     modes: np.ndarray
+    features: np.ndarray
+    sample_modes: np.ndarray
     true_modes: np.ndarray | None
     mode_model: TaskModes
     shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
@@ -173,6 +190,12 @@ class _Steps:
             self.bar.close()
 
 
+def _shares(q: np.ndarray, trial: np.ndarray, K: float, ids: np.ndarray) -> np.ndarray:
+    """Voluntary share at K of each trial in ``ids`` (that order)."""
+    by_trial = voluntary_share(q, trial, K)
+    return np.array([by_trial[i] for i in ids])
+
+
 def _per_sample_features(std: Demonstrations) -> tuple[np.ndarray, np.ndarray]:
     """Stacked standardised observations and trial lengths (the HMM's input)."""
     return np.concatenate([tr.obs for tr in std.trials]), np.array([len(tr) for tr in std.trials])
@@ -199,10 +222,10 @@ def _check_windows(std: Demonstrations, config: AnalysisConfig) -> None:
 def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
             fitted: dict[int, tuple[TaskModes, np.ndarray]], quotient: Callable[..., np.ndarray],
             progress: bool = False) -> list[Candidate]:
-    """Rank (window, n_modes) candidates by log10(median q_random / median q_modes)."""
+    """Rank (window, n_modes) candidates by the median over trials of
+    log10(median q within the reference / median q within modes) (per-trial inference)."""
     K0 = config.K[0]
     rows = []
-    rng = np.random.default_rng(config.seed + 1)
     todo = [n for n in config.search_modes if n not in fitted]
     bar = None
     if progress:
@@ -216,28 +239,36 @@ def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: Ana
     for window in config.search_windows:
         w = causal_windows(std, window, rms=True)
         q0 = quotient(w.X, w.Y)
-        share0 = float(np.mean(list(voluntary_share(q0, w.trial, K0).values())))
+        share0 = _mean_share(q0, w.trial, K0)
         for n_modes in config.search_modes:
             model, labels = fitted[n_modes]
-            g = labels[w.source_index]
-            qm = quotient(w.X, w.Y, g)
-            qr = np.stack([quotient(w.X, w.Y, random_segmentation(g, rng, config.random_method))
-                           for _ in range(config.search_random)])
-            med_m, med_r = float(np.median(qm)), float(np.median(qr))
-            share_m = float(np.mean(list(voluntary_share(qm, w.trial, K0).values())))
-            share_r = float(np.mean([np.mean(list(voluntary_share(r, w.trial, K0).values())) for r in qr]))
-            gain = math.log10(med_r / med_m) if med_m > 0 and med_r > 0 else 0.0
+            ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
+                               reference=config.reference, n_random=config.search_random,
+                               random_method=config.random_method, alpha=SIGNIFICANCE,
+                               min_effect=config.min_effect, seed=config.seed + 1, quotient=quotient)
             rows.append(Candidate(
                 window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
-                median_q_modes=med_m, median_q_random=med_r, gain_beyond_random_log10=gain,
-                share_K=float(K0), share_without_modes=share0, share_with_modes=share_m, share_random=share_r,
+                median_q_modes=float(np.median(ev.q_modes)),
+                median_q_reference=float(np.median(ev.q_reference)),
+                median_q_random=float(np.median(ev.q_random)),
+                gain_beyond_reference_log10=ev.vs_reference.effect / math.log(10),
+                p_value=ev.vs_reference.p_value,
+                gain_beyond_random_log10=ev.vs_random.effect / math.log(10),
+                share_K=float(K0), share_without_modes=share0, share_with_modes=_mean_share(ev.q_modes, w.trial, K0),
+                share_reference=_mean_share(ev.q_reference, w.trial, K0),
+                share_random=float(np.mean([_mean_share(r, w.trial, K0) for r in ev.q_random])),
                 hmm_bic=float(model.bic(Z, lengths))))
             if bar is not None:
                 bar.update(1)
     if bar is not None:
         bar.close()
-    rows.sort(key=lambda r: -r.gain_beyond_random_log10)
+    rows.sort(key=lambda r: -r.gain_beyond_reference_log10)
     return [replace(r, rank=rank) for rank, r in enumerate(rows, 1)]
+
+
+def _mean_share(q: np.ndarray, trial: np.ndarray, K: float) -> float:
+    """Voluntary share at K, mean over trials."""
+    return float(np.mean(list(voluntary_share(q, trial, K).values())))
 
 
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
@@ -295,30 +326,39 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         agreement = float(mode_agreement(modes, true)[0])
         ari = float(mode_ari(modes, true))
     steps.done("modes")
-    comp = compare_segmentation(w.X, w.Y, modes, n_random=config.n_random, seed=config.seed,
-                                method=config.random_method)
-    q_modes, q_random = comp.q_segmentation, comp.q_random
+    ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
+                       reference=config.reference, n_random=config.n_random,
+                       random_method=config.random_method, alpha=SIGNIFICANCE, min_effect=config.min_effect,
+                       seed=config.seed)
+    q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
     steps.done("segmentation test")
 
-    # 4. voluntary share per trial: without modes, within HMM modes, within random
-    #    segmentations. Quotients within any grouping can only fall (fewer partners),
-    #    so the paired test that means something is HMM modes against random groups
-    #    of the same sizes ("p_value"); the test against no modes is reported too.
+    # 4. voluntary share per trial: without modes, within HMM modes, within the reference
+    #    and within random groups. Quotients within any grouping can only fall (fewer
+    #    partners), so the paired test that means something is HMM modes against the
+    #    time-free reference ("p_value"); against random groups and no modes are reported too.
     share_report: dict[str, VoluntaryShare] = {}
     shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-    for t in compare_voluntary_shares(q_modes, q, w.trial, config.K, alternative="less"):
-        ids = t.trials
-        rand = np.mean([[voluntary_share(r, w.trial, t.K)[i] for i in ids] for r in q_random], axis=0)
-        stat, p, eff = paired_wilcoxon(t.shares_a, rand, alternative="less")
-        shares[t.K] = (ids, t.shares_b, t.shares_a)
-        mean_without, mean_with = float(np.mean(t.shares_b)), float(np.mean(t.shares_a))
-        share_report[f"{t.K:g}"] = VoluntaryShare(
-            without_modes=mean_without, with_modes=mean_with, random=float(np.mean(rand)),
+    for K in config.K:
+        by_trial = voluntary_share(q_modes, w.trial, K)
+        ids = np.array(list(by_trial))
+        with_m = np.array([by_trial[i] for i in ids])
+        without = _shares(q, w.trial, K, ids)
+        ref_share = _shares(q_ref, w.trial, K, ids)
+        rand = np.mean([_shares(r, w.trial, K, ids) for r in q_random], axis=0)
+        stat, p, eff = paired_wilcoxon(with_m, ref_share, alternative="less")
+        shares[K] = (ids, without, with_m)
+        mean_without, mean_with = float(np.mean(without)), float(np.mean(with_m))
+        share_report[f"{K:g}"] = VoluntaryShare(
+            without_modes=mean_without, with_modes=mean_with, reference=float(np.mean(ref_share)),
+            random=float(np.mean(rand)),
             fold_reduction=_json_float(mean_without / mean_with) if mean_with > 0 else None,
             statistic=stat, p_value=p, effect_size=eff,
-            test="wilcoxon signed-rank over trials, one-sided: share within HMM modes < share "
-                 "within random segmentations of equal group sizes",
-            p_value_vs_without_modes=float(t.p_value), n_trials=int(len(ids)))
+            test=f"wilcoxon signed-rank over trials, one-sided: share within HMM modes < share within "
+                 f"the {config.reference} reference",
+            p_value_vs_random=paired_wilcoxon(with_m, rand, alternative="less")[1],
+            p_value_vs_without_modes=paired_wilcoxon(with_m, without, alternative="less")[1],
+            n_trials=int(len(ids)))
     steps.done("voluntary share")
 
     # 5. search for missing information
@@ -334,7 +374,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         steps.done("mode selection")
     steps.close()
 
-    test = comp.test
+    t_ref, t_rand = ev.vs_reference, ev.vs_random
     summary = AnalysisReport(
         n_samples=int(len(w)), n_trials=int(len(np.unique(w.trial))),
         input_dim=int(w.X.shape[1]), output_dim=int(w.Y.shape[1]),
@@ -344,15 +384,22 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         modes=ModesSummary(
             n_modes=int(config.n_modes), agreement=agreement, ari=ari,
             occupancy=[float(np.mean(modes == k)) for k in range(config.n_modes)],
-            converged=bool(model.converged_), loglik=float(model.loglik_), bic=float(model.bic(Z, lengths))),
+            converged=bool(model.converged_), loglik=float(model.loglik_), bic=float(model.bic(Z, lengths)),
+            restart_logliks=[float(v) for v in model.restart_logliks_]),
         segmentation_test=SegmentationTest(
-            test="mann-whitney U, one-sided (HMM quotients smaller)",
-            statistic=float(test.statistic), p_value=float(test.p_value),
-            effect_size=float(test.effect_size), effect_size_name="Cliff's delta",
-            hmm_median_q=float(test.median_a), random_median_q=float(test.median_b),
+            test=f"wilcoxon signed-rank over trials, one-sided: ln(reference / HMM per-trial median q) "
+                 f"> {config.min_effect:.4g}, for the time-free reference and for random groups (both)",
+            unit="trial", n_trials=int(t_ref.n_trials), statistic=float(t_ref.statistic),
+            p_value=float(ev.p_value), reference_p_value=float(t_ref.p_value), reference=config.reference,
+            hmm_median_q=float(np.median(q_modes)), reference_median_q=float(np.median(q_ref)),
+            random_median_q=float(np.median(q_random)),
+            effect_size=float(t_ref.effect), ci_low=float(t_ref.ci_low), ci_high=float(t_ref.ci_high),
+            ci_level=float(t_ref.ci_level), min_effect=float(config.min_effect),
+            random_p_value=float(t_rand.p_value), random_effect_size=float(t_rand.effect),
+            random_ci_low=float(t_rand.ci_low), random_ci_high=float(t_rand.ci_high),
             n_random=int(config.n_random), random_method=config.random_method,
-            significant=bool(test.p_value < SIGNIFICANCE and test.median_a < test.median_b),
-            alpha=SIGNIFICANCE),
+            reachable=bool(t_ref.reachable), min_trials=min_trials_for(SIGNIFICANCE),
+            significant=bool(ev.claimed), alpha=SIGNIFICANCE),
         voluntary_share=share_report,
         candidates=candidates,
         mode_selection=selection,
@@ -360,5 +407,6 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         timings_s=steps.timings,
     )
     return AnalysisResult(summary=summary, config=config, windows=w, q=q, q_modes=q_modes,
-                          q_random=q_random, modes=modes, true_modes=true, mode_model=model,
+                          q_reference=q_ref, q_random=q_random, modes=modes, features=Z,
+                          sample_modes=labels, true_modes=true, mode_model=model,
                           shares=shares)

@@ -85,11 +85,17 @@ def print_headline(report: AnalysisReport) -> None:
     if m.agreement is not None:
         print(f"HMM modes: {m.n_modes}, agreement with labels {100 * m.agreement:.1f} %, ARI {m.ari:.3f}")
     t = report.segmentation_test
-    print(f"HMM vs random segmentation: median q {t.hmm_median_q:.2f} vs {t.random_median_q:.2f}, "
-          f"{fmt_p(t.p_value)}")
+    if not t.reachable:
+        verdict = f"no claim possible: {t.n_trials} trials, at least {t.min_trials} needed for p < {t.alpha:g}"
+    else:
+        verdict = "modes add information" if t.significant else "no evidence that modes add information"
+    print(f"HMM vs {t.reference} reference over {t.n_trials} trials: median q {t.hmm_median_q:.2f} vs "
+          f"{t.reference_median_q:.2f} (random groups {t.random_median_q:.2f}); effect ln ratio "
+          f"{t.effect_size:.3f} [{t.ci_low:.3f}, {t.ci_high:.3f}], {fmt_p(t.p_value)}: {verdict}")
     for K, v in report.voluntary_share.items():
         print(f"voluntary share at K = {K}: {100 * v.without_modes:.1f} % without modes, "
-              f"{100 * v.with_modes:.1f} % with modes (paired {fmt_p(v.p_value)})")
+              f"{100 * v.with_modes:.1f} % with modes, {100 * v.reference:.1f} % within the reference "
+              f"(paired over trials {fmt_p(v.p_value)})")
 
 
 def _analyze_args(p: argparse.ArgumentParser) -> None:

@@ -7,13 +7,14 @@ import pytest
 
 from learning.data import save
 from mpcshare.cli import main
-from sim.demonstrator import generate_demonstrations
+from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 
 @pytest.fixture(scope="module")
 def data_file(tmp_path_factory):
     path = tmp_path_factory.mktemp("data") / "demos.npz"
-    save(generate_demonstrations(2, 3, seed=0), path)
+    # 20 trials of 18 s: the segmentation test is over trials and needs >= 10 for p < 0.001
+    save(generate_demonstrations(2, 3, seed=0, config=GeneratorConfig(trial_minutes=0.3)), path)
     return path
 
 
@@ -58,10 +59,12 @@ def test_analyze_writes_report_and_plots(data_file, tmp_path, capsys):
     assert code == 0
     report = json.loads((out / "report.json").read_text())
     assert report["modes"]["agreement"] > 0.9
-    assert report["segmentation_test"]["p_value"] < 1e-3
+    t = report["segmentation_test"]  # the claim's test is over trials (issue 13)
+    assert t["unit"] == "trial" and t["n_trials"] == 20 and t["reachable"]
+    assert t["random"]["p_value"] < 1e-3 and 0 <= t["p_value"] <= 1
     assert len(report["candidates"]) == 1
     md = (out / "report.md").read_text()
-    assert "Voluntary share" in md and "Mann-Whitney" in md
+    assert "Voluntary share" in md and "Wilcoxon" in md and "trials" in md and "bootstrap CI" in md
     for png in ("quotients_trial.png", "quotient_hist.png", "segmentation.png", "voluntary_share.png",
                 "candidates.png"):
         assert (out / png).stat().st_size > 10_000, png
