@@ -1,11 +1,18 @@
 """mpcshare: shared control of a wearable robot arm from demonstrations.
 
 - :mod:`mpcshare.cli` — the ``mpcshare`` command line (registry :data:`mpcshare.cli.COMMANDS`);
-- :mod:`mpcshare.commands` — its subcommands (``generate``, ``inspect``, ``analyze``, ``demo``);
+- :mod:`mpcshare.commands` — its subcommands (``generate``, ``inspect``, ``analyze``, ``train``,
+  ``sim``, ``demo``);
 - :mod:`mpcshare.report` — analysis reports (JSON, Markdown) and plots.
 - :mod:`mpcshare.bundle` — model bundles (:func:`load_bundle`, re-exported here lazily,
   so that ``import mpcshare`` does not import torch or scikit-learn).
-- :mod:`mpcshare.training`, :mod:`mpcshare.sweep` — training a bundle, the K trade-off.
+- :mod:`mpcshare.training`, :mod:`mpcshare.sweep`, :mod:`mpcshare.evaluation` — training a
+  bundle, the K trade-off, held-out metrics.
+- :mod:`mpcshare.streaming`, :mod:`mpcshare.arbitration`, :mod:`mpcshare.controller` — the
+  online loop (:class:`~mpcshare.controller.SharedController`); :mod:`mpcshare.symbolic`,
+  :mod:`mpcshare.mpc` — the CasADi model and MPC.
+- :mod:`mpcshare.experiments`, :mod:`mpcshare.comparison_report`, :mod:`mpcshare.demo_report`,
+  :mod:`mpcshare.html_report`, :mod:`mpcshare.episode_plot` — closed-loop comparisons and reports.
 
 ``python -m mpcshare`` runs the command line. Design: ``docs/design.md``.
 """
