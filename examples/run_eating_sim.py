@@ -15,12 +15,12 @@ Steps, each one call:
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 
+from mpcshare.cli import prefer_offscreen_gl
+
 # MuJoCo picks its OpenGL backend when first imported: render offscreen when there is no display.
-if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
-    os.environ["MUJOCO_GL"] = "egl"
+prefer_offscreen_gl()
 
 from learning.data import load  # noqa: E402
 from mpcshare.bundle import load_bundle, save_bundle  # noqa: E402

@@ -66,6 +66,13 @@ class Comparison:
                 "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video}
 
 
+def _from_bundle(bundle: Any, **options: Any) -> Any:
+    """The default controller factory: :meth:`SharedController.from_bundle` (imported when first used)."""
+    from .controller import SharedController
+
+    return SharedController.from_bundle(bundle, **options)
+
+
 def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.ndarray],
                  sim_seconds: Sequence[float]) -> dict[str, float]:
     """Pool per-trial metrics into one row.
@@ -115,10 +122,7 @@ def compare_strategies(bundle: Any, demos: Demonstrations, trial_ids: Sequence[i
     strategy=..., use_mpc=..., beta=...)`` builds a controller (default:
     :meth:`SharedController.from_bundle`).
     """
-    if make_controller is None:
-        from .controller import SharedController
-
-        make_controller = SharedController.from_bundle
+    make_controller = make_controller or _from_bundle
     known = set(demos.trial_ids)
     missing = [int(t) for t in trial_ids if int(t) not in known]
     if missing or not len(trial_ids):
@@ -167,10 +171,7 @@ def render_clip(bundle: Any, demos: Demonstrations, trial_id: int, path: str | P
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
     when no MP4 encoder is installed) or None, and why not.
     """
-    if make_controller is None:
-        from .controller import SharedController
-
-        make_controller = SharedController.from_bundle
+    make_controller = make_controller or _from_bundle
     trial = next((tr for tr in demos.trials if tr.trial_id == int(trial_id)), None)
     if trial is None:
         raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")

@@ -4,7 +4,6 @@ MuJoCo reads ``MUJOCO_GL`` once, when it is first imported, so it is set here,
 before any test module imports ``mujoco``; the product never sets it on import.
 """
 
-import os
+from mpcshare.cli import prefer_offscreen_gl  # imports neither mujoco nor torch
 
-if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
-    os.environ["MUJOCO_GL"] = "egl"
+prefer_offscreen_gl()

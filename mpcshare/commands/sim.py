@@ -122,8 +122,10 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(f"the bundle's training data {data} is gone; pass --data")
     demos = align_channels(load_or_fail(str(data)), bundle, mapping)
     ids = set(demos.trial_ids)
-    trial_ids = [t for t in bundle.heldout_trials if t in ids] if args.data is None else \
-        ([t for t in bundle.heldout_trials if t in ids] or sorted(ids))
+    # the bundle's held-out trials; other data (--data) without them: all of its trials
+    trial_ids = [t for t in bundle.heldout_trials if t in ids]
+    if not trial_ids and args.data is not None:
+        trial_ids = sorted(ids)
     if not trial_ids:
         raise CommandError(f"none of the bundle's held-out trials {bundle.heldout_trials} is in {data}")
     trial_ids = trial_ids[:args.trials] if args.trials else trial_ids
