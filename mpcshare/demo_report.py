@@ -18,7 +18,7 @@ from typing import Any
 
 from learning.atomic import atomic_open
 
-from .comparison_report import comparison_findings
+from .comparison_report import comparison_findings, strict_json
 from .html_report import write_html_report
 
 __all__ = ["demo_summary", "write_demo_report"]
@@ -118,7 +118,7 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
     obj = {"format_version": 1, "data": data_summary, "analysis": analysis, "training": training,
            "sweep": sweep, "comparison": comparison, "timings_s": timings_s}
     with atomic_open(out / "report.json", "w") as f:
-        json.dump(obj, f, indent=2, default=_jsonable)
+        json.dump(strict_json(obj), f, indent=2, default=_jsonable, allow_nan=False)
     return write_html_report(out / "report.md", out / "report.html")
 
 
