@@ -25,10 +25,10 @@ import numpy as np
 import pinocchio as pin
 from ruckig import InputParameter, OutputParameter, Ruckig
 
+from robot.model_files import build_pinocchio_model
 from robot.qp import QPConfig, QPController
 from robot.smoothing import ReferenceSmoother
 from robot.solvers import daqp_available
-from robot.superlimb import build_pinocchio_model
 
 SOLVERS = ("daqp", "osqp") if daqp_available() else ("osqp",)
 TARGETS_US = {"qp_step_daqp": 150.0, "qp_step_osqp": 150.0, "ruckig_update": 20.0}

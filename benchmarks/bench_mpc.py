@@ -30,7 +30,8 @@ import numpy as np
 import pinocchio as pin
 
 from mpcshare.mpc import TipMPC
-from robot.superlimb import SuperLimbParams, build_pinocchio_model
+from robot.model_files import build_pinocchio_model
+from robot.superlimb import SuperLimbParams
 
 H, DT = 20, 0.01
 Q0 = np.array([0.1, 0.6, 1.1])

@@ -1,6 +1,7 @@
 """Robot side of mpcshare: the SuperLimb description, the QP controller and reference smoothing.
 
-- :mod:`robot.superlimb` — one parametric source → URDF, MJCF, Pinocchio model.
+- :mod:`robot.superlimb` — one parametric source (``SuperLimbParams``); :mod:`robot.model_files`
+  turns it into URDF, MJCF and a Pinocchio model.
 - :mod:`robot.qp` — joint-acceleration QP with position (viable), velocity and torque limits;
   its settings and results in :mod:`robot.qp_types`.
 - :mod:`robot.constraints`, :mod:`robot.tasks` — the QP's limits (``Constraint(G, h)`` rows)
@@ -12,19 +13,11 @@
 from .constraints import Bounds, Constraint, Limit
 from .errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from .limits import JointLimits
+from .model_files import PinocchioModel, build_pinocchio_model, mjcf_arm_body, to_mjcf, to_urdf, write_assets
 from .qp import QPConfig, QPController, QPResult, QPStatus
 from .smoothing import ReferenceSmoother, SmoothedReference, SmoothingStatus
 from .state import ControlState
-from .superlimb import (
-    TOOL_FRAME,
-    PinocchioModel,
-    SuperLimbParams,
-    build_pinocchio_model,
-    mjcf_arm_body,
-    to_mjcf,
-    to_urdf,
-    write_assets,
-)
+from .superlimb import TOOL_FRAME, SuperLimbParams
 from .tasks import Objective, Task
 
 __all__ = [

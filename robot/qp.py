@@ -153,7 +153,8 @@ class QPController:
     @classmethod
     def for_superlimb(cls, params=None, config: QPConfig | None = None) -> "QPController":
         """Controller on the SuperLimb's ``knife_tip`` with its derived limits."""
-        from .superlimb import TOOL_FRAME, SuperLimbParams, build_pinocchio_model
+        from .model_files import build_pinocchio_model
+        from .superlimb import TOOL_FRAME, SuperLimbParams
 
         p = params or SuperLimbParams()
         return cls(build_pinocchio_model(p).model, TOOL_FRAME, JointLimits.from_superlimb(p), config)

@@ -39,13 +39,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from robot.superlimb import (
-    TOOL_FRAME,
-    SuperLimbParams,
-    mjcf_actuators,
-    mjcf_arm_body,
-    rpy_to_matrix,
-)
+from robot.model_files import mjcf_actuators, mjcf_arm_body
+from robot.superlimb import TOOL_FRAME, SuperLimbParams, rpy_to_matrix
 
 __all__ = ["EatingScene", "SceneConfig", "build_scene_xml", "pose_matrix"]
 

@@ -10,7 +10,8 @@ import pytest
 from mpcshare import codegen
 from mpcshare.mpc import SOLVERS, TipMPC
 from robot.constraints import viable_velocity_bound
-from robot.superlimb import SuperLimbParams, build_pinocchio_model
+from robot.model_files import build_pinocchio_model
+from robot.superlimb import SuperLimbParams
 
 H, DT = 20, 0.01
 PARAMS = SuperLimbParams()

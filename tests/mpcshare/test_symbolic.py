@@ -10,12 +10,8 @@ import pinocchio as pin
 import pytest
 
 from mpcshare.symbolic import SymbolicArm
-from robot.superlimb import (
-    Actuator,
-    SuperLimbParams,
-    build_pinocchio_model,
-    rod_inertial,
-)
+from robot.model_files import build_pinocchio_model
+from robot.superlimb import Actuator, SuperLimbParams, rod_inertial
 
 TOL = 1e-9
 

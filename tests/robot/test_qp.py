@@ -11,9 +11,10 @@ from hypothesis import strategies as st
 from robot.constraints import viable_velocity_bound
 from robot.errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from robot.limits import JointLimits
+from robot.model_files import build_pinocchio_model
 from robot.qp import QPConfig, QPController, QPStatus
 from robot.solvers import daqp_available
-from robot.superlimb import SuperLimbParams, build_pinocchio_model
+from robot.superlimb import SuperLimbParams
 
 TOL = 1e-6
 SOLVERS = ["daqp", "osqp"] if daqp_available() else ["osqp"]
@@ -268,7 +269,7 @@ def test_commanded_torque_produces_the_commanded_acceleration_in_mujoco() -> Non
     """τ from the QP applied to the MuJoCo model (same source) gives back a: dynamics are consistent."""
     import mujoco
 
-    from robot.superlimb import to_mjcf
+    from robot.model_files import to_mjcf
 
     m = mujoco.MjModel.from_xml_string(to_mjcf(PARAMS))
     d = mujoco.MjData(m)

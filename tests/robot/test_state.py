@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from robot.model_files import build_pinocchio_model
 from robot.state import StateEvaluator
-from robot.superlimb import build_pinocchio_model
 
 
 def test_state_quantities_match_finite_differences() -> None:

@@ -11,8 +11,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from robot import model_files as mf
 from robot import superlimb as sl
-from robot.superlimb import SuperLimbParams, build_pinocchio_model, to_mjcf, to_urdf
+from robot.model_files import build_pinocchio_model, to_mjcf, to_urdf
+from robot.superlimb import SuperLimbParams
 
 
 def _mj(params: SuperLimbParams, extra: str = "") -> tuple[mujoco.MjModel, mujoco.MjData]:
@@ -26,8 +28,8 @@ def _full_m(model, data, q) -> np.ndarray:
 
 
 def test_assets_are_up_to_date() -> None:
-    assert (sl.ASSETS_DIR / "superlimb.urdf").read_text() == to_urdf(), "run python -m robot.superlimb"
-    assert (sl.ASSETS_DIR / "superlimb.xml").read_text() == to_mjcf(), "run python -m robot.superlimb"
+    assert (sl.ASSETS_DIR / "superlimb.urdf").read_text() == to_urdf(), "run python -m robot"
+    assert (sl.ASSETS_DIR / "superlimb.xml").read_text() == to_mjcf(), "run python -m robot"
 
 
 def test_asset_files_load() -> None:
@@ -145,7 +147,7 @@ def test_extra_worldbody_hook() -> None:
     plate = '    <body name="plate" pos="0.4 0 0.3"><geom type="cylinder" size="0.1 0.01"/></body>\n'
     m, _ = _mj(SuperLimbParams(), extra=plate)
     assert m.body("plate").id > 0 and m.nq == 3
-    assert "<body" in sl.mjcf_arm_body() and "knife_tip" in sl.mjcf_arm_body()
+    assert "<body" in mf.mjcf_arm_body() and "knife_tip" in mf.mjcf_arm_body()
 
 
 def test_braking_is_always_torque_feasible() -> None:

@@ -4,7 +4,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robot.superlimb import SuperLimbParams, build_pinocchio_model
+from robot.model_files import build_pinocchio_model
+from robot.superlimb import SuperLimbParams
 from sim.demonstrator import ACT_NAMES, GeneratorConfig, generate_demonstrations
 from sim.kinematics import (
     ArmGeometry,
