@@ -17,17 +17,19 @@ Reported (all on held-out windowed steps, i.e. steps with a full causal window):
 - the gates' accuracy, F1 and Brier score per mode (:func:`learning.gate.gate_metrics`);
 - ``voluntary_share`` = mean_t (1 − ĥ_t): steps the gate hands to the wearer, ĥ_t =
   1[gate probability ≥ 0.5];
-- ``voluntary_effort`` (Song & Asada: the wearer's motion that the hand-over requires)::
+- ``voluntary_effort`` (Song & Asada: the wearer's command that the hand-over requires)::
 
-      E = (1/N) · Σ_t (1 − ĥ_t) · ‖θ_t − θ_{t−1}‖ / Δt
+      E = (1/N) · Σ_t (1 − ĥ_t) · ‖θ_t‖
 
-  over the N held-out windowed steps, θ the voluntary channel (shoulder angles [rad])
-  after causal downsampling, Δt = 1/model_hz [s]; E in rad/s (θ_{t−1} is the previous
-  sample of the same trial; the first sample of a trial counts as still). A data set
-  without a voluntary channel uses the knife motion as the proxy: θ := the standardised
-  action u (all channels), E in standardised units/s. ``effort_source`` says which;
-  ``effort_if_all_voluntary`` is E with ĥ ≡ 0 (the wearer does everything), the scale
-  against which E is read.
+  over the N held-out windowed steps, θ the voluntary channel (shoulder angles [rad]
+  away from the neutral posture, after causal downsampling); E in rad. It is the
+  closed loop's ``voluntary_effort`` (:mod:`sim.metrics`: mean_k ‖θ_k‖) with the
+  wearer at rest wherever the gate hands to the robot, so the two tables read on one
+  scale. A data set without a voluntary channel uses the knife speed as the proxy
+  (the shoulder commands a knife velocity, :class:`robot.shoulder.ShoulderMap`):
+  ‖u_t − u_{t−1}‖/Δt of the standardised action u, Δt = 1/model_hz, E in standardised
+  units/s. ``effort_source`` says which; ``effort_if_all_voluntary`` is E with ĥ ≡ 0
+  (the wearer does everything), the scale against which E is read.
 """
 
 from __future__ import annotations
@@ -39,33 +41,35 @@ import numpy as np
 
 from mpcshare.training import SplitData, TrainingData, reactive_labels
 
-__all__ = ["step_speed", "voluntary_effort", "rmse", "evaluate", "fit_ridge", "predict_side",
+__all__ = ["command_magnitude", "voluntary_effort", "rmse", "evaluate", "fit_ridge", "predict_side",
            "RMSE_UNITS"]
 
 RMSE_UNITS = "standardised action units (per-sensor unit RMS), RMS over channels and steps"
 
 
-def step_speed(side: SplitData, model_hz: float) -> tuple[np.ndarray, str, str]:
-    """(n_windows,) ‖θ_t − θ_{t−1}‖·model_hz at the windowed steps; source; units.
+def command_magnitude(side: SplitData, model_hz: float) -> tuple[np.ndarray, str, str]:
+    """(n_windows,) the wearer's command magnitude at the windowed steps; source; units.
 
-    θ is the voluntary channel if every trial has one, else the standardised action.
+    ‖θ_t‖ [rad] of the voluntary channel θ if every trial has one; else the proxy
+    ‖u_t − u_{t−1}‖·model_hz of the standardised action u (the first step of a trial
+    counts as still).
     """
     has_vol = side.std.has_voluntary and side.std.trials[0].voluntary.shape[1] > 0
-    speeds = []
-    for tr in side.std.trials:
-        x = tr.voluntary if has_vol else tr.act
-        d = np.linalg.norm(np.diff(x, axis=0), axis=1) * float(model_hz)
-        speeds.append(np.concatenate([[0.0], d]))
-    speed = np.concatenate(speeds)[side.windows.source_index]
     if has_vol:
-        return speed, "voluntary", "rad/s (shoulder angles)"
-    return speed, "action_proxy", "standardised action units/s (knife motion, no voluntary channel)"
+        mags = [np.linalg.norm(tr.voluntary, axis=1) for tr in side.std.trials]
+    else:
+        mags = [np.concatenate([[0.0], np.linalg.norm(np.diff(tr.act, axis=0), axis=1) * float(model_hz)])
+                for tr in side.std.trials]
+    magnitude = np.concatenate(mags)[side.windows.source_index]
+    if has_vol:
+        return magnitude, "voluntary", "rad (shoulder angles from neutral)"
+    return magnitude, "action_proxy", "standardised action units/s (knife speed, no voluntary channel)"
 
 
-def voluntary_effort(gate: np.ndarray, speed: np.ndarray) -> float:
-    """E = mean_t (1 − ĥ_t)·speed_t (module docstring)."""
+def voluntary_effort(gate: np.ndarray, magnitude: np.ndarray) -> float:
+    """E = mean_t (1 − ĥ_t)·m_t, m_t the command magnitude (module docstring)."""
     gate = np.asarray(gate, dtype=float)
-    return float(np.mean((1.0 - gate) * np.asarray(speed, dtype=float))) if gate.size else float("nan")
+    return float(np.mean((1.0 - gate) * np.asarray(magnitude, dtype=float))) if gate.size else float("nan")
 
 
 def rmse(pred: np.ndarray, true: np.ndarray, mask: np.ndarray | None = None) -> float | None:
@@ -128,7 +132,7 @@ def evaluate(data: TrainingData, gates: Any, predictor: Any, K: float,
     modes = side.window_modes
     proba = gates.predict_proba(side.windows.X, modes)
     h = (proba >= 0.5).astype(int)
-    speed, source, units = step_speed(side, data.config.model_hz)
+    magnitude, source, units = command_magnitude(side, data.config.model_hz)
     preds = {name: predict_side(m, side) for name, m in (baselines or {}).items()}
     preds.update(baseline_predictions or {})
     return {
@@ -139,8 +143,8 @@ def evaluate(data: TrainingData, gates: Any, predictor: Any, K: float,
         "baselines": {name: _errors(data, p, R, None) for name, p in preds.items()},
         "gate": gate_metrics(gates, side.windows.X, modes, Z),
         "voluntary_share": float(np.mean(1 - h)),
-        "voluntary_effort": voluntary_effort(h, speed),
-        "effort_if_all_voluntary": float(np.mean(speed)),
+        "voluntary_effort": voluntary_effort(h, magnitude),
+        "effort_if_all_voluntary": float(np.mean(magnitude)),
         "effort_source": source,
         "effort_units": units,
         "rmse_units": RMSE_UNITS,

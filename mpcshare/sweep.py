@@ -228,7 +228,8 @@ def _markdown(result: SweepResult) -> str:
     lines += ["", "Units and definitions:", "",
               f"- RMSE: {first['rmse_units']}; per channel group in physical units in `sweep.json` "
               "(`rmse_reactive_by_group`).",
-              f"- effort E = (1/N)·Σ_t (1 − ĥ_t)·‖θ_t − θ_(t−1)‖/Δt over held-out steps, ĥ the gate decision; "
+              f"- effort E = (1/N)·Σ_t (1 − ĥ_t)·‖θ_t‖ over held-out steps (θ the shoulder angles, ĥ the gate "
+              "decision; the closed loop's effort with the wearer at rest while the robot acts); "
               f"source: {first['effort_source']}, units: {first['effort_units']}.",
               "- voluntary share: held-out steps the gate hands to the wearer (probability < 0.5).",
               "- R on held-out trials: quotients within HMM modes among held-out points, at the training K.",
