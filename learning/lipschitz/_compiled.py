@@ -28,8 +28,8 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["credit_multi", "full_lower_ratios", "full_survivors", "pair_ratios_compiled",
-           "update_best_compiled"]
+__all__ = ["credit_multi", "full_lower_ratios", "full_survivors", "grouped_lower_ratios", "grouped_survivors",
+           "pair_ratios_compiled", "update_best_compiled"]
 
 _TINY = 1e-150
 _HUGE = 1e150
@@ -127,33 +127,49 @@ def update_best_compiled(q: np.ndarray, partner: np.ndarray, rows: np.ndarray, c
                      np.ascontiguousarray(cols_orig, dtype=np.int64), np.ascontiguousarray(r))
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _credit_one(Q, P, LB, tmin, qmin, i, j, labels, v):  # pragma: no cover - compiled
+    if v < qmin[i]:  # below every labeling's current maximum: nothing to credit
+        return
+    changed = False
+    for m in range(labels.shape[1]):
+        if labels[i, m] != labels[j, m]:
+            continue
+        if v > Q[i, m] or (v == Q[i, m] and j < P[i, m]):
+            Q[i, m] = v
+            P[i, m] = j
+            changed = True
+            if v > LB[i, m]:
+                LB[i, m] = v
+    if changed:
+        t = np.inf
+        u = np.inf
+        for m in range(labels.shape[1]):
+            t = min(t, LB[i, m])
+            u = min(u, Q[i, m])
+        tmin[i] = t
+        qmin[i] = u
+
+
 @numba.njit(cache=True, nogil=True)
-def _credit_multi(Q, P, labels, gi, gj, r):  # pragma: no cover - compiled
-    n_lab = labels.shape[0]
+def _credit_multi(Q, P, LB, tmin, qmin, labels, gi, gj, r):  # pragma: no cover - compiled
     for k in range(gi.shape[0]):
         v = r[k]
-        if not v > 0.0:
+        if not v > 0.0:  # NaN (skipped) and 0 never set a partner
             continue
-        i = gi[k]
-        j = gj[k]
-        for m in range(n_lab):
-            if labels[m, i] != labels[m, j]:
-                continue
-            if v > Q[m, i] or (v == Q[m, i] and j < P[m, i]):
-                Q[m, i] = v
-                P[m, i] = j
-            if v > Q[m, j] or (v == Q[m, j] and i < P[m, j]):
-                Q[m, j] = v
-                P[m, j] = i
+        _credit_one(Q, P, LB, tmin, qmin, gi[k], gj[k], labels, v)
+        _credit_one(Q, P, LB, tmin, qmin, gj[k], gi[k], labels, v)
 
 
-def credit_multi(Q: np.ndarray, P: np.ndarray, labels: np.ndarray, gi: np.ndarray, gj: np.ndarray,
-                 r: np.ndarray) -> None:
+def credit_multi(Q: np.ndarray, P: np.ndarray, LB: np.ndarray, tmin: np.ndarray, qmin: np.ndarray,
+                 labels: np.ndarray, gi: np.ndarray, gj: np.ndarray, r: np.ndarray) -> None:
     """Credit exact quotients ``r`` of pairs (gi, gj) to both points in every labeling
-    ``m`` with ``labels[m, gi] == labels[m, gj]``: Q (L, N) running maxima, P (L, N) their
-    partners (smallest index on ties), labels (L, N) int64 codes."""
+    ``m`` with ``labels[gi, m] == labels[gj, m]``. Point-major (N, L) arrays: Q running
+    maxima, P their partners (smallest index on ties), LB lower bounds (raised to Q),
+    tmin (N,) = min_m LB[:, m] and qmin (N,) = min_m Q[:, m] kept up to date (a pair
+    below qmin of a point is skipped for it after one read); labels (N, L) integer codes."""
     if len(r):
-        _credit_multi(Q, P, labels, np.ascontiguousarray(gi, dtype=np.int64),
+        _credit_multi(Q, P, LB, tmin, qmin, labels, np.ascontiguousarray(gi, dtype=np.int64),
                       np.ascontiguousarray(gj, dtype=np.int64), np.ascontiguousarray(r))
 
 
@@ -214,3 +230,101 @@ def full_lower_ratios(G: np.ndarray, Gy: np.ndarray, nxh_r: np.ndarray, nxh_c: n
     colmax = np.full(G.shape[1], -np.inf)
     _full_lower(G, Gy, nxh_r, nxh_c, nwl_r, nwl_c, rowmax, colmax)
     return rowmax, colmax
+
+
+@numba.njit(cache=True, nogil=True)
+def _grouped_lower(G, Gy, nxh_r, nxh_c, nwl_r, nwl_c, lab_r, lab_c, Tr, Tc, Br, Bc):  # pragma: no cover
+    n_lab = lab_r.shape[1]
+    a_n, c_n = G.shape
+    rmin = np.empty(a_n)
+    for a in range(a_n):
+        m0 = np.inf
+        for m in range(n_lab):
+            m0 = min(m0, Tr[a, m])
+        rmin[a] = m0
+    cmin = np.empty(c_n)
+    for c in range(c_n):
+        m0 = np.inf
+        for m in range(n_lab):
+            m0 = min(m0, Tc[c, m])
+        cmin[c] = m0
+    for a in range(a_n):
+        xr = np.float64(nxh_r[a])
+        yr = np.float64(nwl_r[a])
+        for c in range(c_n):
+            xub = -2.0 * np.float64(G[a, c]) + xr + np.float64(nxh_c[c])
+            ylb = -2.0 * np.float64(Gy[a, c]) + yr + np.float64(nwl_c[c])
+            v = ylb / xub
+            if v > rmin[a]:
+                m0 = np.inf
+                for m in range(n_lab):
+                    if lab_r[a, m] == lab_c[c, m] and v > Tr[a, m]:
+                        Tr[a, m] = v
+                        Br[a, m] = v
+                    m0 = min(m0, Tr[a, m])
+                rmin[a] = m0
+            if v > cmin[c]:
+                m0 = np.inf
+                for m in range(n_lab):
+                    if lab_r[a, m] == lab_c[c, m] and v > Tc[c, m]:
+                        Tc[c, m] = v
+                        Bc[c, m] = v
+                    m0 = min(m0, Tc[c, m])
+                cmin[c] = m0
+
+
+def grouped_lower_ratios(G: np.ndarray, Gy: np.ndarray, nxh_r: np.ndarray, nxh_c: np.ndarray,
+                         nwl_r: np.ndarray, nwl_c: np.ndarray, lab_r: np.ndarray, lab_c: np.ndarray,
+                         Tr: np.ndarray, Tc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per labeling, the row and column maxima of lb‖Δŵ‖² / ub‖Δx̂‖² over the pairs whose
+    two points share a group (``lab_r`` (a, L), ``lab_c`` (c, L) their labels) and that
+    exceed the current values ``Tr`` (a, L) / ``Tc`` (c, L) (same squared scaled units;
+    an entry that exceeds no current value of its row or column costs one comparison).
+    Returns (a, L) and (c, L) arrays: the new maxima, −inf where nothing exceeded."""
+    Br = np.full(Tr.shape, -np.inf)
+    Bc = np.full(Tc.shape, -np.inf)
+    _grouped_lower(G, Gy, nxh_r, nxh_c, nwl_r, nwl_c, lab_r, lab_c, np.array(Tr, dtype=np.float64),
+                   np.array(Tc, dtype=np.float64), Br, Bc)
+    return Br, Bc
+
+
+@numba.njit(cache=True, nogil=True)
+def _grouped_survivors(G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, Tr, Tc, lab_r, lab_c,
+                       out_r, out_c):  # pragma: no cover - compiled
+    n_lab = lab_r.shape[1]
+    cnt = 0
+    for a in range(G.shape[0]):
+        ta = np.float64(T[a])
+        xr = np.float64(nxl_r[a])
+        yr = np.float64(nwh_r[a])
+        for c in range(G.shape[1]):
+            xlb = -2.0 * np.float64(G[a, c]) + xr + np.float64(nxl_c[c])
+            yub = -2.0 * np.float64(Gy[a, c]) + yr + np.float64(nwh_c[c])
+            if yub < ta * xlb:
+                continue
+            # the smallest lower bound among the labelings in which the pair shares a group
+            t = np.inf
+            for m in range(n_lab):
+                if lab_r[a, m] == lab_c[c, m]:
+                    t = min(t, Tr[a, m], Tc[c, m])
+            if yub >= t * xlb:
+                out_r[cnt] = a
+                out_c[cnt] = c
+                cnt += 1
+    return cnt
+
+
+def grouped_survivors(G: np.ndarray, Gy: np.ndarray, nxl_r: np.ndarray, nxl_c: np.ndarray,
+                      nwh_r: np.ndarray, nwh_c: np.ndarray, T: np.ndarray, Tr: np.ndarray,
+                      Tc: np.ndarray, lab_r: np.ndarray, lab_c: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """``full_survivors`` for many labelings: an entry passing the row threshold ``T``
+    (float32, ≤ the smallest bound of the row) is kept only if
+    ``ub‖Δŵ‖² ≥ t·lb‖Δx̂‖²`` with t the smallest of Tr[a, m], Tc[c, m] (thresholds in the
+    same squared scaled units, rounded down) over the labelings m in which both points
+    share a group; a pair that shares no group is dropped."""
+    a, c = G.shape
+    out_r = np.empty(a * c, dtype=np.int64)
+    out_c = np.empty(a * c, dtype=np.int64)
+    k = _grouped_survivors(G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, Tr, Tc, lab_r, lab_c, out_r, out_c)
+    return out_r[:k].copy(), out_c[:k].copy()
