@@ -2,9 +2,11 @@
 
 1. preprocessing: downsample, standardise (fitted on the data), causal windows
    normalised by √L (:func:`learning.preprocess.causal_windows` with ``rms=True``);
-2. point-wise quotients q_i without modes; K at percentiles 50…100;
-3. HMM task modes fitted on the per-sample observations (not the windows: see
-   :mod:`learning.modes`); quotients within modes, within the time-free reference
+2. HMM task modes fitted on the per-sample observations (not the windows: see
+   :mod:`learning.modes`); then point-wise quotients q_i without modes (K at
+   percentiles 50…100) and within the random groupings, all in one pass over the pairs
+   (:func:`learning.lipschitz.pointwise_quotients_multi`);
+3. quotients within modes, within the time-free reference
    grouping of the same features (a Gaussian mixture by default) and within random
    groups of equal sizes (the paper's reference); the claim "modes add information"
    is the one-sided Wilcoxon signed-rank test over *trials* of per-trial median
@@ -34,11 +36,11 @@ import numpy as np
 
 from .analysis_report import AnalysisReport, Candidate, ModesSummary, QuotientStats, SegmentationTest, VoluntaryShare
 from .data import Demonstrations
-from .lipschitz import pointwise_quotients
+from .lipschitz import pointwise_quotients, pointwise_quotients_multi
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
 from .predictability import paired_wilcoxon, threshold_from_percentile, voluntary_share
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
-from .reference import REFERENCES, min_trials_for, mode_evidence
+from .reference import REFERENCES, min_trials_for, mode_evidence, random_labelings
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]
 
@@ -236,16 +238,22 @@ def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: Ana
         fitted[n_modes] = _fit_modes(Z, lengths, n_modes, config)
         if bar is not None:
             bar.update(1)
+    R = config.search_random
     for window in config.search_windows:
         w = causal_windows(std, window, rms=True)
-        q0 = quotient(w.X, w.Y)
+        # No grouping and every candidate's random groupings: one pass over the pairs.
+        rand = [random_labelings(fitted[n][1][w.source_index], R, config.random_method, config.seed + 1)
+                for n in config.search_modes]
+        Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64)] + rand))
+        q0 = Q[0]
         share0 = _mean_share(q0, w.trial, K0)
-        for n_modes in config.search_modes:
+        for k, n_modes in enumerate(config.search_modes):
             model, labels = fitted[n_modes]
             ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
-                               reference=config.reference, n_random=config.search_random,
+                               reference=config.reference, n_random=R,
                                random_method=config.random_method, alpha=SIGNIFICANCE,
-                               min_effect=config.min_effect, seed=config.seed + 1, quotient=quotient)
+                               min_effect=config.min_effect, seed=config.seed + 1, quotient=quotient,
+                               q_random=Q[1 + k * R:1 + (k + 1) * R])
             rows.append(Candidate(
                 window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
                 median_q_modes=float(np.median(ev.q_modes)),
@@ -309,12 +317,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     steps = _Steps(5 + bool(n_search) + config.select_modes, progress, start=t_start)
     steps.done("preprocess")
 
-    # 2. quotients without modes
-    q = pointwise_quotients(w.X, w.Y, progress=progress)
-    K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
-    steps.done("quotients")
-
-    # 3. HMM modes, quotients within modes and within random segmentations
+    # 2. HMM modes
     Z, lengths = _per_sample_features(std)
     fitted: dict[int, tuple[TaskModes, np.ndarray]] = {}
     fitted[config.n_modes] = _fit_modes(Z, lengths, config.n_modes, config)
@@ -326,14 +329,25 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         agreement = float(mode_agreement(modes, true)[0])
         ari = float(mode_ari(modes, true))
     steps.done("modes")
+
+    # 3. quotients without modes and within the random segmentations of the test, in one
+    #    pass over the pairs (pointwise_quotients_multi; each equal to its own call)
+    rand = random_labelings(modes, config.n_random, config.random_method, config.seed)
+    Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]),
+                                  progress=progress)
+    q = Q[0]
+    K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
+    steps.done("quotients")
+
+    # 4. quotients within modes and within the time-free reference; the two tests
     ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
                        reference=config.reference, n_random=config.n_random,
                        random_method=config.random_method, alpha=SIGNIFICANCE, min_effect=config.min_effect,
-                       seed=config.seed)
+                       seed=config.seed, q_random=Q[1:])
     q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
     steps.done("segmentation test")
 
-    # 4. voluntary share per trial: without modes, within HMM modes, within the reference
+    # 5. voluntary share per trial: without modes, within HMM modes, within the reference
     #    and within random groups. Quotients within any grouping can only fall (fewer
     #    partners), so the paired test that means something is HMM modes against the
     #    time-free reference ("p_value"); against random groups and no modes are reported too.
@@ -361,7 +375,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             n_trials=int(len(ids)))
     steps.done("voluntary share")
 
-    # 5. search for missing information
+    # 6. search for missing information
     candidates = (_search(std, Z, lengths, config, fitted, pointwise_quotients, progress)
                   if n_search else [])
     if n_search:
