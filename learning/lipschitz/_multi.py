@@ -30,7 +30,7 @@ import numpy as np
 
 from ._bounds import Features, leaf_boxes, threshold_scalar, thresholds
 from ._compiled import credit_multi, grouped_lower_ratios, grouped_survivors
-from ._search import PairCounters
+from ._search import PairCounters, spread_sample
 
 __all__ = ["check_labelings", "multi_pass", "pointwise_quotients_multi", "time_neighbour_pairs"]
 
@@ -97,9 +97,12 @@ def grouped_screen(f: Features, kern, rows: np.ndarray, cols: np.ndarray, lab_r:
     return ri, cj, LBr, LBc
 
 
-def warm_bounds(f: Features, kern, labels: np.ndarray, LB: np.ndarray, pool, m: int = 8) -> int:
+def warm_bounds(f: Features, kern, labels: np.ndarray, LB: np.ndarray, pool, m: int = 8,
+                extra: np.ndarray | None = None) -> int:
     """Raise the lower bounds LB (N, L, original order) of every labeling from each leaf's
-    ``m`` nearest leaves (``grouped_screen``'s bounds, both sides); returns pairs screened."""
+    ``m`` nearest leaves and the points ``extra`` (leaf-order positions, a sample spread
+    over all points: ``_search.spread_sample``), with ``grouped_screen``'s bounds, both
+    sides; returns the pairs screened."""
     zc = leaf_boxes(f)[4]
     n_leaves = len(f.leaf_start) - 1
     lock = threading.Lock()
@@ -109,7 +112,8 @@ def warm_bounds(f: Features, kern, labels: np.ndarray, LB: np.ndarray, pool, m: 
         k = min(m, n_leaves)
         near = np.argpartition(dc, k - 1)[:k] if k < n_leaves else np.arange(n_leaves)
         rows = np.arange(f.leaf_start[a], f.leaf_start[a + 1])
-        cols = np.concatenate([np.arange(f.leaf_start[b], f.leaf_start[b + 1]) for b in near])
+        cols = np.concatenate([np.arange(f.leaf_start[b], f.leaf_start[b + 1]) for b in near]
+                              + ([] if extra is None else [extra]))
         pr, pc = f.perm[rows], f.perm[cols]
         _, _, LBr, LBc = _grouped_bounds(f, kern, rows, cols, labels[pr], labels[pc], LB[pr], LB[pc])
         with lock:
@@ -307,7 +311,8 @@ def pointwise_quotients_multi(X, Y, labelings, *, return_partner: bool = False, 
     try:
         with _blas_single_thread():
             kern = NumpyKernel(f, X, Y)
-            stats.pairs_full_screened += warm_bounds(f, kern, labels, LB, pool, options.warmup_leaves)
+            stats.pairs_full_screened += warm_bounds(f, kern, labels, LB, pool, options.warmup_leaves,
+                                                       spread_sample(N, options.warmup_sample))
             stats.add(multi_pass(f, kern, labels, Q, P, LB, qmin, pool, bar, tile=options.tile,
                                  chunk=options.chunk))
     finally:

@@ -37,6 +37,7 @@ from ._search import (
     PairCounters,
     nearest_leaves,
     search_leaf,
+    spread_sample,
     symmetric_pass,
     warm_leaf,
 )
@@ -59,6 +60,8 @@ class SearchOptions:
         small_group: groups up to this size are done densely (all pairs, exactly).
         time_neighbours: initial bounds from rows k±1 … k±time_neighbours of a group.
         warmup_leaves: leaves in the warm-up of the symmetric pass (1 = own leaf).
+        warmup_sample: points spread over the group that every leaf is also bounded
+            against in the warm-up (``_search.spread_sample``: maximisers are often far away).
         tile: rows per tile of the symmetric pass.
         chunk: columns per screened chunk of the symmetric pass.
     """
@@ -67,6 +70,7 @@ class SearchOptions:
     small_group: int = 512
     time_neighbours: int = 2
     warmup_leaves: int = 8
+    warmup_sample: int = 1024
     tile: int = 256
     chunk: int = 4096
 
@@ -76,6 +80,8 @@ class SearchOptions:
         for name in ("small_group", "warmup_leaves", "tile", "chunk"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
+        if int(self.warmup_sample) < 0:
+            raise ValueError(f"warmup_sample must be >= 0, got {self.warmup_sample!r}")
         if int(self.time_neighbours) < 0:
             raise ValueError(f"time_neighbours must be >= 0, got {self.time_neighbours!r}")
 
@@ -345,7 +351,8 @@ def _one_group(X, Y, idx, q, partner, *, options: SearchOptions, block, n_compon
         # 2. every unordered pair screened once against those bounds.
         ctx.lb = qp.copy()
         m = options.warmup_leaves
-        warm = (lambda a: warm_leaf(ctx, a, m)) if f.xs is not None else \
+        far = spread_sample(n, options.warmup_sample)
+        warm = (lambda a: warm_leaf(ctx, a, m, far)) if f.xs is not None else \
             (lambda a: search_leaf(ctx, a, nearest_leaves(ctx, a, m)))
         for st in run(warm, range(n_leaves)):
             stats.add(st)
