@@ -205,7 +205,9 @@ def _per_sample_features(std: Demonstrations) -> tuple[np.ndarray, np.ndarray]:
 
 def _fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: AnalysisConfig
                ) -> tuple[TaskModes, np.ndarray]:
-    model = TaskModes(n_modes=n_modes, n_restarts=config.hmm_restarts, seed=config.seed).fit(Z, lengths)
+    # Restarts in parallel processes (the result does not depend on it).
+    model = TaskModes(n_modes=n_modes, n_restarts=config.hmm_restarts, seed=config.seed,
+                      n_jobs=-1).fit(Z, lengths)
     return model, model.predict(Z, lengths)
 
 
