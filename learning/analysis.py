@@ -40,7 +40,7 @@ from .lipschitz import pointwise_quotients, pointwise_quotients_multi
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
 from .predictability import paired_wilcoxon, threshold_from_percentile, voluntary_share
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
-from .reference import REFERENCES, min_trials_for, mode_evidence, random_labelings
+from .reference import REFERENCES, min_trials_for, mode_evidence, random_labelings, reference_segmentation
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]
 
@@ -241,6 +241,11 @@ def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: Ana
         if bar is not None:
             bar.update(1)
     R = config.search_random
+    # What does not depend on the window, once per number of modes: the time-free
+    # reference grouping (a mixture fit) and the HMM's BIC.
+    refs = {n: reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed + 1)
+            for n in config.search_modes}
+    bics = {n: float(fitted[n][0].bic(Z, lengths)) for n in config.search_modes}
     for window in config.search_windows:
         w = causal_windows(std, window, rms=True)
         # No grouping and every candidate's random groupings: one pass over the pairs.
@@ -255,7 +260,7 @@ def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: Ana
                                reference=config.reference, n_random=R,
                                random_method=config.random_method, alpha=SIGNIFICANCE,
                                min_effect=config.min_effect, seed=config.seed + 1, quotient=quotient,
-                               q_random=Q[1 + k * R:1 + (k + 1) * R])
+                               q_random=Q[1 + k * R:1 + (k + 1) * R], reference_labels=refs[n_modes])
             rows.append(Candidate(
                 window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
                 median_q_modes=float(np.median(ev.q_modes)),
@@ -267,7 +272,7 @@ def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: Ana
                 share_K=float(K0), share_without_modes=share0, share_with_modes=_mean_share(ev.q_modes, w.trial, K0),
                 share_reference=_mean_share(ev.q_reference, w.trial, K0),
                 share_random=float(np.mean([_mean_share(r, w.trial, K0) for r in ev.q_random])),
-                hmm_bic=float(model.bic(Z, lengths))))
+                hmm_bic=bics[n_modes]))
             if bar is not None:
                 bar.update(1)
     if bar is not None:

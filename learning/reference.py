@@ -275,7 +275,8 @@ def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index:
                   features: np.ndarray, labels: np.ndarray, *, reference: Reference = "gmm",
                   n_random: int = 20, random_method: str = "permutation", alpha: float = 1e-3,
                   min_effect: float = 0.0, seed: int = 0, quotient: Callable[..., np.ndarray] | None = None,
-                  q_modes: np.ndarray | None = None, q_random: np.ndarray | None = None) -> ModeEvidence:
+                  q_modes: np.ndarray | None = None, q_random: np.ndarray | None = None,
+                  reference_labels: np.ndarray | None = None) -> ModeEvidence:
     """Do the modes ``labels`` (per sample, on ``features`` (N_samples, D), the HMM's input
     space) lower the quotients of the windows ``X`` → ``Y`` (rows taken from samples
     ``source_index``, trials ``trial``) beyond a time-free grouping? See module doc.
@@ -287,7 +288,8 @@ def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index:
     faster). ``quotient``, when given, is used for every grouping one by one instead;
     ``q_modes`` (N,) and ``q_random`` (n_random, N) may be passed when already computed
     (``q_random`` for the groupings ``random_labelings(labels[source_index], n_random,
-    random_method, seed)``).
+    random_method, seed)``), and ``reference_labels`` (N_samples,), the result of
+    ``reference_segmentation(features, labels, reference, seed)``.
     """
     from .lipschitz import pointwise_quotients, pointwise_quotients_multi
 
@@ -295,7 +297,12 @@ def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index:
         raise ValueError(f"n_random must be >= 1, got {n_random}")
     labels = np.asarray(labels)
     single = quotient or pointwise_quotients
-    ref = reference_segmentation(features, labels, reference, seed)
+    if reference_labels is None:
+        ref = reference_segmentation(features, labels, reference, seed)
+    else:
+        ref = np.asarray(reference_labels)
+        if ref.shape != labels.shape:
+            raise ValueError(f"reference_labels must have the shape of labels {labels.shape}, got {ref.shape}")
     g = labels[source_index]
     qm = single(X, Y, g) if q_modes is None else np.asarray(q_modes, dtype=np.float64)
     qr = single(X, Y, ref[source_index])
