@@ -179,7 +179,7 @@ def multi_pass(f: Features, kern, labels: np.ndarray, Q: np.ndarray, P: np.ndarr
         rows = order[s:e]
         pr = perm[rows]
         spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
-        pend: list[tuple[np.ndarray, np.ndarray]] = []
+        pend: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
         n_pend = 0
         tile_full = False
         n_full = 0
@@ -187,9 +187,9 @@ def multi_pass(f: Features, kern, labels: np.ndarray, Q: np.ndarray, P: np.ndarr
         def flush() -> None:
             if not pend:
                 return
-            oi = perm[np.concatenate([a for a, _ in pend])]
-            oj = perm[np.concatenate([b for _, b in pend])]
-            r = kern.exact(oi, oj)
+            oi = perm[np.concatenate([a[0] for a in pend])]
+            oj = perm[np.concatenate([a[1] for a in pend])]
+            r = kern.sym_exact(np.concatenate([a[2] for a in pend]), np.concatenate([a[3] for a in pend]))
             st.pairs_exact += len(r)
             credit(oi, oj, r)
             pend.clear()
@@ -221,7 +221,7 @@ def multi_pass(f: Features, kern, labels: np.ndarray, Q: np.ndarray, P: np.ndarr
                     raise_lb(pc, Bc)
             if len(ri) == 0:
                 continue
-            pend.append((rows[ri], order[c0 + cj]))
+            pend.append((rows[ri], order[c0 + cj], s + ri, c0 + cj))
             n_pend += len(ri)
             if n_pend >= batch:
                 flush()

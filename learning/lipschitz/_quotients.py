@@ -69,8 +69,8 @@ class SearchOptions:
     search: Literal["symmetric", "per_leaf"] = "symmetric"
     small_group: int = 512
     time_neighbours: int = 2
-    warmup_leaves: int = 8
-    warmup_sample: int = 1024
+    warmup_leaves: int = 4
+    warmup_sample: int = 512
     tile: int = 256
     chunk: int = 4096
 

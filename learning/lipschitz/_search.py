@@ -266,7 +266,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
         e = min(s + tile, n)
         rows = order[s:e]
         spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
-        pend: list[tuple[np.ndarray, np.ndarray, bool]] = []
+        pend: list[tuple[np.ndarray, np.ndarray, bool, np.ndarray, np.ndarray]] = []
         n_pend = 0
         # The z screen or the full-d screen is chosen per chunk, not once for all tiles:
         # rows are in ascending lb and the first columns of a tile are the points of
@@ -287,12 +287,13 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
         def flush() -> None:
             # Survivors are evaluated in batches (per-call overhead), then credited.
             for diag in (True, False):
-                sel = [(gi, gj) for gi, gj, dg in pend if dg == diag]
+                sel = [(gi, gj, pi, pj) for gi, gj, dg, pi, pj in pend if dg == diag]
                 if not sel:
                     continue
-                gi = np.concatenate([a for a, _ in sel])
-                gj = np.concatenate([b for _, b in sel])
-                r = kern.exact(f.perm[gi], f.perm[gj])
+                gi = np.concatenate([a[0] for a in sel])
+                gj = np.concatenate([a[1] for a in sel])
+                # exact quotients by pass positions: the data in pass order (cache-friendly)
+                r = kern.sym_exact(np.concatenate([a[2] for a in sel]), np.concatenate([a[3] for a in sel]))
                 st.pairs_exact += len(r)
                 credit(gi, gj, r, not diag)
             pend.clear()
@@ -323,7 +324,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
                     raise_lb(cols, Lc)
             if len(ri) == 0:
                 continue
-            pend.append((rows[ri], order[c0 + cj], diag))
+            pend.append((rows[ri], order[c0 + cj], diag, s + ri, c0 + cj))
             n_pend += len(ri)
             if n_pend >= batch:
                 flush()
