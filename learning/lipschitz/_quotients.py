@@ -9,9 +9,15 @@ is recomputed by direct differences), while almost all pairs are discarded by
 conservative bounds: a float32 matrix-product screen on a principal-component
 lower bound of ‖Δx‖ with a proven rounding margin (``_bounds``),
 applied once per unordered pair against lower bounds of both points' quotients
-(``_search.symmetric_pass``).
+(``_search.symmetric_pass``). The lower bounds come from time neighbours (exact), and
+from a warm-up of full-dimensional float32 bounds against each k-d leaf's nearest
+leaves and a sample of points spread over the group (the maximiser is often far away
+in x). Survivors are recomputed by a compiled loop (``_compiled``, numba).
+Many labelings of the same points share one pass: :func:`pointwise_quotients_multi`
+(``_multi``).
 
-Memory is O(N·(d + block)) — the float32 copy of X plus a few (tile × chunk)
+Memory is O(N·(d + block)) — the float32 copy of X, a float64 copy of X and Y in the
+order of the pass (contiguous reads in the exact stage) and a few (tile × chunk)
 screening matrices per thread; time is N²/2 × (one short float32 product) plus
 the exact recomputation of the few survivors on windowed time series, and about
 half a blocked brute force on i.i.d. data, where no bound can prune (measured
