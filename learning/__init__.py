@@ -6,7 +6,8 @@
 - :mod:`learning.lipschitz` — exact, fast point-wise Lipschitz quotients.
 - :mod:`learning.predictability` — thresholds, voluntary shares, segmentation tests, model order.
 - :mod:`learning.modes` — HMM task modes offline (``TaskModes``) and online (``ModeFilter``).
-- :mod:`learning.analysis` — the paper's analysis end to end (``analyze``).
+- :mod:`learning.analysis` — the paper's analysis end to end (``analyze``); its search
+  over windows and numbers of modes in :mod:`learning.analysis_search`.
 - :mod:`learning.gate` — per-mode calibrated gates ``ModeGates`` and ``gate_metrics``.
 - :mod:`learning.predictor` — the LSTM reactive predictor ``ReactivePredictor`` with its
   NumPy ``PredictorStream`` (:mod:`learning.predictor_stream`);
@@ -14,5 +15,5 @@
   :mod:`learning.predictor_metrics` (RMSE per physical channel group),
   :mod:`learning.sequences` (per-trial sequence sets: checks, chunks, padding).
 
-Imports only numpy, scipy, scikit-learn, threadpoolctl, hmmlearn, torch and tqdm.
+Imports only numpy, scipy, scikit-learn, threadpoolctl, hmmlearn, numba, torch and tqdm.
 """

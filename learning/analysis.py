@@ -2,9 +2,11 @@
 
 1. preprocessing: downsample, standardise (fitted on the data), causal windows
    normalised by √L (:func:`learning.preprocess.causal_windows` with ``rms=True``);
-2. point-wise quotients q_i without modes; K at percentiles 50…100;
-3. HMM task modes fitted on the per-sample observations (not the windows: see
-   :mod:`learning.modes`); quotients within modes, within the time-free reference
+2. HMM task modes fitted on the per-sample observations (not the windows: see
+   :mod:`learning.modes`); then point-wise quotients q_i without modes (K at
+   percentiles 50…100) and within the random groupings, all in one pass over the pairs
+   (:func:`learning.lipschitz.pointwise_quotients_multi`);
+3. quotients within modes, within the time-free reference
    grouping of the same features (a Gaussian mixture by default) and within random
    groups of equal sizes (the paper's reference); the claim "modes add information"
    is the one-sided Wilcoxon signed-rank test over *trials* of per-trial median
@@ -12,9 +14,9 @@
 4. the voluntary share per trial at each K, without modes, within modes, within the
    reference and within random groups, with the paired one-sided Wilcoxon test over
    trials (modes vs reference);
-5. a search for missing information: every (window length, number of modes)
-   candidate ranked by how far its modes lower the per-trial median quotients
-   *beyond* the time-free reference grouping.
+5. a search for missing information (:mod:`learning.analysis_search`): every (window
+   length, number of modes) candidate ranked by how far its modes lower the per-trial
+   median quotients *beyond* the time-free reference grouping.
 
 :func:`analyze` returns an :class:`AnalysisResult`: the findings as an
 :class:`~learning.analysis_report.AnalysisReport` (``summary``; ``report`` is its
@@ -27,18 +29,19 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field, replace
-from typing import Any, Callable
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
-from .analysis_report import AnalysisReport, Candidate, ModesSummary, QuotientStats, SegmentationTest, VoluntaryShare
+from .analysis_report import AnalysisReport, ModesSummary, QuotientStats, SegmentationTest, VoluntaryShare
+from .analysis_search import fit_modes, search_candidates
 from .data import Demonstrations
-from .lipschitz import pointwise_quotients
+from .lipschitz import pointwise_quotients_multi
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
 from .predictability import paired_wilcoxon, threshold_from_percentile, voluntary_share
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
-from .reference import REFERENCES, min_trials_for, mode_evidence
+from .reference import REFERENCES, min_trials_for, mode_evidence, random_labelings
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]
 
@@ -201,12 +204,6 @@ def _per_sample_features(std: Demonstrations) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([tr.obs for tr in std.trials]), np.array([len(tr) for tr in std.trials])
 
 
-def _fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: AnalysisConfig
-               ) -> tuple[TaskModes, np.ndarray]:
-    model = TaskModes(n_modes=n_modes, n_restarts=config.hmm_restarts, seed=config.seed).fit(Z, lengths)
-    return model, model.predict(Z, lengths)
-
-
 def _check_windows(std: Demonstrations, config: AnalysisConfig) -> None:
     """Every window (analysis and search) must fit in the longest trial: checked
     before any long work starts, not when the search reaches that window."""
@@ -217,58 +214,6 @@ def _check_windows(std: Demonstrations, config: AnalysisConfig) -> None:
             raise AnalysisError(
                 f"{name} {window:g} s ({L} samples at {std.rate_hz:g} Hz) is longer than the longest "
                 f"trial ({longest} samples = {longest / std.rate_hz:g} s); use a shorter window")
-
-
-def _search(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
-            fitted: dict[int, tuple[TaskModes, np.ndarray]], quotient: Callable[..., np.ndarray],
-            progress: bool = False) -> list[Candidate]:
-    """Rank (window, n_modes) candidates by the median over trials of
-    log10(median q within the reference / median q within modes) (per-trial inference)."""
-    K0 = config.K[0]
-    rows = []
-    todo = [n for n in config.search_modes if n not in fitted]
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=len(todo) + len(config.search_windows) * len(config.search_modes),
-                   desc="search", unit="fit", leave=False)
-    for n_modes in todo:
-        fitted[n_modes] = _fit_modes(Z, lengths, n_modes, config)
-        if bar is not None:
-            bar.update(1)
-    for window in config.search_windows:
-        w = causal_windows(std, window, rms=True)
-        q0 = quotient(w.X, w.Y)
-        share0 = _mean_share(q0, w.trial, K0)
-        for n_modes in config.search_modes:
-            model, labels = fitted[n_modes]
-            ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
-                               reference=config.reference, n_random=config.search_random,
-                               random_method=config.random_method, alpha=SIGNIFICANCE,
-                               min_effect=config.min_effect, seed=config.seed + 1, quotient=quotient)
-            rows.append(Candidate(
-                window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
-                median_q_modes=float(np.median(ev.q_modes)),
-                median_q_reference=float(np.median(ev.q_reference)),
-                median_q_random=float(np.median(ev.q_random)),
-                gain_beyond_reference_log10=ev.vs_reference.effect / math.log(10),
-                p_value=ev.vs_reference.p_value,
-                gain_beyond_random_log10=ev.vs_random.effect / math.log(10),
-                share_K=float(K0), share_without_modes=share0, share_with_modes=_mean_share(ev.q_modes, w.trial, K0),
-                share_reference=_mean_share(ev.q_reference, w.trial, K0),
-                share_random=float(np.mean([_mean_share(r, w.trial, K0) for r in ev.q_random])),
-                hmm_bic=float(model.bic(Z, lengths))))
-            if bar is not None:
-                bar.update(1)
-    if bar is not None:
-        bar.close()
-    rows.sort(key=lambda r: -r.gain_beyond_reference_log10)
-    return [replace(r, rank=rank) for rank, r in enumerate(rows, 1)]
-
-
-def _mean_share(q: np.ndarray, trial: np.ndarray, K: float) -> float:
-    """Voluntary share at K, mean over trials."""
-    return float(np.mean(list(voluntary_share(q, trial, K).values())))
 
 
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
@@ -309,15 +254,10 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     steps = _Steps(5 + bool(n_search) + config.select_modes, progress, start=t_start)
     steps.done("preprocess")
 
-    # 2. quotients without modes
-    q = pointwise_quotients(w.X, w.Y, progress=progress)
-    K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
-    steps.done("quotients")
-
-    # 3. HMM modes, quotients within modes and within random segmentations
+    # 2. HMM modes
     Z, lengths = _per_sample_features(std)
     fitted: dict[int, tuple[TaskModes, np.ndarray]] = {}
-    fitted[config.n_modes] = _fit_modes(Z, lengths, config.n_modes, config)
+    fitted[config.n_modes] = fit_modes(Z, lengths, config.n_modes, config)
     model, labels = fitted[config.n_modes]
     modes = labels[w.source_index]
     true = w.mode if w.mode is not None and np.any(w.mode >= 0) else None
@@ -326,14 +266,25 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         agreement = float(mode_agreement(modes, true)[0])
         ari = float(mode_ari(modes, true))
     steps.done("modes")
+
+    # 3. quotients without modes and within the random segmentations of the test, in one
+    #    pass over the pairs (pointwise_quotients_multi; each equal to its own call)
+    rand = random_labelings(modes, config.n_random, config.random_method, config.seed)
+    Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]),
+                                  progress=progress)
+    q = Q[0]
+    K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
+    steps.done("quotients")
+
+    # 4. quotients within modes and within the time-free reference; the two tests
     ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
                        reference=config.reference, n_random=config.n_random,
                        random_method=config.random_method, alpha=SIGNIFICANCE, min_effect=config.min_effect,
-                       seed=config.seed)
+                       seed=config.seed, q_random=Q[1:])
     q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
     steps.done("segmentation test")
 
-    # 4. voluntary share per trial: without modes, within HMM modes, within the reference
+    # 5. voluntary share per trial: without modes, within HMM modes, within the reference
     #    and within random groups. Quotients within any grouping can only fall (fewer
     #    partners), so the paired test that means something is HMM modes against the
     #    time-free reference ("p_value"); against random groups and no modes are reported too.
@@ -361,8 +312,8 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             n_trials=int(len(ids)))
     steps.done("voluntary share")
 
-    # 5. search for missing information
-    candidates = (_search(std, Z, lengths, config, fitted, pointwise_quotients, progress)
+    # 6. search for missing information
+    candidates = (search_candidates(std, Z, lengths, config, fitted, SIGNIFICANCE, progress)
                   if n_search else [])
     if n_search:
         steps.done("search")

@@ -58,7 +58,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.mixture import GaussianMixture
 
 __all__ = ["REFERENCES", "ModeEvidence", "TrialTest", "min_trials_for", "mode_evidence",
-           "reference_segmentation", "size_matched_kmeans", "trial_medians", "trial_test"]
+           "random_labelings", "reference_segmentation", "size_matched_kmeans", "trial_medians", "trial_test"]
 
 REFERENCES = ("gmm", "kmeans-sized", "kmeans")
 Reference = Literal["gmm", "kmeans-sized", "kmeans"]
@@ -258,31 +258,62 @@ class ModeEvidence:
         return self.vs_reference.claimed and self.vs_random.claimed
 
 
+def random_labelings(labels: np.ndarray, n_random: int, method: str = "permutation", seed: int = 0
+                     ) -> np.ndarray:
+    """(n_random, N) random segmentations of ``labels`` (equal group sizes; see
+    :func:`learning.predictability.random_segmentation`), drawn in turn from one generator
+    seeded with ``seed`` (the draws :func:`mode_evidence` uses)."""
+    from .predictability import random_segmentation
+
+    if n_random < 1:
+        raise ValueError(f"n_random must be >= 1, got {n_random}")
+    rng = np.random.default_rng(seed)
+    return np.stack([random_segmentation(labels, rng, method) for _ in range(n_random)])
+
+
 def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index: np.ndarray,
                   features: np.ndarray, labels: np.ndarray, *, reference: Reference = "gmm",
                   n_random: int = 20, random_method: str = "permutation", alpha: float = 1e-3,
                   min_effect: float = 0.0, seed: int = 0, quotient: Callable[..., np.ndarray] | None = None,
-                  q_modes: np.ndarray | None = None) -> ModeEvidence:
+                  q_modes: np.ndarray | None = None, q_random: np.ndarray | None = None,
+                  reference_labels: np.ndarray | None = None) -> ModeEvidence:
     """Do the modes ``labels`` (per sample, on ``features`` (N_samples, D), the HMM's input
     space) lower the quotients of the windows ``X`` → ``Y`` (rows taken from samples
     ``source_index``, trials ``trial``) beyond a time-free grouping? See module doc.
 
-    ``quotient`` defaults to :func:`learning.lipschitz.pointwise_quotients`; ``q_modes``
-    may be passed when already computed.
+    Quotients: within modes and within the reference by
+    :func:`learning.lipschitz.pointwise_quotients`, within the ``n_random`` random groupings
+    (:func:`random_labelings` with ``seed``) all in one pass by
+    :func:`learning.lipschitz.pointwise_quotients_multi` (the same numbers, several times
+    faster). ``quotient``, when given, is used for every grouping one by one instead;
+    ``q_modes`` (N,) and ``q_random`` (n_random, N) may be passed when already computed
+    (``q_random`` for the groupings ``random_labelings(labels[source_index], n_random,
+    random_method, seed)``), and ``reference_labels`` (N_samples,), the result of
+    ``reference_segmentation(features, labels, reference, seed)``.
     """
-    from .lipschitz import pointwise_quotients
-    from .predictability import random_segmentation
+    from .lipschitz import pointwise_quotients, pointwise_quotients_multi
 
-    quotient = quotient or pointwise_quotients
     if n_random < 1:
         raise ValueError(f"n_random must be >= 1, got {n_random}")
     labels = np.asarray(labels)
-    ref = reference_segmentation(features, labels, reference, seed)
+    single = quotient or pointwise_quotients
+    if reference_labels is None:
+        ref = reference_segmentation(features, labels, reference, seed)
+    else:
+        ref = np.asarray(reference_labels)
+        if ref.shape != labels.shape:
+            raise ValueError(f"reference_labels must have the shape of labels {labels.shape}, got {ref.shape}")
     g = labels[source_index]
-    qm = quotient(X, Y, g) if q_modes is None else np.asarray(q_modes, dtype=np.float64)
-    qr = quotient(X, Y, ref[source_index])
-    rng = np.random.default_rng(seed)
-    qrand = np.stack([quotient(X, Y, random_segmentation(g, rng, random_method)) for _ in range(n_random)])
+    qm = single(X, Y, g) if q_modes is None else np.asarray(q_modes, dtype=np.float64)
+    qr = single(X, Y, ref[source_index])
+    if q_random is not None:
+        qrand = np.asarray(q_random, dtype=np.float64)
+        if qrand.shape != (n_random, len(g)):
+            raise ValueError(f"q_random must be (n_random, N) = ({n_random}, {len(g)}), got shape {qrand.shape}")
+    else:
+        rand = random_labelings(g, n_random, random_method, seed)
+        qrand = (np.stack([quotient(X, Y, r) for r in rand]) if quotient is not None
+                 else pointwise_quotients_multi(X, Y, rand))
     return ModeEvidence(
         q_modes=qm, q_reference=qr, q_random=qrand, reference_labels=ref,
         vs_reference=trial_test(qm, qr, trial, alpha=alpha, min_effect=min_effect, seed=seed),

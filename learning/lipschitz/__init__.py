@@ -6,6 +6,9 @@ Public API
 ----------
 - :func:`pointwise_quotients` — the exact quotients of every point (optionally the
   partner attaining each, and the work counters as a :class:`QuotientResult`).
+- :func:`pointwise_quotients_multi` — the quotients of many labelings (L × N labels) of
+  the same points in one pass over the pairs, each equal to the single-labeling call
+  (for labelings with alike quotients, e.g. random groupings and no grouping).
 - :class:`SearchOptions` — tuning of the search (never changes the result);
   :class:`SearchStats` — work counters of one call.
 - :func:`check_inputs` — the input validation ``pointwise_quotients`` applies.
@@ -14,13 +17,15 @@ Public API
   :func:`survivors` (positions of the entries ≥ 0 of a float32 screen).
 
 The engine lives in private modules: ``_bounds`` (conservative float32 bounds),
-``_exact`` (float64 pairs), ``_kernel`` (numpy screening), ``_search`` (branch and
-bound, symmetric pass),
-``_torch`` (the torch kernel), ``_quotients`` (the driver).
+``_exact`` (float64 pairs), ``_compiled`` (numba loops: exact pairs, running maxima,
+fused full-d screens), ``_kernel`` (numpy screening), ``_search`` (branch and bound,
+symmetric pass), ``_multi`` (many labelings in one pass), ``_torch`` (the torch
+kernel), ``_quotients`` (the driver).
 """
 
 from ._exact import pair_norms, pair_ratios
 from ._kernel import survivors
+from ._multi import pointwise_quotients_multi
 from ._quotients import (
                          QuotientResult,
                          SearchOptions,
@@ -37,5 +42,6 @@ __all__ = [
                          "pair_norms",
                          "pair_ratios",
                          "pointwise_quotients",
+                         "pointwise_quotients_multi",
                          "survivors",
 ]

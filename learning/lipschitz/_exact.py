@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._compiled import pair_ratios_compiled, update_best_compiled
+
 __all__ = ["dense_exact", "pair_norms", "pair_ratios", "update_best"]
 
 _PAIR_CHUNK = 1 << 15  # pairs per gather; bounds temporary memory to chunk·d·8 B
@@ -45,13 +47,13 @@ def pair_ratios(X: np.ndarray, Y: np.ndarray, i: np.ndarray, j: np.ndarray) -> n
     """Exact quotients ``‖Y[i]−Y[j]‖ / ‖X[i]−X[j]‖`` with the conventions above.
 
     Returns NaN for skipped pairs (identical in x and y, including i == j) and
-    ``inf`` for identical x with different y.
+    ``inf`` for identical x with different y. Evaluated by the compiled loop of
+    ``_compiled`` (direct differences in a fixed summation order), so a pair has the
+    same quotient, bit for bit, wherever the engine evaluates it.
     """
-    dx = pair_norms(X, i, j)
-    dy = pair_norms(Y, i, j)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = dy / dx  # 0/0 -> nan (skipped), y/0 -> inf
-    return r
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    Y = np.ascontiguousarray(Y, dtype=np.float64)
+    return pair_ratios_compiled(X, Y, i, j)
 
 
 def update_best(q: np.ndarray, partner: np.ndarray, rows: np.ndarray, cols_orig: np.ndarray,
@@ -63,24 +65,7 @@ def update_best(q: np.ndarray, partner: np.ndarray, rows: np.ndarray, cols_orig:
     quotients of 0 never set a partner (a point whose best quotient is 0 has
     partner -1).
     """
-    # Only r ≥ the current q can change anything (r == q may bring a smaller partner);
-    # NaN compares False; 0 cannot raise q above its initial 0.
-    keep = (r > 0) & (r >= q[rows])
-    if not keep.all():
-        rows, cols_orig, r = rows[keep], cols_orig[keep], r[keep]
-    if len(r) == 0:
-        return
-    # Best (largest r, then smallest j) per row: sort by row, -r, j.
-    order = np.lexsort((cols_orig, -r, rows))
-    rows, cols_orig, r = rows[order], cols_orig[order], r[order]
-    first = np.ones(len(rows), dtype=bool)
-    first[1:] = rows[1:] != rows[:-1]
-    rows, cols_orig, r = rows[first], cols_orig[first], r[first]
-    cur_q, cur_p = q[rows], partner[rows]
-    better = (r > cur_q) | ((r == cur_q) & (cols_orig < cur_p))
-    if better.any():
-        q[rows[better]] = r[better]
-        partner[rows[better]] = cols_orig[better]
+    update_best_compiled(q, partner, rows, cols_orig, r)
 
 
 def dense_exact(X: np.ndarray, Y: np.ndarray, idx: np.ndarray, q: np.ndarray,

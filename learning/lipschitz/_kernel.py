@@ -13,6 +13,7 @@ import threading
 import numpy as np
 
 from ._bounds import Features, row_features, threshold_scalar, thresholds
+from ._compiled import full_lower_ratios, full_survivors
 from ._exact import pair_ratios
 
 __all__ = ["NumpyKernel", "survivors"]
@@ -62,8 +63,13 @@ class NumpyKernel:
         return survivors(np.ascontiguousarray(S))
 
     def sym_prepare(self, order: np.ndarray) -> None:
-        """Copy the z-screen features into the order of the symmetric pass."""
+        """Copy the z-screen features, X and Y into the order of the symmetric pass (the
+        exact stage then reads a tile's and a chunk's rows from contiguous memory:
+        measured 350 → 100 ns a pair at d = 90, N = 50k)."""
         f = self.f
+        src = f.perm[order]
+        self.o_X = np.ascontiguousarray(self.X[src])
+        self.o_Y = np.ascontiguousarray(self.Y[src])
         self.o_col = np.ascontiguousarray(f.col_z[order])
         self.o_ws, self.o_nb = f.ws[order], f.nb[order]
         self.o_zs, self.o_na = f.zs[order], f.na[order]
@@ -85,36 +91,43 @@ class NumpyKernel:
         max(L, max sqrt(lb‖Δy‖² / ub‖Δx‖²)) — provable lower bounds of q.
         """
         f = self.f
-        xr, xc = f.xs[rows], f.xs[cols]
-        G = xr @ xc.T
-        G *= -2.0
-        xub = G + f.nx_hi[rows][:, None]
-        xub += f.nx_hi[cols][None, :]
-        G += f.nx_lo[rows][:, None]
-        G += f.nx_lo[cols][None, :]  # lower bound of ‖Δx̂‖²
-        Gy = f.ws[rows] @ f.ws[cols].T
-        Gy *= -2.0
-        ylb = Gy + f.nw_lo[rows][:, None]
-        ylb += f.nw_lo[cols][None, :]
-        Gy += f.nw_hi[rows][:, None]
-        Gy += f.nw_hi[cols][None, :]  # upper bound of ‖Δŵ‖²
-        ylb /= xub  # lower bound of the squared scaled ratio (xub > 0 by the norm floor)
+        G, Gy = self._grams(rows, cols)
+        best_r, best_c = full_lower_ratios(G, Gy, f.nx_hi[rows], f.nx_hi[cols], f.nw_lo[rows], f.nw_lo[cols])
         conv = f.scale_x / f.scale_y
-        def lift(best: np.ndarray) -> np.ndarray:
-            return np.sqrt(np.maximum(best.astype(np.float64), 0.0)) * conv * (1.0 - 1e-5)
 
-        Lr = np.maximum(Lr, lift(ylb.max(axis=1)))
-        Lc = np.maximum(Lc, lift(ylb.max(axis=0)))
+        def lift(best: np.ndarray) -> np.ndarray:
+            return np.sqrt(np.maximum(best, 0.0)) * conv * (1.0 - 1e-5)
+
+        Lr = np.maximum(Lr, lift(best_r))
+        Lc = np.maximum(Lc, lift(best_c))
         T = thresholds(Lr, f.scale_x, f.scale_y)
         if cap is not None:
             np.minimum(T, threshold_scalar(min(cap, Lc.min()), f.scale_x, f.scale_y), out=T)
-        G *= T[:, None]
-        Gy -= G
-        ri, cj = survivors(Gy)
+        ri, cj = full_survivors(G, Gy, f.nx_lo[rows], f.nx_lo[cols], f.nw_hi[rows], f.nw_hi[cols], T)
         return ri, cj, Lr, Lc
+
+    def _grams(self, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """float32 Gram matrices x̂_r x̂_cᵀ and ŵ_r ŵ_cᵀ (BLAS)."""
+        f = self.f
+        return f.xs[rows] @ f.xs[cols].T, f.ws[rows] @ f.ws[cols].T
+
+    def sym_survivors(self, rows: np.ndarray, cols: np.ndarray, T: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        """Survivors (positions) of the full-dimensional two-sided screen
+        ``ub‖Δy‖² ≥ T_i·lb‖Δx‖²`` of rows × cols with the given float32 thresholds
+        (no bound is raised: for labelings, where group-free bounds are not valid)."""
+        f = self.f
+        G, Gy = self._grams(rows, cols)
+        return full_survivors(G, Gy, f.nx_lo[rows], f.nx_lo[cols], f.nw_hi[rows], f.nw_hi[cols], T)
+
+    def sym_exact(self, pi: np.ndarray, pj: np.ndarray) -> np.ndarray:
+        """Exact quotients of pairs given by positions in the pass order (``sym_prepare``);
+        the same numbers as ``exact`` of their original indices."""
+        return pair_ratios(self.o_X, self.o_Y, pi, pj)
 
     def sym_release(self) -> None:
         self.o_col = self.o_ws = self.o_nb = self.o_zs = self.o_na = None
+        self.o_X = self.o_Y = None
 
     def tight(self, rows: np.ndarray, cols: np.ndarray, L: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

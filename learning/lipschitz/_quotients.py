@@ -9,9 +9,15 @@ is recomputed by direct differences), while almost all pairs are discarded by
 conservative bounds: a float32 matrix-product screen on a principal-component
 lower bound of ‖Δx‖ with a proven rounding margin (``_bounds``),
 applied once per unordered pair against lower bounds of both points' quotients
-(``_search.symmetric_pass``).
+(``_search.symmetric_pass``). The lower bounds come from time neighbours (exact), and
+from a warm-up of full-dimensional float32 bounds against each k-d leaf's nearest
+leaves and a sample of points spread over the group (the maximiser is often far away
+in x). Survivors are recomputed by a compiled loop (``_compiled``, numba).
+Many labelings of the same points share one pass: :func:`pointwise_quotients_multi`
+(``_multi``).
 
-Memory is O(N·(d + block)) — the float32 copy of X plus a few (tile × chunk)
+Memory is O(N·(d + block)) — the float32 copy of X, a float64 copy of X and Y in the
+order of the pass (contiguous reads in the exact stage) and a few (tile × chunk)
 screening matrices per thread; time is N²/2 × (one short float32 product) plus
 the exact recomputation of the few survivors on windowed time series, and about
 half a blocked brute force on i.i.d. data, where no bound can prune (measured
@@ -37,6 +43,7 @@ from ._search import (
     PairCounters,
     nearest_leaves,
     search_leaf,
+    spread_sample,
     symmetric_pass,
     warm_leaf,
 )
@@ -59,6 +66,8 @@ class SearchOptions:
         small_group: groups up to this size are done densely (all pairs, exactly).
         time_neighbours: initial bounds from rows k±1 … k±time_neighbours of a group.
         warmup_leaves: leaves in the warm-up of the symmetric pass (1 = own leaf).
+        warmup_sample: points spread over the group that every leaf is also bounded
+            against in the warm-up (``_search.spread_sample``: maximisers are often far away).
         tile: rows per tile of the symmetric pass.
         chunk: columns per screened chunk of the symmetric pass.
     """
@@ -66,7 +75,8 @@ class SearchOptions:
     search: Literal["symmetric", "per_leaf"] = "symmetric"
     small_group: int = 512
     time_neighbours: int = 2
-    warmup_leaves: int = 8
+    warmup_leaves: int = 4
+    warmup_sample: int = 512
     tile: int = 256
     chunk: int = 4096
 
@@ -76,6 +86,8 @@ class SearchOptions:
         for name in ("small_group", "warmup_leaves", "tile", "chunk"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
+        if int(self.warmup_sample) < 0:
+            raise ValueError(f"warmup_sample must be >= 0, got {self.warmup_sample!r}")
         if int(self.time_neighbours) < 0:
             raise ValueError(f"time_neighbours must be >= 0, got {self.time_neighbours!r}")
 
@@ -345,7 +357,8 @@ def _one_group(X, Y, idx, q, partner, *, options: SearchOptions, block, n_compon
         # 2. every unordered pair screened once against those bounds.
         ctx.lb = qp.copy()
         m = options.warmup_leaves
-        warm = (lambda a: warm_leaf(ctx, a, m)) if f.xs is not None else \
+        far = spread_sample(n, options.warmup_sample)
+        warm = (lambda a: warm_leaf(ctx, a, m, far)) if f.xs is not None else \
             (lambda a: search_leaf(ctx, a, nearest_leaves(ctx, a, m)))
         for st in run(warm, range(n_leaves)):
             stats.add(st)

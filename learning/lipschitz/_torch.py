@@ -78,6 +78,7 @@ class TorchKernel:
 
     def sym_prepare(self, order: np.ndarray) -> None:
         """z-screen features in the order of the symmetric pass (see ``symmetric_pass``)."""
+        self._o_src = self.f.perm[order]
         o = self._idx(order)
         self.o_col = self.col_z[o].contiguous()
         self.o_ws, self.o_nb, self.o_zs, self.o_na = self.ws[o], self.nb[o], self.zs[o], self.na[o]
@@ -109,6 +110,10 @@ class TorchKernel:
         Tt = torch.from_numpy(T).to(self.dev)
         ri, cj = self._where(yub >= Tt[:, None] * xlb, len(cols))
         return ri, cj, Lr, Lc
+
+    def sym_exact(self, pi: np.ndarray, pj: np.ndarray) -> np.ndarray:
+        """Exact quotients of pairs given by positions in the pass order."""
+        return self.exact(self._o_src[pi], self._o_src[pj])
 
     def sym_release(self) -> None:
         self.o_col = self.o_ws = self.o_nb = self.o_zs = self.o_na = None

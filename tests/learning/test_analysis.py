@@ -135,7 +135,7 @@ def test_window_longer_than_every_trial_is_refused_before_any_work(kwargs, name,
         raise AssertionError("the analysis started working before refusing the window")
 
     # Refused up front: no quotient is computed and no HMM is fitted first.
-    monkeypatch.setattr(analysis, "pointwise_quotients", no_work)
+    monkeypatch.setattr(analysis, "pointwise_quotients_multi", no_work)
     monkeypatch.setattr(analysis.TaskModes, "fit", no_work)
     with pytest.raises(AnalysisError, match=f"{name} .300 samples at 10 Hz. is longer than the "
                                             f"longest trial .180 samples"):

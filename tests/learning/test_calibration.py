@@ -138,3 +138,21 @@ def test_reference_uses_as_many_groups_and_no_time(method):
     assert stats.contingency.crosstab(g[perm], g2).count.max(axis=1).sum() >= 0.97 * 400
     with pytest.raises(ValueError, match="reference must be one of"):
         reference_segmentation(Z, labels, "hmm")
+
+
+def test_mode_evidence_shared_pass_equals_per_grouping_calls():
+    """Random groupings in one pointwise_quotients_multi pass = one call per grouping."""
+    from learning.lipschitz import pointwise_quotients
+    from learning.reference import random_labelings
+
+    X, Y, trial, src, feats, regime = _hidden_regime_data(4, 250, seed=5)
+    kw = dict(reference="gmm", n_random=3, alpha=SIGNIFICANCE, min_effect=MIN_EFFECT, seed=2)
+    shared = mode_evidence(X, Y, trial, src, feats, regime, **kw)
+    single = mode_evidence(X, Y, trial, src, feats, regime, quotient=pointwise_quotients, **kw)
+    assert np.array_equal(shared.q_random, single.q_random)
+    assert np.array_equal(shared.q_modes, single.q_modes)
+    assert shared.vs_random.p_value == single.vs_random.p_value
+    rand = random_labelings(regime[src], 3, seed=2)
+    assert np.array_equal(shared.q_random[1], pointwise_quotients(X, Y, rand[1]))
+    with pytest.raises(ValueError, match=r"q_random must be \(n_random, N\) = \(3, "):
+        mode_evidence(X, Y, trial, src, feats, regime, q_random=shared.q_random[:2], **kw)

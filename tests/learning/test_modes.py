@@ -400,3 +400,38 @@ def test_regularised_hmm_matches_hmmlearn_em_step(data):
     np.testing.assert_allclose(ours.means_, ref.means_, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(ours.covars_, ref.covars_, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(ours.transmat_, ref.transmat_, rtol=1e-9)
+
+
+def _two_regimes(seed: int = 0, outlier: bool = False) -> tuple[np.ndarray, list[int]]:
+    rng = np.random.default_rng(seed)
+    Z = rng.normal(size=(1800, 3))
+    Z[(np.arange(1800) // 150) % 2 == 1] += 3.0
+    if outlier:
+        Z[100] = 1e4  # no state explains it: the scaling forward pass underflows
+    return Z, [600, 600, 600]
+
+
+def test_parallel_restarts_give_the_same_model():
+    Z, lengths = _two_regimes()
+    a = TaskModes(n_modes=2, n_restarts=3, seed=1).fit(Z, lengths)
+    b = TaskModes(n_modes=2, n_restarts=3, seed=1, n_jobs=2).fit(Z, lengths)
+    assert a.restart_logliks_ == b.restart_logliks_
+    assert np.array_equal(a.predict(Z, lengths), b.predict(Z, lengths))
+
+
+@pytest.mark.parametrize("outlier", [False, True])
+def test_scaling_fit_equals_log_fit_and_falls_back(outlier, monkeypatch):
+    """The fit runs hmmlearn's "scaling" forward–backward (log space where it underflows):
+    the same model as a fit in log space throughout."""
+    Z, lengths = _two_regimes(outlier=outlier)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fast = TaskModes(n_modes=2, n_restarts=2, seed=3).fit(Z, lengths)
+        orig = TaskModes._fit_restart_with
+        monkeypatch.setattr(TaskModes, "_fit_restart_with",
+                            lambda self, Z, lengths, seed, impl: orig(self, Z, lengths, seed, "log"))
+        slow = TaskModes(n_modes=2, n_restarts=2, seed=3).fit(Z, lengths)
+    assert fast.model_.implementation == "log"
+    np.testing.assert_allclose(fast.restart_logliks_, slow.restart_logliks_, rtol=1e-9)
+    np.testing.assert_allclose(fast.model_.means_, slow.model_.means_, rtol=1e-7, atol=1e-9)
+    assert np.array_equal(fast.predict(Z, lengths), slow.predict(Z, lengths))
