@@ -33,7 +33,7 @@ import numpy as np
 
 from ._bounds import Features, leaf_boxes, threshold_scalar, thresholds
 from ._compiled import credit_multi, grouped_lower_ratios, grouped_survivors
-from ._search import PairCounters, spread_sample
+from ._search import PairCounters, run_tiles, spread_sample
 
 __all__ = ["check_labelings", "multi_pass", "pointwise_quotients_multi", "time_neighbour_pairs"]
 
@@ -232,17 +232,7 @@ def multi_pass(f: Features, kern, labels: np.ndarray, Q: np.ndarray, P: np.ndarr
         flush()
         return st, (e - s) * (e - s - 1) // 2 + (e - s) * (n - e)
 
-    total = PairCounters()
-    starts = list(range(0, n, tile))
-    try:
-        results = map(task, starts) if pool is None else pool.map(task, starts)
-        for st, work in results:
-            total.add(st)
-            if bar is not None:
-                bar.update(work)
-    finally:
-        kern.sym_release()
-    return total
+    return run_tiles(task, n, tile, pool, bar, kern)
 
 
 def pointwise_quotients_multi(X, Y, labelings, *, return_partner: bool = False, block: int = 256,

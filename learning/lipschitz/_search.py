@@ -55,6 +55,7 @@ __all__ = [
     "LeafContext",
     "PairCounters",
     "nearest_leaves",
+    "run_tiles",
     "search_leaf",
     "spread_sample",
     "symmetric_pass",
@@ -332,6 +333,13 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
         flush()
         return st, (e - s) * (e - s - 1) // 2 + (e - s) * (n - e)
 
+    return run_tiles(task, n, tile, pool, bar, kern)
+
+
+def run_tiles(task, n: int, tile: int, pool, bar, kern) -> PairCounters:
+    """Run ``task(s)`` for the row tiles s = 0, tile, 2·tile, … < n (in ``pool`` if given),
+    sum their counters, advance ``bar`` by each tile's pairs, and release the kernel's
+    pass-order copies (``kern.sym_release``) whatever happens."""
     total = PairCounters()
     starts = list(range(0, n, tile))
     try:
