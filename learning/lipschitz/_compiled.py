@@ -173,6 +173,13 @@ def credit_multi(Q: np.ndarray, P: np.ndarray, LB: np.ndarray, tmin: np.ndarray,
                       np.ascontiguousarray(gj, dtype=np.int64), np.ascontiguousarray(r))
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _gram_sq_dist(G, a, c, n_row, n_col):  # pragma: no cover - compiled
+    """Squared distance ``n_row + n_col − 2·G[a, c]`` from a float32 Gram entry and two
+    (margined) squared norms, in float64 (in this order, so every kernel rounds alike)."""
+    return -2.0 * np.float64(G[a, c]) + n_row + np.float64(n_col[c])
+
+
 @numba.njit(cache=True, nogil=True)
 def _full_survivors(G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, out_r, out_c):  # pragma: no cover
     cnt = 0
@@ -181,13 +188,23 @@ def _full_survivors(G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, out_r, out_c):  # prag
         xr = np.float64(nxl_r[a])
         yr = np.float64(nwh_r[a])
         for c in range(G.shape[1]):
-            xlb = -2.0 * np.float64(G[a, c]) + xr + np.float64(nxl_c[c])
-            yub = -2.0 * np.float64(Gy[a, c]) + yr + np.float64(nwh_c[c])
+            xlb = _gram_sq_dist(G, a, c, xr, nxl_c)
+            yub = _gram_sq_dist(Gy, a, c, yr, nwh_c)
             if yub >= ta * xlb:
                 out_r[cnt] = a
                 out_c[cnt] = c
                 cnt += 1
     return cnt
+
+
+def _collect(kernel, G: np.ndarray, *args) -> tuple[np.ndarray, np.ndarray]:
+    """Run a survivor ``kernel(G, *args, out_r, out_c) -> count`` over the (a × c) block of
+    ``G`` and return the (row, column) positions it kept."""
+    a, c = G.shape
+    out_r = np.empty(a * c, dtype=np.int64)
+    out_c = np.empty(a * c, dtype=np.int64)
+    k = kernel(G, *args, out_r, out_c)
+    return out_r[:k].copy(), out_c[:k].copy()
 
 
 def full_survivors(G: np.ndarray, Gy: np.ndarray, nxl_r: np.ndarray, nxl_c: np.ndarray,
@@ -197,11 +214,7 @@ def full_survivors(G: np.ndarray, Gy: np.ndarray, nxl_r: np.ndarray, nxl_c: np.n
     lb‖Δx̂‖² = nxl_r + nxl_c − 2G, ub‖Δŵ‖² = nwh_r + nwh_c − 2Gy. The additions and the
     product by T are done in float64 (exact for these float32 operands up to one
     rounding), so the test is at least as conservative as its float32 form."""
-    a, c = G.shape
-    out_r = np.empty(a * c, dtype=np.int64)
-    out_c = np.empty(a * c, dtype=np.int64)
-    k = _full_survivors(G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, out_r, out_c)
-    return out_r[:k].copy(), out_c[:k].copy()
+    return _collect(_full_survivors, G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -211,8 +224,8 @@ def _full_lower(G, Gy, nxh_r, nxh_c, nwl_r, nwl_c, rowmax, colmax):  # pragma: n
         yr = np.float64(nwl_r[a])
         best = rowmax[a]
         for c in range(G.shape[1]):
-            xub = -2.0 * np.float64(G[a, c]) + xr + np.float64(nxh_c[c])
-            ylb = -2.0 * np.float64(Gy[a, c]) + yr + np.float64(nwl_c[c])
+            xub = _gram_sq_dist(G, a, c, xr, nxh_c)
+            ylb = _gram_sq_dist(Gy, a, c, yr, nwl_c)
             v = ylb / xub
             if v > best:
                 best = v
@@ -252,8 +265,8 @@ def _grouped_lower(G, Gy, nxh_r, nxh_c, nwl_r, nwl_c, lab_r, lab_c, Tr, Tc, Br, 
         xr = np.float64(nxh_r[a])
         yr = np.float64(nwl_r[a])
         for c in range(c_n):
-            xub = -2.0 * np.float64(G[a, c]) + xr + np.float64(nxh_c[c])
-            ylb = -2.0 * np.float64(Gy[a, c]) + yr + np.float64(nwl_c[c])
+            xub = _gram_sq_dist(G, a, c, xr, nxh_c)
+            ylb = _gram_sq_dist(Gy, a, c, yr, nwl_c)
             v = ylb / xub
             if v > rmin[a]:
                 m0 = np.inf
@@ -298,8 +311,8 @@ def _grouped_survivors(G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, Tr, Tc, lab_r, lab_
         xr = np.float64(nxl_r[a])
         yr = np.float64(nwh_r[a])
         for c in range(G.shape[1]):
-            xlb = -2.0 * np.float64(G[a, c]) + xr + np.float64(nxl_c[c])
-            yub = -2.0 * np.float64(Gy[a, c]) + yr + np.float64(nwh_c[c])
+            xlb = _gram_sq_dist(G, a, c, xr, nxl_c)
+            yub = _gram_sq_dist(Gy, a, c, yr, nwh_c)
             if yub < ta * xlb:
                 continue
             # the smallest lower bound among the labelings in which the pair shares a group
@@ -323,8 +336,4 @@ def grouped_survivors(G: np.ndarray, Gy: np.ndarray, nxl_r: np.ndarray, nxl_c: n
     ``ub‖Δŵ‖² ≥ t·lb‖Δx̂‖²`` with t the smallest of Tr[a, m], Tc[c, m] (thresholds in the
     same squared scaled units, rounded down) over the labelings m in which both points
     share a group; a pair that shares no group is dropped."""
-    a, c = G.shape
-    out_r = np.empty(a * c, dtype=np.int64)
-    out_c = np.empty(a * c, dtype=np.int64)
-    k = _grouped_survivors(G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, Tr, Tc, lab_r, lab_c, out_r, out_c)
-    return out_r[:k].copy(), out_c[:k].copy()
+    return _collect(_grouped_survivors, G, Gy, nxl_r, nxl_c, nwh_r, nwh_c, T, Tr, Tc, lab_r, lab_c)
