@@ -313,7 +313,10 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     steps.done("voluntary share")
 
     # 6. search for missing information
-    candidates = (search_candidates(std, Z, lengths, config, fitted, SIGNIFICANCE, progress)
+    # the main analysis's quotients within its modes are those of the search's candidate
+    # (window_s, n_modes): same windows, same HMM labels
+    candidates = (search_candidates(std, Z, lengths, config, fitted, SIGNIFICANCE, progress,
+                                    known_q_modes={(float(config.window_s), int(config.n_modes)): q_modes})
                   if n_search else [])
     if n_search:
         steps.done("search")

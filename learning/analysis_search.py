@@ -37,14 +37,17 @@ def fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: Analysis
 
 def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
                       fitted: dict[int, tuple[TaskModes, np.ndarray]], alpha: float,
-                      progress: bool = False) -> list[Candidate]:
+                      progress: bool = False,
+                      known_q_modes: dict[tuple[float, int], np.ndarray] | None = None) -> list[Candidate]:
     """Rank (window, n_modes) candidates by the median over trials of
     log10(median q within the reference / median q within modes) (per-trial inference).
 
     ``fitted`` holds the HMMs already fitted (by number of modes); the others are fitted
     and added. Per window, the quotients without modes and within every candidate's
     random groupings come from one :func:`pointwise_quotients_multi` pass; within modes
-    and within the reference from one :func:`pointwise_quotients` call each."""
+    and within the reference from one :func:`pointwise_quotients` call each.
+    ``known_q_modes`` maps (window [s], n_modes) to quotients within those modes already
+    computed on the same windows (the main analysis's), which are then not recomputed."""
     K0 = config.K[0]
     rows = []
     todo = [n for n in config.search_modes if n not in fitted]
@@ -77,7 +80,8 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
                                reference=config.reference, n_random=R,
                                random_method=config.random_method, alpha=alpha,
                                min_effect=config.min_effect, seed=config.seed + 1,
-                               q_random=Q[1 + k * R:1 + (k + 1) * R], reference_labels=refs[n_modes])
+                               q_random=Q[1 + k * R:1 + (k + 1) * R], reference_labels=refs[n_modes],
+                               q_modes=(known_q_modes or {}).get((float(window), int(n_modes))))
             rows.append(Candidate(
                 window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
                 median_q_modes=float(np.median(ev.q_modes)),

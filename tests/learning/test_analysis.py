@@ -8,6 +8,7 @@ import pytest
 from learning import analysis
 from learning.analysis import AnalysisConfig, AnalysisError, analyze
 from learning.data import Trial
+from learning.lipschitz import pointwise_quotients
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 FAST = {"n_random": 3, "search_windows": (), "search_modes": ()}
@@ -88,9 +89,15 @@ def test_no_mode_structure_claims_no_gain():
 
 def test_search_ranks_candidates():
     demos = generate_demonstrations(1, 4, seed=0)
-    r = analyze(demos, AnalysisConfig(n_random=2, search_windows=(0.5, 1.0), search_modes=(1, 4),
-                                      hmm_restarts=1)).report
+    res = analyze(demos, AnalysisConfig(n_random=2, search_windows=(0.5, 1.0), search_modes=(1, 4),
+                                        hmm_restarts=1))
+    r = res.report
     c = r["candidates"]
+    # the candidate of the main analysis's (window, n_modes) reuses its quotients within
+    # modes: they are the quotients within those modes on those windows
+    same = [x for x in c if x["window_s"] == 1.0 and x["n_modes"] == 4]
+    w = res.windows
+    assert same[0]["median_q_modes"] == np.median(pointwise_quotients(w.X, w.Y, res.modes))
     assert len(c) == 4 and [x["rank"] for x in c] == [1, 2, 3, 4]
     gains = [x["gain_beyond_reference_log10"] for x in c]
     assert gains == sorted(gains, reverse=True)
