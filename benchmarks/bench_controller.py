@@ -45,7 +45,8 @@ from sim.demonstrator import (
 
 def small_bundle(demos, seed: int = 0):
     """A real bundle trained on ``demos`` with short settings (``mpcshare.training.train_bundle``)."""
-    from mpcshare.training import TrainConfig, train_bundle
+    from mpcshare.train_config import TrainConfig
+    from mpcshare.training import train_bundle
 
     cfg = TrainConfig(n_modes=4, hmm_restarts=1, max_epochs=10, patience=3, gate_max_samples=600, seed=seed)
     return train_bundle(demos, cfg, progress=False)

@@ -38,7 +38,8 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from learning.gate import ModeGates, gate_metrics
+from learning.gate import ModeGates
+from learning.gate_metrics import gate_metrics
 from learning.lipschitz import pointwise_quotients
 from learning.modes import TaskModes
 from learning.predictor import ReactivePredictor, RidgeWindowBaseline, rmse_by_group

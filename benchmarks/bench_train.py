@@ -54,7 +54,8 @@ def main() -> None:
 
     from mpcshare.bundle import save_bundle
     from mpcshare.sweep import run_sweep
-    from mpcshare.training import TrainConfig, train_bundle
+    from mpcshare.train_config import TrainConfig
+    from mpcshare.training import train_bundle
     from sim.demonstrator import generate_demonstrations
 
     res: dict = {"machine": platform.machine(), "cpus": os.cpu_count(), "load_avg_start": os.getloadavg()[0],

@@ -8,7 +8,8 @@
 - :mod:`learning.modes` — HMM task modes offline (``TaskModes``) and online (``ModeFilter``).
 - :mod:`learning.analysis` — the paper's analysis end to end (``analyze``); its search
   over windows and numbers of modes in :mod:`learning.analysis_search`.
-- :mod:`learning.gate` — per-mode calibrated gates ``ModeGates`` and ``gate_metrics``.
+- :mod:`learning.gate` — per-mode calibrated gates ``ModeGates``; their scores
+  (accuracy, F1, Brier) in :mod:`learning.gate_metrics` (``gate_metrics``).
 - :mod:`learning.predictor` — the LSTM reactive predictor ``ReactivePredictor`` with its
   NumPy ``PredictorStream`` (:mod:`learning.predictor_stream`);
   :mod:`learning.predictor_baseline` (ridge on the window),

@@ -41,7 +41,6 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.calibration import CalibratedClassifierCV
 from sklearn.kernel_approximation import Nystroem
-from sklearn.metrics import accuracy_score, brier_score_loss, f1_score
 from sklearn.model_selection import StratifiedKFold
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
@@ -49,7 +48,7 @@ from sklearn.svm import SVC, LinearSVC
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
-__all__ = ["ConstantGate", "ModeGates", "check_gate_inputs", "gate_metrics"]
+__all__ = ["ConstantGate", "ModeGates", "check_gate_inputs", "check_gate_labels"]
 
 KERNELS = ("rbf", "nystroem")
 
@@ -135,7 +134,8 @@ def _stratified_subsample(rows: np.ndarray, y: np.ndarray, cap: int, min_count: 
                                    rng.choice(neg, k_neg, replace=False)]))
 
 
-def _check_labels(labels: Any, n: int) -> np.ndarray:
+def check_gate_labels(labels: Any, n: int) -> np.ndarray:
+    """Validate ``labels`` (n,) of 0/1 (or bool); return them as ints."""
     y_raw = np.asarray(labels)
     if y_raw.shape != (n,):
         raise ValueError(f"labels must have shape ({n},), got {y_raw.shape}")
@@ -224,7 +224,7 @@ class ModeGates(BaseEstimator):
         if not (isinstance(n_modes, numbers.Integral) and n_modes >= 1):
             raise ValueError(f"n_modes must be an integer ≥ 1, got {n_modes!r}")
         X, m = check_gate_inputs(windows, modes, int(n_modes))
-        y = _check_labels(labels, X.shape[0])
+        y = check_gate_labels(labels, X.shape[0])
         if X.shape[0] == 0:
             raise ValueError("no training rows: windows is empty")
         with threadpool_limits(1):  # small matrices: BLAS threads only add contention
@@ -385,32 +385,3 @@ class ModeGates(BaseEstimator):
         return {"kernel": self.kernel, "n_modes": self.n_modes_, "n_features": self.n_features_in_,
                 "n_train": list(self.n_train_), "gamma": list(self.gamma_),
                 "constant_modes": {str(k): dict(v) for k, v in self.constant_modes_.items()}}
-
-
-def _scores(y: np.ndarray, p: np.ndarray, threshold: float) -> dict[str, Any]:
-    n = int(y.size)
-    if n == 0:
-        return {"n": 0, "n_positive": 0, "accuracy": None, "f1": None, "brier": None}
-    pred = (p >= threshold).astype(int)
-    return {"n": n, "n_positive": int(y.sum()),
-            "accuracy": float(accuracy_score(y, pred)),
-            "f1": float(f1_score(y, pred, zero_division=0.0)),
-            "brier": float(brier_score_loss(y, np.clip(p, 0.0, 1.0), pos_label=1))}
-
-
-def gate_metrics(gates: ModeGates, windows: Any, modes: Any, labels: Any,
-                 threshold: float = 0.5) -> dict[str, Any]:
-    """Accuracy, F1 (of class 1 = predictable) and Brier score of the gates on (held-out) rows,
-    per mode and overall, with counts. JSON-able; a mode without rows has None scores.
-
-    Returns ``{"overall": {...}, "per_mode": {"0": {..., "constant": bool}, ...}}``.
-    """
-    check_is_fitted(gates, "gates_")
-    X, m = check_gate_inputs(windows, modes, gates.n_modes_, gates.n_features_in_)
-    y = _check_labels(labels, X.shape[0])
-    p = gates.predict_proba(X, m) if X.shape[0] else np.zeros(0)
-    per_mode = {}
-    for j in range(gates.n_modes_):
-        sel = m == j
-        per_mode[str(j)] = {**_scores(y[sel], p[sel], threshold), "constant": j in gates.constant_modes_}
-    return {"overall": _scores(y, p, threshold), "per_mode": per_mode, "threshold": float(threshold)}

@@ -5,9 +5,10 @@
   ``sim``, ``demo``);
 - :mod:`mpcshare.report` — analysis reports (JSON, Markdown) and plots.
 - :mod:`mpcshare.bundle` — model bundles (:func:`load_bundle`, re-exported here lazily,
-  so that ``import mpcshare`` does not import torch or scikit-learn).
+  so that ``import mpcshare`` does not import torch or scikit-learn); their JSON encodings,
+  checksums and durable writes in :mod:`mpcshare.bundle_files`.
 - :mod:`mpcshare.training`, :mod:`mpcshare.sweep`, :mod:`mpcshare.evaluation` — training a
-  bundle, the K trade-off, held-out metrics.
+  bundle, the K trade-off, held-out metrics; the settings in :mod:`mpcshare.train_config`.
 - :mod:`mpcshare.streaming`, :mod:`mpcshare.arbitration`, :mod:`mpcshare.controller` — the
   online loop (:class:`~mpcshare.controller.SharedController`); :mod:`mpcshare.symbolic`,
   :mod:`mpcshare.mpc` — the CasADi model and MPC.

@@ -20,13 +20,12 @@ A bundle (format version :data:`FORMAT_VERSION`) is a folder holding
 file and the folder, then renames it onto the target: the bundle folder is complete
 or absent. :func:`load_bundle` checks the manifest before reading anything and
 raises one :class:`BundleError` whose message starts with the offending file.
+JSON encodings, checksums and fsync are in :mod:`mpcshare.bundle_files`.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
-import math
 import os
 import shutil
 import tempfile
@@ -34,10 +33,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
-import numpy as np
-
 from learning.atomic import default_dir_mode
-from learning.preprocess import Preprocessor, Standardizer
+from learning.preprocess import Preprocessor
+from mpcshare.bundle_files import (
+    file_sha256,
+    from_json_number,
+    fsync_path,
+    json_number,
+    library_versions,
+    standardizer_from_json,
+    standardizer_to_json,
+    write_json,
+)
 
 if TYPE_CHECKING:  # pragma: no cover - imported lazily (torch and sklearn are slow to import)
     from learning.gate import ModeGates
@@ -118,71 +125,6 @@ class ModelBundle:
         return window_lags(self.window_s, self.model_hz)
 
 
-# ----------------------------------------------------------------- helpers
-
-def _json_number(x: float) -> float | None:
-    """A float for JSON; +∞ becomes None (read back as +∞ by :func:`_from_json_number`)."""
-    x = float(x)
-    if math.isnan(x) or x == -math.inf:
-        raise ValueError(f"cannot store {x} in a bundle")
-    return None if x == math.inf else x
-
-
-def _from_json_number(x: float | None) -> float:
-    return math.inf if x is None else float(x)
-
-
-def _standardizer_to_json(s: Standardizer) -> dict[str, Any]:
-    if not hasattr(s, "mean_"):
-        raise ValueError("the preprocessor's standardizers must be fitted")
-    sensors = s.sensors if s.sensors is None or isinstance(s.sensors, (int, np.integer)) \
-        else [list(map(int, g)) for g in s.sensors]
-    return {"scope": s.scope, "sensors": sensors, "field": s.field,
-            "mean": [float(v) for v in s.mean_], "scale": [float(v) for v in s.scale_],
-            "groups": [[int(i) for i in g] for g in s.groups_]}
-
-
-def _standardizer_from_json(d: dict[str, Any]) -> Standardizer:
-    s = Standardizer(d["scope"], sensors=d["sensors"], field=d["field"])
-    s.mean_ = np.asarray(d["mean"], dtype=float)
-    s.scale_ = np.asarray(d["scale"], dtype=float)
-    s.groups_ = [np.asarray(g, dtype=int) for g in d["groups"]]
-    s.n_features_in_ = int(s.mean_.shape[0])
-    if s.scale_.shape != s.mean_.shape or not (np.isfinite(s.mean_).all() and (s.scale_ > 0).all()):
-        raise ValueError("mean and scale must be finite, of equal length, scale > 0")
-    return s
-
-
-def _library_versions() -> dict[str, str]:
-    import hmmlearn
-    import sklearn
-    import torch
-    return {"numpy": np.__version__, "scikit-learn": sklearn.__version__,
-            "hmmlearn": hmmlearn.__version__, "torch": torch.__version__}
-
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
-def _write_json(obj: Any, path: Path) -> None:
-    with open(path, "w", encoding="utf-8") as f:
-        json.dump(obj, f, indent=2, allow_nan=False)
-        f.write("\n")
-
-
-def _fsync_path(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
 def is_bundle(folder: str | os.PathLike) -> bool:
     """True when ``folder`` is a folder with a bundle manifest (not checked further)."""
     p = Path(folder)
@@ -225,31 +167,31 @@ def _write_files(bundle: ModelBundle, tmp: Path) -> None:
         "vol_names": list(bundle.vol_names),
         "rate_hz": float(bundle.rate_hz), "model_hz": float(bundle.model_hz),
         "window_s": float(bundle.window_s), "n_modes": bundle.n_modes,
-        "K": _json_number(bundle.K), "percentile": float(bundle.percentile),
+        "K": json_number(bundle.K), "percentile": float(bundle.percentile),
         "novelty_threshold": float(bundle.novelty_threshold),
         "train_trials": [int(i) for i in bundle.train_trials],
         "heldout_trials": [int(i) for i in bundle.heldout_trials],
         "predictor_config": bundle.predictor.get_config(),
-        "config": bundle.config, "library_versions": _library_versions(),
+        "config": bundle.config, "library_versions": library_versions(),
     }
-    _write_json(info, tmp / "bundle.json")
-    _write_json(bundle.metrics, tmp / "metrics.json")
-    _write_json({"obs": _standardizer_to_json(bundle.preprocessor.obs),
-                 "act": _standardizer_to_json(bundle.preprocessor.act),
-                 "target_hz": float(bundle.preprocessor.target_hz),
-                 "window_s": float(bundle.preprocessor.window_s)}, tmp / "preprocessor.json")
+    write_json(info, tmp / "bundle.json")
+    write_json(bundle.metrics, tmp / "metrics.json")
+    write_json({"obs": standardizer_to_json(bundle.preprocessor.obs),
+                "act": standardizer_to_json(bundle.preprocessor.act),
+                "target_hz": float(bundle.preprocessor.target_hz),
+                "window_s": float(bundle.preprocessor.window_s)}, tmp / "preprocessor.json")
     torch.save(bundle.predictor.state_dict(), tmp / "predictor.pt")
     joblib.dump(bundle.modes, tmp / "modes.joblib")
     joblib.dump(bundle.gates, tmp / "gates.joblib")
     files = {}
     for name in BUNDLE_FILES:
         path = tmp / name
-        _fsync_path(path)
-        files[name] = {"bytes": path.stat().st_size, "sha256": _sha256(path)}
-    _write_json({"format_version": FORMAT_VERSION, "files": files}, tmp / MANIFEST)
-    _fsync_path(tmp / MANIFEST)
+        fsync_path(path)
+        files[name] = {"bytes": path.stat().st_size, "sha256": file_sha256(path)}
+    write_json({"format_version": FORMAT_VERSION, "files": files}, tmp / MANIFEST)
+    fsync_path(tmp / MANIFEST)
     os.chmod(tmp, default_dir_mode())
-    _fsync_path(tmp)
+    fsync_path(tmp)
 
 
 def save_bundle(bundle: ModelBundle, folder: str | os.PathLike) -> Path:
@@ -275,7 +217,7 @@ def save_bundle(bundle: ModelBundle, folder: str | os.PathLike) -> Path:
             if old is not None:
                 os.replace(old / "b", target)
             raise
-        _fsync_path(parent)
+        fsync_path(parent)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         if old is not None and not (old / "b").exists():
@@ -324,7 +266,7 @@ def _verify_manifest(root: Path) -> None:
         if size != want.get("bytes"):
             raise BundleError(path, f"{size} bytes, the manifest says {want.get('bytes')}: "
                                     "truncated or replaced")
-        if _sha256(path) != want.get("sha256"):
+        if file_sha256(path) != want.get("sha256"):
             raise BundleError(path, "checksum differs from the manifest: the file is corrupt or was edited")
 
 
@@ -373,7 +315,7 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
     ppath = root / "preprocessor.json"
     try:
         p = _read_json(ppath)
-        pre = Preprocessor(obs=_standardizer_from_json(p["obs"]), act=_standardizer_from_json(p["act"]),
+        pre = Preprocessor(obs=standardizer_from_json(p["obs"]), act=standardizer_from_json(p["act"]),
                            target_hz=float(p["target_hz"]), window_s=float(p["window_s"]))
     except (KeyError, TypeError, ValueError) as exc:
         if isinstance(exc, BundleError):
@@ -405,7 +347,7 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
             vol_names=tuple(info.get("vol_names", [])), rate_hz=float(info["rate_hz"]),
             model_hz=float(info["model_hz"]), window_s=float(info["window_s"]), preprocessor=pre,
             modes=loaded["modes.joblib"], gates=loaded["gates.joblib"], predictor=predictor,
-            K=_from_json_number(info["K"]), percentile=float(info["percentile"]),
+            K=from_json_number(info["K"]), percentile=float(info["percentile"]),
             novelty_threshold=float(info["novelty_threshold"]),
             train_trials=[int(i) for i in info["train_trials"]],
             heldout_trials=[int(i) for i in info["heldout_trials"]],

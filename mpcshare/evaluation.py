@@ -14,7 +14,7 @@ Reported (all on held-out windowed steps, i.e. steps with a full causal window):
   the same per channel group in physical units (``*_by_group``, via
   :func:`learning.predictor.rmse_by_group`); ``rmse_gated``: on the steps the gate hands
   to the robot (ĥ = 1);
-- the gates' accuracy, F1 and Brier score per mode (:func:`learning.gate.gate_metrics`);
+- the gates' accuracy, F1 and Brier score per mode (:func:`learning.gate_metrics.gate_metrics`);
 - ``voluntary_share`` = mean_t (1 − ĥ_t): steps the gate hands to the wearer, ĥ_t =
   1[gate probability ≥ 0.5];
 - ``voluntary_effort`` (Song & Asada: the wearer's command that the hand-over requires)::
@@ -124,7 +124,7 @@ def evaluate(data: TrainingData, gates: Any, predictor: Any, K: float,
     ``baseline_predictions``: name → precomputed held-out predictions (n_windows, d_u).
     Returns a JSON-able dict.
     """
-    from learning.gate import gate_metrics
+    from learning.gate_metrics import gate_metrics
 
     side = data.heldout
     Z = reactive_labels(side.q, K)

@@ -35,7 +35,8 @@ import numpy as np
 from learning.atomic import atomic_open
 from learning.data import Demonstrations
 from learning.predictability import threshold_from_percentile
-from mpcshare.training import Stages, TrainConfig, fit_gates, fit_predictor, prepare_training_data, reactive_labels
+from mpcshare.train_config import TrainConfig
+from mpcshare.training import Stages, fit_gates, fit_predictor, prepare_training_data, reactive_labels
 
 __all__ = ["SweepResult", "baseline_sentence", "run_sweep", "trend_sentence", "write_sweep"]
 

@@ -55,7 +55,8 @@ def _demo(args: argparse.Namespace) -> int:
     from mpcshare.demo_report import write_demo_report
     from mpcshare.experiments import compare_strategies, render_clip
     from mpcshare.report import plot_demonstrations, write_json_atomic
-    from mpcshare.training import TrainConfig, TrainingError, train_bundle
+    from mpcshare.train_config import TrainConfig
+    from mpcshare.training import TrainingError, train_bundle
 
     out = prepare_output_folder(args.out)
     t_start = time.perf_counter()

@@ -71,7 +71,7 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _config(args: argparse.Namespace):
-    from mpcshare.training import TrainConfig
+    from mpcshare.train_config import TrainConfig
 
     return TrainConfig(percentile=args.percentile, model_hz=args.rate, window_s=args.window,
                        n_modes=args.modes, hmm_restarts=args.hmm_restarts, heldout_fraction=args.heldout,

@@ -9,7 +9,8 @@ import pytest
 
 import mpcshare
 from mpcshare.bundle import BUNDLE_FILES, FORMAT_VERSION, BundleError, load_bundle, save_bundle
-from mpcshare.training import TrainConfig, train_bundle
+from mpcshare.train_config import TrainConfig
+from mpcshare.training import train_bundle
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 SMALL = TrainConfig(percentile=80, n_modes=3, hmm_restarts=1, max_epochs=3, patience=2,
