@@ -143,16 +143,39 @@ class RegularizedGaussianHMM(GaussianHMM):
             return super()._compute_log_likelihood(X)
         N, D = X.shape
         out = np.empty((N, self.n_components))
-        for k, (mu, cv) in enumerate(zip(self.means_, self.covars_)):
+        for k, (mu, Linv, log_det) in enumerate(self._whiteners()):
+            y = (X - mu) @ Linv.T
+            out[:, k] = -0.5 * (D * np.log(2 * np.pi) + np.einsum("ij,ij->i", y, y)) - log_det
+        return out
+
+    def _whiteners(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
+        """Per state (μ_k, L_k⁻¹, log|L_k|) with Σ_k = L_k L_kᵀ, computed once per parameter
+        set: hmmlearn evaluates the likelihood one trial at a time, and factorising every
+        covariance again for each of 90 trials took 35 % of an EM fit (measured, 108k
+        samples in 90 trials, 5 modes). Keyed by the bytes of means and covariances, so a
+        change of parameters (M-step, reseeding, user assignment) is always seen."""
+        means = np.asarray(self.means_, dtype=float)
+        covars = np.asarray(self.covars_, dtype=float)
+        key = (means.tobytes(), covars.tobytes())
+        cached = getattr(self, "_whitener_cache", None)
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        D = means.shape[1]
+        factors = []
+        for mu, cv in zip(means, covars):
             try:
                 L = linalg.cholesky(cv, lower=True)
             except linalg.LinAlgError:  # same fallback as hmmlearn
                 L = linalg.cholesky(cv + 1e-7 * np.eye(D), lower=True)
             Linv = linalg.solve_triangular(L, np.eye(D), lower=True)
-            y = (X - mu) @ Linv.T
-            out[:, k] = -0.5 * (D * np.log(2 * np.pi) + np.einsum("ij,ij->i", y, y)) \
-                - np.log(np.diag(L)).sum()
-        return out
+            factors.append((mu, Linv, float(np.log(np.diag(L)).sum())))
+        self._whitener_cache = (key, factors)
+        return factors
+
+    def __getstate__(self):
+        state = super().__getstate__()
+        state.pop("_whitener_cache", None)  # derived data, rebuilt on first use
+        return state
 
     def _do_mstep(self, stats):
         means_old = np.array(self.means_, copy=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pickle
 import warnings
 
 import numpy as np
@@ -400,6 +401,12 @@ def test_regularised_hmm_matches_hmmlearn_em_step(data):
     np.testing.assert_allclose(ours.means_, ref.means_, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(ours.covars_, ref.covars_, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(ours.transmat_, ref.transmat_, rtol=1e-9)
+    # the per-parameter-set factor cache follows every change of the parameters
+    for means in (ours.means_ + 0.5, X[rng.choice(len(X), K)]):
+        ours.means_, ref.means_ = means.copy(), means.copy()
+        np.testing.assert_allclose(ours._compute_log_likelihood(X), ref._compute_log_likelihood(X),
+                                   rtol=1e-10)
+    assert "_whitener_cache" not in pickle.loads(pickle.dumps(ours)).__dict__
 
 
 def _two_regimes(seed: int = 0, outlier: bool = False) -> tuple[np.ndarray, list[int]]:
