@@ -12,6 +12,11 @@ data included; tracemalloc is not used, its hooks slow the search several-fold),
 largest relative difference to a float64 direct-difference reference on a
 sample of rows.
 
+``--floor`` adds the time below which no exact method that screens every pair once can go
+on this machine: the bare float32 products of the screen (inner length dy + 12 + 3, the
+engine's smallest; tiles of 256 × 4096 on every core, nothing else) timed for about 2 s and
+extrapolated to the N(N − 1)/2 pairs (``screen_floor_s``), and the engine's time over it.
+
 ``--compile-time`` adds the numba compile time of the compiled loops (``_compiled``),
 measured in a fresh interpreter with an empty cache directory, and the time to load them
 from that cache in a second one.
@@ -220,6 +225,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--noise", type=float, default=0.05,
                     help="windowed data: relative low-pass sensor noise")
     ap.add_argument("--progress", action="store_true")
+    ap.add_argument("--floor", action="store_true",
+                    help="also time the bare float32 screen products over all pairs (the floor)")
     ap.add_argument("--compile-time", action="store_true",
                     help="also measure the numba compile time (fresh interpreter, empty cache)")
     a = ap.parse_args(argv)
@@ -303,10 +310,47 @@ def main(argv: list[str] | None = None) -> dict:
         "max_rel_diff_bruteforce_f32_vs_float64": rel32,
         "q_median": float(np.median(q)),
     }
+    if a.floor:
+        out.update(screen_floor(a.n, int(Y.shape[1]), a.n_jobs))
+        out["project_over_floor"] = round(t_project / out["screen_floor_s"], 2)
     if a.compile_time:
         out.update(numba_compile_times())
     print(json.dumps(out, indent=1))
     return out
+
+
+def screen_floor(n: int, dy: int, n_jobs: int | None = None, seconds: float = 2.0,
+                 tile: int = 256, chunk: int = 4096) -> dict[str, float]:
+    """Time of the bare screen over all n(n − 1)/2 pairs: float32 products of (tile × K')
+    row features by (K' × chunk) column features, K' = dy + 12 + 3 (the engine's smallest
+    z screen), on every core for ``seconds``; no bound, no survivor, no exact pair."""
+    from threadpoolctl import threadpool_limits
+
+    jobs = n_jobs or len(os.sched_getaffinity(0))
+    k = dy + 12 + 3
+    rng = np.random.default_rng(0)
+    R = rng.standard_normal((tile, k)).astype(np.float32)
+    C = rng.standard_normal((k, chunk)).astype(np.float32)
+    done = [0] * jobs
+
+    def work(slot: int) -> None:
+        out = np.empty((tile, chunk), np.float32)
+        end = time.perf_counter() + seconds
+        while time.perf_counter() < end:
+            np.matmul(R, C, out=out)
+            done[slot] += tile * chunk
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        t0 = time.perf_counter()
+        threads = [threading.Thread(target=work, args=(i,)) for i in range(jobs)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        elapsed = time.perf_counter() - t0
+    rate = sum(done) / elapsed
+    return {"screen_floor_s": round(n * (n - 1) / 2 / rate, 2),
+            "screen_floor_ns_per_pair_per_core": round(jobs / rate * 1e9, 3), "screen_floor_inner_length": k}
 
 
 def numba_compile_times() -> dict[str, float]:
