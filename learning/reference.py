@@ -271,12 +271,21 @@ def random_labelings(labels: np.ndarray, n_random: int, method: str = "permutati
     return np.stack([random_segmentation(labels, rng, method) for _ in range(n_random)])
 
 
+def _known(q, name: str, n: int) -> np.ndarray:
+    """Quotients passed in by the caller, checked against the number of window rows."""
+    q = np.asarray(q, dtype=np.float64)
+    if q.shape != (n,):
+        raise ValueError(f"{name} must be ({n},) (one quotient per window row), got shape {q.shape}")
+    return q
+
+
 def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index: np.ndarray,
                   features: np.ndarray, labels: np.ndarray, *, reference: Reference = "gmm",
                   n_random: int = 20, random_method: str = "permutation", alpha: float = 1e-3,
                   min_effect: float = 0.0, seed: int = 0, quotient: Callable[..., np.ndarray] | None = None,
                   q_modes: np.ndarray | None = None, q_random: np.ndarray | None = None,
-                  reference_labels: np.ndarray | None = None) -> ModeEvidence:
+                  reference_labels: np.ndarray | None = None,
+                  q_reference: np.ndarray | None = None) -> ModeEvidence:
     """Do the modes ``labels`` (per sample, on ``features`` (N_samples, D), the HMM's input
     space) lower the quotients of the windows ``X`` → ``Y`` (rows taken from samples
     ``source_index``, trials ``trial``) beyond a time-free grouping? See module doc.
@@ -289,7 +298,8 @@ def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index:
     ``q_modes`` (N,) and ``q_random`` (n_random, N) may be passed when already computed
     (``q_random`` for the groupings ``random_labelings(labels[source_index], n_random,
     random_method, seed)``), and ``reference_labels`` (N_samples,), the result of
-    ``reference_segmentation(features, labels, reference, seed)``.
+    ``reference_segmentation(features, labels, reference, seed)``, with ``q_reference``
+    (N,) the quotients within it when already computed.
     """
     from .lipschitz import pointwise_quotients, pointwise_quotients_multi
 
@@ -304,8 +314,10 @@ def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index:
         if ref.shape != labels.shape:
             raise ValueError(f"reference_labels must have the shape of labels {labels.shape}, got {ref.shape}")
     g = labels[source_index]
-    qm = single(X, Y, g) if q_modes is None else np.asarray(q_modes, dtype=np.float64)
-    qr = single(X, Y, ref[source_index])
+    qm = single(X, Y, g) if q_modes is None else _known(q_modes, "q_modes", len(g))
+    if q_reference is not None and reference_labels is None:
+        raise ValueError("q_reference needs the reference_labels it was computed within")
+    qr = single(X, Y, ref[source_index]) if q_reference is None else _known(q_reference, "q_reference", len(g))
     if q_random is not None:
         qrand = np.asarray(q_random, dtype=np.float64)
         if qrand.shape != (n_random, len(g)):
