@@ -35,13 +35,13 @@ from typing import Any
 import numpy as np
 
 from .analysis_report import AnalysisReport, ModesSummary, QuotientStats, SegmentationTest, VoluntaryShare
-from .analysis_search import fit_modes, search_candidates
+from .analysis_search import fit_modes, search_candidates, within_group_quotients
 from .data import Demonstrations
 from .lipschitz import pointwise_quotients_multi
 from .modes import TaskModes, mode_agreement, mode_ari, select_n_modes
 from .predictability import paired_wilcoxon, threshold_from_percentile, voluntary_share
 from .preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, downsample, window_lags
-from .reference import REFERENCES, min_trials_for, mode_evidence, random_labelings
+from .reference import REFERENCES, min_trials_for, mode_evidence, random_labelings, reference_segmentation
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "SIGNIFICANCE"]
 
@@ -276,11 +276,16 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
     steps.done("quotients")
 
-    # 4. quotients within modes and within the time-free reference; the two tests
-    ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
+    # 4. quotients within modes and within the time-free reference (two calls side by
+    #    side); the two tests
+    features = model.transform(Z)
+    ref_labels = reference_segmentation(features, labels, config.reference, config.seed)
+    within = within_group_quotients(w.X, w.Y, {"modes": modes, "reference": ref_labels[w.source_index]})
+    ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, features, labels,
                        reference=config.reference, n_random=config.n_random,
                        random_method=config.random_method, alpha=SIGNIFICANCE, min_effect=config.min_effect,
-                       seed=config.seed, q_random=Q[1:])
+                       seed=config.seed, q_random=Q[1:], q_modes=within["modes"],
+                       reference_labels=ref_labels, q_reference=within["reference"])
     q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
     steps.done("segmentation test")
 
