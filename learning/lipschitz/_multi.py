@@ -304,7 +304,7 @@ def pointwise_quotients_multi(X, Y, labelings, *, return_partner: bool = False, 
     try:
         with _blas_single_thread():
             kern = NumpyKernel(f, X, Y)
-            stats.pairs_full_screened += warm_bounds(f, kern, labels, LB, pool, options.warmup_leaves,
+            stats.pairs_full_screened += warm_bounds(f, kern, labels, LB, pool, options.multi_warmup_leaves,
                                                        spread_sample(N, options.warmup_sample))
             stats.add(multi_pass(f, kern, labels, Q, P, LB, qmin, pool, bar, tile=options.tile,
                                  chunk=options.chunk))

@@ -358,3 +358,17 @@ def test_stats_are_returned_per_call_and_default_return_is_unchanged():
     assert dense.stats.pairs_exact == 600 * 599 and dense.stats.pairs_screened == 0
     with pytest.raises(ValueError, match="search must be 'symmetric' or 'per_leaf'"):
         SearchOptions(search="fast")
+
+
+@pytest.mark.parametrize("name", ["warmup_leaves", "multi_warmup_leaves", "tile", "chunk", "small_group"])
+def test_search_options_name_the_bad_setting(name):
+    with pytest.raises(ValueError, match=f"{name} must be a positive integer"):
+        SearchOptions(**{name: 0})
+
+
+def test_warmup_leaves_change_the_work_not_the_result():
+    X, Y = smooth_windows(4000, seed=3)
+    one = pointwise_quotients(X, Y, backend="numpy", return_stats=True, options=SearchOptions(warmup_leaves=1))
+    four = pointwise_quotients(X, Y, backend="numpy", return_stats=True, options=SearchOptions(warmup_leaves=4))
+    assert np.array_equal(one.q, four.q) and np.array_equal(one.partner, four.partner)
+    assert one.stats.pairs_full_screened != four.stats.pairs_full_screened
