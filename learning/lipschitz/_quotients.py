@@ -10,9 +10,10 @@ conservative bounds: a float32 matrix-product screen on a principal-component
 lower bound of ‖Δx‖ with a proven rounding margin (``_bounds``),
 applied once per unordered pair against lower bounds of both points' quotients
 (``_search.symmetric_pass``). The lower bounds come from time neighbours (exact), and
-from a warm-up of full-dimensional float32 bounds against each k-d leaf's nearest
-leaves and a sample of points spread over the group (the maximiser is often far away
-in x). Survivors are recomputed by a compiled loop (``_compiled``, numba).
+from a warm-up of full-dimensional float32 bounds of each k-d leaf against itself
+(or its nearest leaves, ``SearchOptions.warmup_leaves``) and a sample of points spread
+over the group (the maximiser is often far away in x). Survivors are recomputed by a
+compiled loop (``_compiled``, numba).
 Many labelings of the same points share one pass: :func:`pointwise_quotients_multi`
 (``_multi``).
 

@@ -3,8 +3,9 @@
 Default path (``pointwise_quotients`` with ``SearchOptions(search="symmetric")``):
 
 1. ``warm_leaf``: each k-d leaf raises the lower bounds ``lb`` of its rows from
-   its 8 nearest leaves with full-dimensional two-sided float32 bounds (no exact
-   work; lb_i ≤ q_i is all that is needed);
+   its ``SearchOptions.warmup_leaves`` nearest leaves (itself by default) and a
+   sample of points spread over the group, with full-dimensional two-sided float32
+   bounds (no exact work; lb_i ≤ q_i is all that is needed);
 2. ``symmetric_pass``: every unordered pair is screened once with the float32
    z screen (a single product per tile) against ``min(T_i, T_j)``, points in
    ascending ``lb`` so that this is almost always the row's own threshold;
