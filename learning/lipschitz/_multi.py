@@ -33,7 +33,7 @@ import numpy as np
 
 from ._bounds import Features, leaf_boxes, threshold_scalar, thresholds
 from ._compiled import credit_multi, grouped_lower_ratios, grouped_survivors
-from ._search import PairCounters, run_tiles, spread_sample
+from ._search import ChunkScreen, PairCounters, run_tiles, spread_sample
 
 __all__ = ["check_labelings", "multi_pass", "pointwise_quotients_multi", "time_neighbour_pairs"]
 
@@ -184,8 +184,7 @@ def multi_pass(f: Features, kern, labels: np.ndarray, Q: np.ndarray, P: np.ndarr
         spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
         pend: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
         n_pend = 0
-        tile_full = False
-        n_full = 0
+        screen = ChunkScreen(kern, has_full, sym_full_fraction)
 
         def flush() -> None:
             if not pend:
@@ -202,19 +201,7 @@ def multi_pass(f: Features, kern, labels: np.ndarray, Q: np.ndarray, P: np.ndarr
             cols = order[c0:c1]
             pc = perm[cols]
             n_ac = (e - s) * (c1 - c0)
-            chunk_full = tile_full
-            if not tile_full:
-                T = thresholds(tmin[pr], sx, sy)
-                if not diag:
-                    np.minimum(T, threshold_scalar(tmin[pc].min(), sx, sy), out=T)
-                ri, cj = kern.sym_screen(s, e, T, c0, c1)
-                st.pairs_screened += n_ac
-                if has_full and len(ri) > sym_full_fraction * n_ac and n_ac >= 1 << 16:
-                    chunk_full = True
-                    n_full += 1
-                    tile_full = n_full >= 2 and not diag
-                elif not diag:
-                    n_full = 0
+            ri, cj, chunk_full = screen.z_screen(s, e, c0, c1, tmin[pr], tmin[pc], sx, sy, st)
             if chunk_full:
                 ri, cj, Br, Bc = grouped_screen(f, kern, rows, cols, labels[pr], labels[pc],
                                                 LB[pr], LB[pc], cap=not diag)

@@ -53,6 +53,7 @@ from ._bounds import (
 from ._exact import update_best
 
 __all__ = [
+    "ChunkScreen",
     "LeafContext",
     "PairCounters",
     "nearest_leaves",
@@ -270,21 +271,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
         spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
         pend: list[tuple[np.ndarray, np.ndarray, bool, np.ndarray, np.ndarray]] = []
         n_pend = 0
-        # The z screen or the full-d screen is chosen per chunk, not once for all tiles:
-        # rows are in ascending lb and the first columns of a tile are the points of
-        # nearby lb, which lie close by, so the first chunks of a tile can keep many
-        # pairs where its later chunks keep almost none (measured on the eating
-        # demonstrations: 2.3× faster than one switch for all tiles, windowed and
-        # i.i.d. data unchanged). A chunk whose z screen keeps more than
-        # ``sym_full_fraction`` is screened again with the full-d screen: an exact
-        # evaluation costs about 40 full-d screens (measured, d = 90: 7 ns a pair for
-        # the full-d screen, 1.2 ns for the z screen, 300 ns for an exact pair), so
-        # above ~2 % survivors the full-d screen is cheaper than evaluating them.
-        # After two such chunks in a row off the diagonal (i.i.d.-like rows) the rest
-        # of the tile skips the z screen.
-        # Local to the task, so the counters do not depend on the thread schedule.
-        tile_full = False
-        n_full = 0  # consecutive chunks of this tile that needed the full-d screen
+        screen = ChunkScreen(kern, has_full, sym_full_fraction)
 
         def flush() -> None:
             # Survivors are evaluated in batches (per-call overhead), then credited.
@@ -304,19 +291,7 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
             diag = c0 == s
             cols = order[c0:c1]
             n_ac = (e - s) * (c1 - c0)
-            chunk_full = tile_full
-            if not tile_full:
-                T = thresholds(lb[rows], sx, sy)
-                if not diag:
-                    np.minimum(T, threshold_scalar(lb[cols].min(), sx, sy), out=T)
-                ri, cj = kern.sym_screen(s, e, T, c0, c1)
-                st.pairs_screened += n_ac
-                if has_full and len(ri) > sym_full_fraction * n_ac and n_ac >= 1 << 16:
-                    chunk_full = True  # the z screen keeps too much here
-                    n_full += 1
-                    tile_full = n_full >= 2 and not diag  # twice off the diagonal: i.i.d.-like rows
-                elif not diag:
-                    n_full = 0
+            ri, cj, chunk_full = screen.z_screen(s, e, c0, c1, lb[rows], lb[cols], sx, sy, st)
             if chunk_full:
                 ri, cj, Lr, Lc = kern.sym_tight(rows, cols, lb[rows], lb[cols],
                                                 None if diag else np.inf)
@@ -335,6 +310,52 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
         return st, (e - s) * (e - s - 1) // 2 + (e - s) * (n - e)
 
     return run_tiles(task, n, tile, pool, bar, kern)
+
+
+class ChunkScreen:
+    """The screen of one chunk of a tile's columns in a pass (``symmetric_pass``, ``_multi``).
+
+    The z screen or the full-d screen is chosen per chunk, not once for all tiles:
+    rows are in ascending lower bound and the first columns of a tile are the points of
+    nearby bound, which lie close by, so the first chunks of a tile can keep many
+    pairs where its later chunks keep almost none (measured on the eating
+    demonstrations: 2.3× faster than one switch for all tiles, windowed and
+    i.i.d. data unchanged). A chunk whose z screen keeps more than ``full_fraction``
+    is to be screened again with the full-d screen: an exact evaluation costs about 40
+    full-d screens (measured, d = 90: 7 ns a pair for the full-d screen, 1.2 ns for the
+    z screen, 300 ns for an exact pair), so above ~2 % survivors the full-d screen is
+    cheaper than evaluating them. After two such chunks in a row off the diagonal
+    (i.i.d.-like rows) the rest of the tile skips the z screen.
+    One object per tile task, so the counters do not depend on the thread schedule.
+    """
+
+    def __init__(self, kern, has_full: bool, full_fraction: float) -> None:
+        self.kern, self.has_full, self.full_fraction = kern, has_full, full_fraction
+        self.tile_full = False
+        self.n_full = 0  # consecutive chunks of this tile that needed the full-d screen
+
+    def z_screen(self, s: int, e: int, c0: int, c1: int, row_lb: np.ndarray, col_lb: np.ndarray,
+                 sx: float, sy: float, st: PairCounters) -> tuple[np.ndarray | None, np.ndarray | None, bool]:
+        """Survivors (positions in rows [s, e) × columns [c0, c1) of the pass order) of the
+        z screen against the rows' lower bounds (capped by the columns' smallest off the
+        diagonal), and whether the chunk needs the full-d screen (then the survivors are
+        to be replaced; ``None`` when the z screen was skipped)."""
+        if self.tile_full:
+            return None, None, True
+        diag = c0 == s
+        n_ac = (e - s) * (c1 - c0)
+        T = thresholds(row_lb, sx, sy)
+        if not diag:
+            np.minimum(T, threshold_scalar(col_lb.min(), sx, sy), out=T)
+        ri, cj = self.kern.sym_screen(s, e, T, c0, c1)
+        st.pairs_screened += n_ac
+        if self.has_full and len(ri) > self.full_fraction * n_ac and n_ac >= 1 << 16:
+            self.n_full += 1
+            self.tile_full = self.n_full >= 2 and not diag  # twice off the diagonal: i.i.d.-like rows
+            return ri, cj, True
+        if not diag:
+            self.n_full = 0
+        return ri, cj, False
 
 
 def run_tiles(task, n: int, tile: int, pool, bar, kern) -> PairCounters:
