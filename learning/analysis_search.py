@@ -5,7 +5,6 @@ per-trial median quotients beyond the time-free reference grouping (and random g
 from __future__ import annotations
 
 import math
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 from typing import TYPE_CHECKING, Callable
@@ -14,7 +13,7 @@ import numpy as np
 
 from .analysis_report import Candidate
 from .data import Demonstrations
-from .lipschitz import pointwise_quotients, pointwise_quotients_multi
+from .lipschitz import default_jobs, pointwise_quotients, pointwise_quotients_multi
 from .modes import TaskModes
 from .predictability import voluntary_share
 from .preprocess import causal_windows
@@ -125,7 +124,7 @@ def within_group_quotients(X: np.ndarray, Y: np.ndarray, groupings: dict, max_pa
     keys = list(groupings)
     if not keys:
         return {}
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    cores = default_jobs()
     workers = max(1, min(max_parallel, len(keys), cores))
     threads = max(1, cores // workers)
     def one(key) -> np.ndarray:

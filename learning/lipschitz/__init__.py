@@ -11,7 +11,8 @@ Public API
   (for labelings with alike quotients, e.g. random groupings and no grouping).
 - :class:`SearchOptions` — tuning of the search (never changes the result);
   :class:`SearchStats` — work counters of one call.
-- :func:`check_inputs` — the input validation ``pointwise_quotients`` applies.
+- :func:`check_inputs` — the input validation ``pointwise_quotients`` applies;
+  :func:`default_jobs` — the threads a call uses by default.
 - Building blocks, float64 by direct differences: :func:`pair_ratios` (quotients of
   explicit pairs, with the conventions for duplicates), :func:`pair_norms`; and
   :func:`survivors` (positions of the entries ≥ 0 of a float32 screen).
@@ -31,6 +32,7 @@ from ._quotients import (
                          SearchOptions,
                          SearchStats,
                          check_inputs,
+                         default_jobs,
                          pointwise_quotients,
 )
 
@@ -39,6 +41,7 @@ __all__ = [
                          "SearchOptions",
                          "SearchStats",
                          "check_inputs",
+                         "default_jobs",
                          "pair_norms",
                          "pair_ratios",
                          "pointwise_quotients",

@@ -244,7 +244,7 @@ def pointwise_quotients_multi(X, Y, labelings, *, return_partner: bool = False, 
     """
     from ._bounds import F32_UNIT_ROUNDOFF, build_features
     from ._kernel import NumpyKernel
-    from ._quotients import SearchOptions, SearchStats, _blas_single_thread, _default_jobs, check_inputs
+    from ._quotients import SearchOptions, SearchStats, _blas_single_thread, check_inputs, default_jobs
 
     options = SearchOptions() if options is None else options
     if not isinstance(options, SearchOptions):
@@ -259,7 +259,7 @@ def pointwise_quotients_multi(X, Y, labelings, *, return_partner: bool = False, 
     qmin = np.zeros(N)
     n_pairs = N * (N - 1) // 2
     stats = PairCounters()
-    n_jobs = max(1, int(_default_jobs() if n_jobs is None else n_jobs))
+    n_jobs = max(1, int(default_jobs() if n_jobs is None else n_jobs))
 
     def done():
         QT, PT = np.ascontiguousarray(Q.T), np.ascontiguousarray(P.T)

@@ -49,7 +49,7 @@ from ._search import (
     warm_leaf,
 )
 
-__all__ = ["QuotientResult", "SearchOptions", "SearchStats", "check_inputs", "pointwise_quotients"]
+__all__ = ["QuotientResult", "SearchOptions", "SearchStats", "check_inputs", "default_jobs", "pointwise_quotients"]
 
 
 @dataclass(frozen=True)
@@ -177,7 +177,8 @@ def check_inputs(X, Y, groups=None) -> tuple[np.ndarray, np.ndarray, np.ndarray 
     return X, Y, groups
 
 
-def _default_jobs() -> int:
+def default_jobs() -> int:
+    """Threads a call uses by default: the cores this process may run on."""
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - non-Linux
@@ -294,7 +295,7 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
     N = len(X)
     backend, dev, u = _resolve_backend(backend, device)
     if n_jobs is None:
-        n_jobs = _default_jobs()
+        n_jobs = default_jobs()
     n_jobs = max(1, int(n_jobs))
     if backend == "torch" and str(dev) != "cpu":
         n_jobs = 1
