@@ -64,11 +64,10 @@ def main(argv: list[str] | None = None) -> dict:
 
 def _baseline(demos, config) -> dict:
     """No grouping + n_random random groupings of the HMM modes: one pass vs one call each."""
-    from learning.analysis import _per_sample_features
-    from learning.analysis_search import fit_modes
+    from learning.analysis.reference import random_labelings
+    from learning.analysis.search import fit_modes
     from learning.lipschitz import pointwise_quotients, pointwise_quotients_multi
-    from learning.preprocess import Preprocessor, Standardizer, causal_windows, downsample
-    from learning.reference import random_labelings
+    from learning.preprocessing.preprocess import Preprocessor, Standardizer, causal_windows, downsample
 
     low = downsample(demos, config.target_hz) if demos.rate_hz != config.target_hz else demos
     pre = Preprocessor(obs=Standardizer(config.scope, field="obs").fit(low),
@@ -76,7 +75,7 @@ def _baseline(demos, config) -> dict:
                        target_hz=config.target_hz, window_s=config.window_s)
     std = pre.standardize(low)
     w = causal_windows(std, config.window_s, rms=True)
-    Z, lengths = _per_sample_features(std)
+    Z, lengths = std.obs_sequences()
     _, labels = fit_modes(Z, lengths, config.n_modes, config)
     labs = np.vstack([np.zeros((1, len(w)), np.int64),
                       random_labelings(labels[w.source_index], config.n_random, config.random_method,

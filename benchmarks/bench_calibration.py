@@ -4,7 +4,7 @@ False claims: ≥ 50 regime-free data sets (``sim.regime_free.calibration_family
 and nonlinear maps, latent dimension 1–5, noise levels, 6–20 trials of 1–2 min at 10 Hz)
 through :func:`learning.analysis.analyze` (the claim: one-sided Wilcoxon over trials
 against a time-free reference grouping, p < 0.001, effect > ln 1.1). Every reference
-of :data:`learning.reference.REFERENCES` is tested on the same HMM modes, so the choice of
+of :data:`learning.analysis.reference.REFERENCES` is tested on the same HMM modes, so the choice of
 the default is made on these numbers. Power: data with hidden regimes against cue
 strength — the default demonstrations (``sim.demonstrator``) and weaker-cue variants
 (``overlap`` up, ``contrast`` down), 20 trials of 30 s; and three regimes that change
@@ -29,8 +29,8 @@ import warnings
 import numpy as np
 
 from learning.analysis import SIGNIFICANCE, AnalysisConfig, analyze
+from learning.analysis.reference import REFERENCES, reference_segmentation, trial_test
 from learning.lipschitz import pointwise_quotients
-from learning.reference import REFERENCES, reference_segmentation, trial_test
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 from sim.hidden_regime import HiddenRegimeConfig, generate_hidden_regime
 from sim.regime_free import calibration_family, generate_regime_free

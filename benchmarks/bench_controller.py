@@ -7,11 +7,11 @@ comparable figures):
 
 * ``baseline_qp_step``: one bare ``robot.qp.QPController.step`` tracking a moving tip;
 * ``step_no_mpc``: the whole step without MPC; targets median ≤ 1 ms, p99 ≤ 3 ms;
-* ``step_mpc``: the whole step with ``mpcshare.mpc.TipMPC`` (when it can be imported);
+* ``step_mpc``: the whole step with ``robot.mpc.tip_mpc.TipMPC`` (when it can be imported);
   target p99 ≤ 5 ms; ``step_mpc_every_2``: the MPC solved every 2nd step
   (``ControllerConfig.mpc_every``), the QP following its plan in between.
 
-Per-stage medians and p99 (``Command.timings``, wall clock) and the statuses seen are
+Per-stage medians and p99 (``ControlCommand.timings``, wall clock) and the statuses seen are
 reported too, with the load average of the machine before and after, and the step's
 thread CPU time (``cpu_time``: excludes the time the process waited for a core, which
 dominates the wall-clock p99 on a loaded machine).
@@ -34,7 +34,7 @@ import time
 
 import numpy as np
 
-from mpcshare.controller import ControllerConfig, SharedController
+from mpcshare.control.controller import ControllerConfig, SharedController
 from robot.qp import QPController
 from robot.superlimb import SuperLimbParams
 from sim.demonstrator import (
@@ -45,8 +45,8 @@ from sim.demonstrator import (
 
 def small_bundle(demos, seed: int = 0):
     """A real bundle trained on ``demos`` with short settings (``mpcshare.training.train_bundle``)."""
-    from mpcshare.train_config import TrainConfig
     from mpcshare.training import train_bundle
+    from mpcshare.training.config import TrainConfig
 
     cfg = TrainConfig(n_modes=4, hmm_restarts=1, max_epochs=10, patience=3, gate_max_samples=600, seed=seed)
     return train_bundle(demos, cfg, progress=False)

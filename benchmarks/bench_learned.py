@@ -1,4 +1,4 @@
-"""Speed and accuracy of the learned parts (learning.gate, learning.predictor). Prints JSON.
+"""Speed and accuracy of the learned parts (learning.gates.gate, learning.predictor). Prints JSON.
 
     python benchmarks/bench_learned.py [--quick] [--subjects 3] [--minutes 10] [--seed 0] [--single-regime]
 
@@ -38,13 +38,13 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from learning.gate import ModeGates
-from learning.gate_metrics import gate_metrics
+from learning.gates.gate import ModeGates
+from learning.gates.metrics import gate_metrics
 from learning.lipschitz import pointwise_quotients
 from learning.modes import TaskModes
 from learning.predictor import ReactivePredictor, RidgeWindowBaseline, rmse_by_group
-from learning.preprocess import Preprocessor, Standardizer, causal_windows
-from learning.resample import causal_downsample
+from learning.preprocessing.preprocess import Preprocessor, Standardizer, causal_windows
+from learning.preprocessing.resample import causal_downsample
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 

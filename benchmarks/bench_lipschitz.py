@@ -110,7 +110,7 @@ def demo_data(n: int, seed: int, subjects: int = 3) -> tuple[np.ndarray, np.ndar
     """The synthetic eating demonstrations, preprocessed exactly as ``mpcshare analyze``
     does by default (10 Hz, per-sensor scaling, 1 s causal √L-normalised windows):
     d = 90, d_y = 9; the first ``n`` windows of enough minutes per subject."""
-    from learning.preprocess import Standardizer, causal_windows, downsample
+    from learning.preprocessing.preprocess import Standardizer, causal_windows, downsample
     from sim.demonstrator import generate_demonstrations
 
     minutes = math.ceil(n / (subjects * 600 * 0.98)) + 1  # 600 windows a minute, less trial edges

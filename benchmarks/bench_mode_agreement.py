@@ -7,7 +7,7 @@ record each restart's training log-likelihood and agreement with the true modes.
 these, the agreement that choosing the best-likelihood restart among the first k gives,
 for k = 1, 3, 5, … (what ``TaskModes(n_restarts=k)`` returns), and the spread of the
 restarts' log-likelihoods; and, as a time-free baseline, the agreement of the
-analysis's reference grouping (``learning.reference``, a Gaussian mixture on the same
+analysis's reference grouping (``learning.analysis.reference``, a Gaussian mixture on the same
 features). Prints JSON.
 
     PYTHONPATH=. python benchmarks/bench_mode_agreement.py [--seeds 20] [--restarts 10]
@@ -22,9 +22,9 @@ import warnings
 
 import numpy as np
 
+from learning.analysis.reference import reference_segmentation
 from learning.modes import TaskModes, mode_agreement
-from learning.preprocess import Standardizer, downsample
-from learning.reference import reference_segmentation
+from learning.preprocessing.preprocess import Standardizer, downsample
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 FAMILIES = {"default": {}, "overlap 0.9": {"overlap": 0.9}}

@@ -29,8 +29,8 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from mpcshare.mpc import TipMPC
 from robot.model_files import build_pinocchio_model
+from robot.mpc.tip_mpc import TipMPC
 from robot.superlimb import SuperLimbParams
 
 H, DT = 20, 0.01

@@ -7,13 +7,13 @@ project's default data, 3 subjects × 10 min at 100 Hz). Measured in one process
 
 - ``train_s``: :func:`mpcshare.training.train_bundle` with the default ``TrainConfig``
   (90th percentile), plus ``save_bundle``; stage timings from the bundle's metrics;
-- ``sweep_s``: :func:`mpcshare.sweep.run_sweep` over 100, 90, …, 50 with the files;
+- ``sweep_s``: :func:`mpcshare.training.sweep.run_sweep` over 100, 90, …, 50 with the files;
 - ``baseline_matmul_s``: a fixed single-threaded NumPy workload (20 products of two
   1000×1000 float64 matrices) timed before and after, so that figures from a loaded,
   shared machine can be compared as ratios (``*_over_baseline``);
 - ``load_avg``: the 1-minute load average at the start and end (``os.getloadavg``).
 
-Targets (DESIGN.md, 2-core CPU): train ≤ 300 s, sweep ≤ 900 s.
+Targets (README, 2-core CPU): train ≤ 300 s, sweep ≤ 900 s.
 """
 
 from __future__ import annotations
@@ -53,9 +53,9 @@ def main() -> None:
     args = ap.parse_args()
 
     from mpcshare.bundle import save_bundle
-    from mpcshare.sweep import run_sweep
-    from mpcshare.train_config import TrainConfig
     from mpcshare.training import train_bundle
+    from mpcshare.training.config import TrainConfig
+    from mpcshare.training.sweep import run_sweep
     from sim.demonstrator import generate_demonstrations
 
     res: dict = {"machine": platform.machine(), "cpus": os.cpu_count(), "load_avg_start": os.getloadavg()[0],

@@ -24,10 +24,10 @@ prefer_offscreen_gl()
 
 from learning.data import load  # noqa: E402
 from mpcshare.bundle import load_bundle, save_bundle  # noqa: E402
-from mpcshare.controller import SharedController  # noqa: E402
-from mpcshare.episode_plot import plot_episode  # noqa: E402
-from mpcshare.train_config import TrainConfig  # noqa: E402
+from mpcshare.control.controller import SharedController  # noqa: E402
+from mpcshare.reports.episode_plot import plot_episode  # noqa: E402
 from mpcshare.training import train_bundle  # noqa: E402
+from mpcshare.training.config import TrainConfig  # noqa: E402
 from sim.closed_loop import run_episode  # noqa: E402
 from sim.demonstrator import generate_demonstrations  # noqa: E402
 from sim.metrics import episode_metrics  # noqa: E402

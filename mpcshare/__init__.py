@@ -3,17 +3,17 @@
 - :mod:`mpcshare.cli` — the ``mpcshare`` command line (registry :data:`mpcshare.cli.COMMANDS`);
 - :mod:`mpcshare.commands` — its subcommands (``generate``, ``inspect``, ``analyze``, ``train``,
   ``sim``, ``demo``);
-- :mod:`mpcshare.report` — analysis reports (JSON, Markdown) and plots.
+- :mod:`mpcshare.reports.analysis` — analysis reports (JSON, Markdown) and plots.
 - :mod:`mpcshare.bundle` — model bundles (:func:`load_bundle`, re-exported here lazily,
   so that ``import mpcshare`` does not import torch or scikit-learn); their JSON encodings,
-  checksums and durable writes in :mod:`mpcshare.bundle_files`.
-- :mod:`mpcshare.training`, :mod:`mpcshare.sweep`, :mod:`mpcshare.evaluation` — training a
-  bundle, the K trade-off, held-out metrics; the settings in :mod:`mpcshare.train_config`.
-- :mod:`mpcshare.streaming`, :mod:`mpcshare.arbitration`, :mod:`mpcshare.controller` — the
-  online loop (:class:`~mpcshare.controller.SharedController`); :mod:`mpcshare.symbolic`,
-  :mod:`mpcshare.mpc` — the CasADi model and MPC.
-- :mod:`mpcshare.experiments`, :mod:`mpcshare.comparison_report`, :mod:`mpcshare.demo_report`,
-  :mod:`mpcshare.html_report`, :mod:`mpcshare.episode_plot` — closed-loop comparisons and reports.
+  checksums and durable writes in :mod:`mpcshare.bundle.files`.
+- :mod:`mpcshare.training`, :mod:`mpcshare.training.sweep`, :mod:`mpcshare.training.evaluation` — training a
+  bundle, the K trade-off, held-out metrics; the settings in :mod:`mpcshare.training.config`.
+- :mod:`mpcshare.control.frontend`, :mod:`mpcshare.control.arbitration`, :mod:`mpcshare.control.controller` — the
+  online loop (:class:`~mpcshare.control.controller.SharedController`); :mod:`robot.mpc.symbolic`,
+  :mod:`robot.mpc.tip_mpc` — the CasADi model and MPC.
+- :mod:`mpcshare.experiments`, :mod:`mpcshare.reports.comparison`, :mod:`mpcshare.reports.demo`,
+  :mod:`mpcshare.reports.html`, :mod:`mpcshare.reports.episode_plot` — closed-loop comparisons and reports.
 
 ``python -m mpcshare`` runs the command line. Design: ``docs/design.md``.
 """

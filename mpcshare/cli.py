@@ -15,8 +15,8 @@ import os
 import sys
 from typing import Sequence
 
-from .commands.analysis import ANALYZE_COMMAND
-from .commands.base import (
+from mpcshare.commands.analysis import ANALYZE_COMMAND
+from mpcshare.commands.base import (
     Command,
     CommandError,
     load_or_fail,
@@ -25,10 +25,10 @@ from .commands.base import (
     positive_int,
     prepare_output_folder,
 )
-from .commands.data import GENERATE_COMMAND, INSPECT_COMMAND
-from .commands.demo import DEMO_COMMAND
-from .commands.sim import SIM_COMMAND
-from .commands.train import TRAIN_COMMAND
+from mpcshare.commands.data import GENERATE_COMMAND, INSPECT_COMMAND
+from mpcshare.commands.demo import DEMO_COMMAND
+from mpcshare.commands.sim import SIM_COMMAND
+from mpcshare.commands.train import TRAIN_COMMAND
 
 __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "positive_int", "positive_float",
            "nonnegative_float", "prepare_output_folder", "load_or_fail"]

@@ -1,6 +1,6 @@
 """Closed-loop comparison of arbitration strategies on held-out demonstrations.
 
-Each *run* is a strategy of :class:`mpcshare.controller.SharedController` (``voluntary``,
+Each *run* is a strategy of :class:`mpcshare.control.controller.SharedController` (``voluntary``,
 ``reactive``, ``gate``, ``blend``, and the gate without MPC); each is simulated on the
 same held-out trials, with the same wearer and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
@@ -68,7 +68,7 @@ class Comparison:
 
 def _from_bundle(bundle: Any, **options: Any) -> Any:
     """The default controller factory: :meth:`SharedController.from_bundle` (imported when first used)."""
-    from .controller import SharedController
+    from mpcshare.control.controller import SharedController
 
     return SharedController.from_bundle(bundle, **options)
 

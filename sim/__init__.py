@@ -2,7 +2,7 @@
 
 - :mod:`sim.demonstrator` — synthetic bimanual-eating demonstrations.
 - :mod:`sim.scene` — the MuJoCo scene (swaying torso with the SuperLimb, table, plate, food, fork).
-- :mod:`sim.kinematics` — closed-form knife-tip kinematics (reachability, start pose).
+- :mod:`robot.kinematics` — closed-form knife-tip kinematics (reachability, start pose).
 - :mod:`sim.servo` — the joint servo at the physics rate, limits held in MuJoCo.
 - :mod:`sim.wearer` — the simulated wearer (shoulder commands toward the intent).
 - :mod:`sim.closed_loop` — ``run_episode`` and the run file; :mod:`sim.metrics` — episode metrics.

@@ -15,7 +15,7 @@ Per control step k (t_k = k·T, T = 10 ms):
    limits (positions and velocities at 1e-6, torques at 1e-9 N·m).
 
 The controller object needs only ``step`` (the interface of
-``mpcshare.controller.SharedController``); ``reset()`` is called first if it has one.
+``mpcshare.control.controller.SharedController``); ``reset()`` is called first if it has one.
 ``obs`` rows go to the controller in the trial's column order: reorder the trial
 to the controller's channel order first if they differ.
 
@@ -39,11 +39,10 @@ import numpy as np
 
 from learning.atomic import atomic_open
 from learning.data import Trial
-
-from .kinematics import ArmGeometry, nearest_reachable_q
-from .scene import EatingScene, SceneConfig
-from .servo import JointServo, ServoConfig
-from .wearer import SimulatedWearer, WearerConfig
+from robot.kinematics import ArmGeometry, nearest_reachable_q
+from sim.scene import EatingScene, SceneConfig
+from sim.servo import JointServo, ServoConfig
+from sim.wearer import SimulatedWearer, WearerConfig
 
 __all__ = ["FORK_CHANNELS", "LIMIT_TOL", "TIP_CHANNELS", "TORQUE_TOL", "Controller", "Episode", "run_episode"]
 
@@ -168,7 +167,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         render: path of a video (.mp4 if ffmpeg is available, else a .gif beside it).
         progress: show a tqdm bar.
     """
-    from .demonstrator import ACT_NAMES, OBS_NAMES
+    from sim.demonstrator import ACT_NAMES, OBS_NAMES
 
     sc = scene or SceneConfig()
     wc = wearer or WearerConfig()
@@ -227,7 +226,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     violations, worst = 0, {"q": 0.0, "v": 0.0, "tau": 0.0}
     renderer = None
     if render is not None:
-        from .render import VideoRecorder
+        from sim.render import VideoRecorder
 
         renderer = VideoRecorder(m, render, fps=25, control_rate_hz=1.0 / sc.control_period)
     bar = None

@@ -33,7 +33,7 @@ never goes below the plate's surface (z = 0 in the plate frame). Where the hand
 aims below it (cutting and collecting press down; 28 % of samples before this
 rule) the tip rests on the plate and presses harder (:func:`_rest_on_plate`);
 only the recorded sensor noise (σ = 0.5 mm) reads below zero. Every knife tip is
-reachable by the arm mounted on the swaying torso (tests/sim/test_kinematics.py).
+reachable by the arm mounted on the swaying torso (tests/robot/test_kinematics.py).
 Re-measured after this change (3 subjects × 10 min, analysis without search):
 without modes / within HMM modes 48.1 % / 12.0 % (seed 0), 45.7 % / 11.7 %
 (seed 1), 47.1 % / 12.8 % (seed 2); before it 48.3 % / 12.0 % and 45.8 % / 11.7 %

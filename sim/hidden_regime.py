@@ -24,8 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from learning.data import Demonstrations, Trial
-
-from .regime_free import _drift
+from sim.regime_free import _drift
 
 __all__ = ["HiddenRegimeConfig", "generate_hidden_regime"]
 

@@ -31,8 +31,7 @@ from typing import Any
 import numpy as np
 
 from robot.shoulder import ShoulderMap
-
-from .closed_loop import Episode
+from sim.closed_loop import Episode
 
 __all__ = ["METRIC_KEYS", "conflict_mask", "episode_metrics"]
 

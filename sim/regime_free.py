@@ -17,7 +17,7 @@ alike, would be hidden state that time can recover: a real finding, not a false 
 ε_o, ε_u are i.i.d. Gaussian with std ``obs_noise``, ``act_noise`` (units of the
 unit-RMS latent). Any structure a segmentation finds here is observation-space
 structure, not a regime: the analysis must not claim that modes add information
-(``benchmarks/bench_calibration.py``, ``tests/learning/test_calibration.py``).
+(``benchmarks/bench_calibration.py``, ``tests/learning/analysis/test_calibration.py``).
 """
 
 from __future__ import annotations

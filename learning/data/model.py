@@ -154,6 +154,11 @@ class Demonstrations:
             out["voluntary"] = np.concatenate([tr.voluntary for tr in self.trials])
         return out
 
+    def obs_sequences(self) -> tuple[np.ndarray, np.ndarray]:
+        """(N, d_o) observations of all trials stacked and (n_trials,) their lengths: the input of a
+        sequence model over trials (hmmlearn's ``X, lengths``)."""
+        return np.concatenate([tr.obs for tr in self.trials]), np.array([len(tr) for tr in self.trials])
+
     def select(self, trial_ids: Sequence[int]) -> Demonstrations:
         """A new set holding the trials with the given ids, in the given order."""
         by_id = {tr.trial_id: tr for tr in self.trials}

@@ -6,10 +6,10 @@ import argparse
 from pathlib import Path
 from typing import Sequence
 
-from learning.analysis_report import AnalysisReport
+from learning.analysis.config import AnalysisConfig
+from learning.analysis.report import AnalysisReport
 from learning.data import Demonstrations
-
-from .base import (
+from mpcshare.commands.base import (
     Command,
     CommandError,
     load_or_fail,
@@ -18,37 +18,46 @@ from .base import (
     positive_int,
     prepare_output_folder,
 )
-from .data import DATA_HELP
+from mpcshare.commands.data import DATA_HELP
 
 __all__ = ["ANALYZE_COMMAND", "add_analysis_arguments", "analysis_config", "run_analysis", "print_headline"]
 
 
+def _listed(values) -> str:
+    return " ".join(f"{v:g}" for v in values)
+
+
 def add_analysis_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of the predictability analysis (shared by ``analyze`` and ``demo``)."""
+    """Options of the predictability analysis (shared by ``analyze`` and ``demo``); every default
+    is :class:`~learning.analysis.AnalysisConfig`'s, written once there."""
+    d = AnalysisConfig()
     g = p.add_argument_group("analysis")
-    g.add_argument("--rate", type=positive_float, default=10.0, help="rate after downsampling [Hz] (default 10)")
-    g.add_argument("--window", type=nonnegative_float, default=1.0, help="causal window [s] (default 1)")
-    g.add_argument("--scope", choices=["sensor", "channel"], default="sensor",
-                   help="standardise per sensor to unit RMS magnitude (the paper) or per channel")
-    g.add_argument("--modes", type=positive_int, default=4, help="number of HMM task modes (default 4)")
-    g.add_argument("-K", "--K", dest="K", type=positive_float, nargs="+", default=[5.0, 10.0],
-                   help="thresholds K for the voluntary share (default 5 10)")
-    g.add_argument("--n-random", type=positive_int, default=20,
-                   help="random segmentations to compare the HMM against (default 20)")
-    g.add_argument("--search-windows", type=nonnegative_float, nargs="*", default=[0.5, 1.0, 2.0],
-                   help="window lengths [s] for the search for missing information")
-    g.add_argument("--search-modes", type=positive_int, nargs="*", default=[2, 3, 4, 5, 6],
-                   help="numbers of modes for the search for missing information")
+    g.add_argument("--rate", type=positive_float, default=d.target_hz,
+                   help=f"rate after downsampling [Hz] (default {d.target_hz:g})")
+    g.add_argument("--window", type=nonnegative_float, default=d.window_s,
+                   help=f"causal window [s] (default {d.window_s:g})")
+    g.add_argument("--scope", choices=["sensor", "channel"], default=d.scope,
+                   help="standardise per sensor to unit RMS magnitude (the paper) or per channel "
+                        f"(default {d.scope})")
+    g.add_argument("--modes", type=positive_int, default=d.n_modes,
+                   help=f"number of HMM task modes (default {d.n_modes})")
+    g.add_argument("-K", "--K", dest="K", type=positive_float, nargs="+", default=list(d.K),
+                   help=f"thresholds K for the voluntary share (default {_listed(d.K)})")
+    g.add_argument("--n-random", type=positive_int, default=d.n_random,
+                   help=f"random segmentations to compare the HMM against (default {d.n_random})")
+    g.add_argument("--search-windows", type=nonnegative_float, nargs="*", default=list(d.search_windows),
+                   help="window lengths [s] for the search for missing information "
+                        f"(default {_listed(d.search_windows)})")
+    g.add_argument("--search-modes", type=positive_int, nargs="*", default=list(d.search_modes),
+                   help=f"numbers of modes for the search (default {_listed(d.search_modes)})")
     g.add_argument("--no-search", action="store_true", help="skip the search for missing information")
     g.add_argument("--select-modes", action="store_true",
                    help="also choose the number of modes by held-out likelihood over trials (+BIC)")
-    g.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
+    g.add_argument("--seed", type=int, default=d.seed, help=f"seed of everything random (default {d.seed})")
 
 
-def analysis_config(args: argparse.Namespace):
+def analysis_config(args: argparse.Namespace) -> AnalysisConfig:
     """The :class:`learning.analysis.AnalysisConfig` of parsed arguments."""
-    from learning.analysis import AnalysisConfig
-
     return AnalysisConfig(
         target_hz=args.rate, window_s=args.window, scope=args.scope, n_modes=args.modes,
         K=tuple(args.K), n_random=args.n_random,
@@ -65,7 +74,7 @@ def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
     settings (``learning.analysis.AnalysisError``: rate, trials shorter than the window).
     """
     from learning.analysis import AnalysisError, analyze
-    from mpcshare.report import write_analysis_report
+    from mpcshare.reports.analysis import write_analysis_report
 
     try:
         result = analyze(demos, analysis_config(args), progress=True)
@@ -77,7 +86,7 @@ def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
 
 def print_headline(report: AnalysisReport) -> None:
     """The few lines a person reads first: quotients, modes, the two tests."""
-    from mpcshare.report import fmt, fmt_p
+    from mpcshare.reports.analysis import fmt, fmt_p
 
     q = report.quotients
     print(f"quotients without modes: median {fmt(q.p50)}, p90 {fmt(q.p90)}, max {fmt(q.max)}")

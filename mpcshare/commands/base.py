@@ -20,7 +20,7 @@ from typing import Callable
 
 from learning.data import DataFormatError, Demonstrations, load
 
-__all__ = ["Command", "CommandError", "positive_int", "positive_float", "nonnegative_float",
+__all__ = ["Command", "CommandError", "positive_int", "positive_float", "nonnegative_float", "percentile",
            "prepare_output_folder", "load_or_fail"]
 
 
@@ -71,6 +71,14 @@ def nonnegative_float(text: str) -> float:
 
 
 # ------------------------------------------------------- files
+
+def percentile(text: str) -> float:
+    """argparse type: a percentile in [0, 100]."""
+    value = nonnegative_float(text)
+    if value > 100:
+        raise argparse.ArgumentTypeError(f"expected a percentile in [0, 100], got {text!r}")
+    return value
+
 
 def prepare_output_folder(path: str | Path) -> Path:
     """Create the output folder (and parents) or raise :class:`CommandError` saying why.

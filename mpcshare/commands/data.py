@@ -9,9 +9,8 @@ import time
 from typing import Sequence
 
 from learning.data import Demonstrations, save
+from mpcshare.commands.base import Command, CommandError, load_or_fail, positive_float, positive_int
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
-
-from .base import Command, CommandError, load_or_fail, positive_float, positive_int
 
 __all__ = ["INSPECT_COMMAND", "GENERATE_COMMAND", "format_summary", "DATA_HELP"]
 

@@ -19,11 +19,18 @@ from pathlib import Path
 
 from learning.atomic import atomic_open
 from learning.data import save
+from mpcshare.commands.analysis import add_analysis_arguments, print_headline, run_analysis
+from mpcshare.commands.base import (
+    Command,
+    CommandError,
+    percentile,
+    positive_float,
+    positive_int,
+    prepare_output_folder,
+)
+from mpcshare.commands.data import format_summary
+from mpcshare.training.config import TrainConfig
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
-
-from .analysis import add_analysis_arguments, print_headline, run_analysis
-from .base import Command, CommandError, positive_float, positive_int, prepare_output_folder
-from .data import format_summary
 
 __all__ = ["DEMO_COMMAND"]
 
@@ -35,8 +42,8 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--subjects", type=positive_int, default=3, help="subjects in the default data (default 3)")
     p.add_argument("--minutes", type=positive_float, default=10.0, help="minutes per subject (default 10)")
     p.add_argument("--data-seed", type=int, default=0, help="seed of the default data (default 0)")
-    p.add_argument("--percentile", type=float, default=90.0,
-                   help="K at this percentile of the within-mode quotients (default 90)")
+    p.add_argument("--percentile", type=percentile, default=TrainConfig.percentile,
+                   help=f"K at this percentile of the within-mode quotients (default {TrainConfig.percentile:g})")
     p.add_argument("--no-sweep", action="store_true", help="skip the K trade-off sweep")
     p.add_argument("--sim-trials", type=positive_int, default=2, help="held-out trials to simulate (default 2)")
     p.add_argument("--sim-duration", type=positive_float, default=30.0,
@@ -45,17 +52,22 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     add_analysis_arguments(p)
 
 
+def training_config(args: argparse.Namespace) -> TrainConfig:
+    """The demo trains with the analysis's choices (modes, window, rate, seed) and ``--percentile``."""
+    return TrainConfig(percentile=args.percentile, n_modes=args.modes, window_s=args.window,
+                       model_hz=args.rate, seed=args.seed)
+
+
 def _stage(k: int, text: str) -> None:
     print(f"[{k}/{_STAGES}] {text}", flush=True)
 
 
 def _demo(args: argparse.Namespace) -> int:
     from mpcshare.bundle import load_bundle, save_bundle
-    from mpcshare.comparison_report import write_comparison
-    from mpcshare.demo_report import write_demo_report
     from mpcshare.experiments import compare_strategies, render_clip
-    from mpcshare.report import plot_demonstrations, write_json_atomic
-    from mpcshare.train_config import TrainConfig
+    from mpcshare.reports.analysis import plot_demonstrations, write_json_atomic
+    from mpcshare.reports.comparison import write_comparison
+    from mpcshare.reports.demo import write_demo_report
     from mpcshare.training import TrainingError, train_bundle
 
     out = prepare_output_folder(args.out)
@@ -92,7 +104,7 @@ def _demo(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
-    config = TrainConfig(percentile=args.percentile, seed=args.seed)
+    config = training_config(args)
     try:
         bundle = train_bundle(demos, config, progress=True)
     except TrainingError as exc:
@@ -104,7 +116,7 @@ def _demo(args: argparse.Namespace) -> int:
 
     sweep = None
     if not args.no_sweep:
-        from mpcshare.sweep import run_sweep
+        from mpcshare.training.sweep import run_sweep
 
         t0 = time.perf_counter()
         _stage(5, "the trade-off between accuracy and effort (K sweep)")
@@ -134,7 +146,7 @@ def _demo(args: argparse.Namespace) -> int:
                                 data_summary=summary, sweep=sweep)
     if missing:
         print(f"report.html: could not embed {missing}")
-    from mpcshare.comparison_report import comparison_findings
+    from mpcshare.reports.comparison import comparison_findings
 
     for line in comparison_findings(comparison["strategies"]):
         print(line)

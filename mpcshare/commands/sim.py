@@ -17,8 +17,14 @@ from pathlib import Path
 from typing import Any
 
 from learning.data import Demonstrations
-
-from .base import Command, CommandError, load_or_fail, positive_float, positive_int, prepare_output_folder
+from mpcshare.commands.base import (
+    Command,
+    CommandError,
+    load_or_fail,
+    positive_float,
+    positive_int,
+    prepare_output_folder,
+)
 
 __all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "run_comparison"]
 
@@ -86,8 +92,8 @@ def align_channels(demos: Demonstrations, bundle: Any, mapping: dict[str, str] |
 def run_comparison(bundle: Any, demos: Demonstrations, out: Path, args: argparse.Namespace,
                    trial_ids: list[int]) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
-    from mpcshare.comparison_report import write_comparison
     from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
+    from mpcshare.reports.comparison import write_comparison
 
     if abs(demos.rate_hz - bundle.rate_hz) > 1e-9 * bundle.rate_hz:
         raise CommandError(f"the data is at {demos.rate_hz:g} Hz, the bundle was trained at {bundle.rate_hz:g} Hz")
@@ -131,7 +137,7 @@ def _run(args: argparse.Namespace) -> int:
     trial_ids = trial_ids[:args.trials] if args.trials else trial_ids
     t0 = time.perf_counter()
     obj = run_comparison(bundle, demos, out, args, trial_ids)
-    from mpcshare.comparison_report import comparison_findings
+    from mpcshare.reports.comparison import comparison_findings
 
     for line in comparison_findings(obj["strategies"]):
         print(line)

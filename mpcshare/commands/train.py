@@ -3,7 +3,7 @@
 - ``mpcshare train DATA --percentile 90 --out MODEL_DIR`` writes a bundle
   (:mod:`mpcshare.bundle`) and prints a summary of the held-out metrics;
 - ``mpcshare train DATA --sweep --out DIR`` writes ``sweep.json``, ``sweep.md`` and
-  ``sweep.png`` (:mod:`mpcshare.sweep`).
+  ``sweep.png`` (:mod:`mpcshare.training.sweep`).
 
 Unusable data (too few or too short trials, no act channels, a rate that cannot be
 downsampled to the model rate) gives one message and exit status 1; bad option values
@@ -16,24 +16,20 @@ import argparse
 import math
 from pathlib import Path
 
-from .base import (
+from mpcshare.commands.base import (
     Command,
     CommandError,
     load_or_fail,
     nonnegative_float,
+    percentile,
     positive_float,
     positive_int,
     prepare_output_folder,
 )
+from mpcshare.commands.data import DATA_HELP
+from mpcshare.training.config import DEFAULT_PERCENTILES, TrainConfig
 
 __all__ = ["TRAIN_COMMAND"]
-
-
-def _percentile(text: str) -> float:
-    value = nonnegative_float(text)
-    if value > 100:
-        raise argparse.ArgumentTypeError(f"expected a percentile in [0, 100], got {text!r}")
-    return value
 
 
 def _fraction(text: str) -> float:
@@ -44,35 +40,37 @@ def _fraction(text: str) -> float:
 
 
 def _add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("data", help="an NPZ file or a CSV folder (format: DESIGN.md)")
+    d = TrainConfig()
+    p.add_argument("data", help=DATA_HELP)
     p.add_argument("--out", required=True,
                    help="bundle folder (absent, empty or an older bundle); with --sweep the folder "
                         "for sweep.json, sweep.md, sweep.png")
-    p.add_argument("--percentile", type=_percentile, default=90.0,
-                   help="K = this percentile of the within-mode quotients (default 90)")
+    p.add_argument("--percentile", type=percentile, default=d.percentile,
+                   help=f"K = this percentile of the within-mode quotients (default {d.percentile:g})")
     p.add_argument("--sweep", action="store_true",
                    help="the trade-off sweep over --percentiles instead of one bundle")
-    p.add_argument("--percentiles", type=_percentile, nargs="+", default=[100, 90, 80, 70, 60, 50],
-                   help="percentiles of the sweep (default 100 90 80 70 60 50)")
+    p.add_argument("--percentiles", type=percentile, nargs="+", default=list(DEFAULT_PERCENTILES),
+                   help=f"percentiles of the sweep (default {' '.join(f'{x:g}' for x in DEFAULT_PERCENTILES)})")
     g = p.add_argument_group("training")
-    g.add_argument("--modes", type=positive_int, default=4, help="HMM task modes (default 4)")
-    g.add_argument("--window", type=nonnegative_float, default=1.0, help="causal window [s] (default 1)")
-    g.add_argument("--rate", type=positive_float, default=10.0, help="model rate [Hz] (default 10)")
-    g.add_argument("--heldout", type=_fraction, default=0.25,
-                   help="share of trials held out for evaluation (default 0.25)")
-    g.add_argument("--epochs", type=positive_int, default=80, help="maximum LSTM epochs (default 80)")
-    g.add_argument("--hmm-restarts", type=positive_int, default=3, help="EM restarts (default 3)")
+    g.add_argument("--modes", type=positive_int, default=d.n_modes, help=f"HMM task modes (default {d.n_modes})")
+    g.add_argument("--window", type=nonnegative_float, default=d.window_s,
+                   help=f"causal window [s] (default {d.window_s:g})")
+    g.add_argument("--rate", type=positive_float, default=d.model_hz, help=f"model rate [Hz] (default {d.model_hz:g})")
+    g.add_argument("--heldout", type=_fraction, default=d.heldout_fraction,
+                   help=f"share of trials held out for evaluation (default {d.heldout_fraction:g})")
+    g.add_argument("--epochs", type=positive_int, default=d.max_epochs,
+                   help=f"maximum LSTM epochs (default {d.max_epochs})")
+    g.add_argument("--hmm-restarts", type=positive_int, default=d.hmm_restarts,
+                   help=f"EM restarts (default {d.hmm_restarts})")
     g.add_argument("--baselines", action="store_true",
                    help="also train the LSTM on all points as a baseline (the sweep always does)")
-    g.add_argument("--device", choices=["cpu", "cuda", "auto"], default="cpu",
-                   help="torch device of the LSTM (default cpu; auto = CUDA when present)")
-    g.add_argument("--seed", type=int, default=0, help="seed of everything random (default 0)")
+    g.add_argument("--device", choices=["cpu", "cuda", "auto"], default=d.device,
+                   help=f"torch device of the LSTM (default {d.device}; auto = CUDA when present)")
+    g.add_argument("--seed", type=int, default=d.seed, help=f"seed of everything random (default {d.seed})")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
 
 
-def _config(args: argparse.Namespace):
-    from mpcshare.train_config import TrainConfig
-
+def _config(args: argparse.Namespace) -> TrainConfig:
     return TrainConfig(percentile=args.percentile, model_hz=args.rate, window_s=args.window,
                        n_modes=args.modes, hmm_restarts=args.hmm_restarts, heldout_fraction=args.heldout,
                        max_epochs=args.epochs, lstm_baseline=args.baselines, device=args.device,
@@ -123,7 +121,7 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(str(exc)) from None
     try:
         if args.sweep:
-            from mpcshare.sweep import run_sweep
+            from mpcshare.training.sweep import run_sweep
             result = run_sweep(demos, config, percentiles=args.percentiles, out=out,
                                progress=not args.quiet)
             print(result.conclusion)

@@ -53,14 +53,19 @@ def test_demo_refuses_an_output_path_that_is_a_file(tmp_path, capsys):
 def test_demo_runs_every_stage_into_one_report(tmp_path):
     out = tmp_path / "demo"
     code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "4", "--n-random", "2",
-                 "--no-search", "--no-sweep", "--sim-trials", "1", "--sim-duration", "3", "--no-video"])
+                 "--no-search", "--no-sweep", "--sim-trials", "1", "--sim-duration", "3", "--no-video",
+                 "--modes", "3", "--window", "0.8"])
     assert code == 0
+    # the analysis options reach the training too (they were once read by the analysis only)
+    bundle = json.loads((out / "model" / "bundle.json").read_text())
+    assert bundle["n_modes"] == 3 and bundle["window_s"] == 0.8
     summary = json.loads((out / "data_summary.json").read_text())
     assert summary["mode_names"] == ["cutting", "repositioning", "collecting", "removing"]
     assert (out / "data_trial.png").stat().st_size > 10_000
     assert (out / "demos.npz").exists()
     analysis = json.loads((out / "analysis" / "report.json").read_text())
     assert analysis["candidates"] == []
+    assert analysis["modes"]["n_modes"] == 3 and analysis["window_s"] == 0.8
     assert (out / "model" / "bundle.json").exists()
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
     assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_no_mpc"}

@@ -11,7 +11,7 @@ import pytest
 from learning.data import Demonstrations, load, save
 from mpcshare.cli import main
 from mpcshare.experiments import METRIC_KEYS, pool_metrics
-from mpcshare.html_report import markdown_to_html
+from mpcshare.reports.html import markdown_to_html
 from sim.closed_loop import Episode
 from sim.demonstrator import generate_demonstrations
 

@@ -7,8 +7,7 @@ from robot.superlimb import SuperLimbParams
 from sim.closed_loop import CONTROL_KEYS, PHYSICS_KEYS, Episode, run_episode
 from sim.demonstrator import generate_demonstrations
 from sim.metrics import METRIC_KEYS, episode_metrics
-
-from .controllers import (
+from tests.sim.controllers import (
     AggressiveController,
     IdleController,
     OracleController,

@@ -5,7 +5,7 @@ import pytest
 from scipy import signal
 
 from learning.lipschitz import pointwise_quotients
-from learning.preprocess import preprocess
+from learning.preprocessing.preprocess import preprocess
 from sim.demonstrator import (
     ACT_NAMES,
     CUTTING,

@@ -4,8 +4,8 @@ import mujoco
 import numpy as np
 import pytest
 
+from robot.kinematics import ArmGeometry, forward_tip
 from robot.superlimb import rpy_to_matrix
-from sim.kinematics import ArmGeometry, forward_tip
 from sim.scene import EatingScene, SceneConfig, pose_matrix
 
 

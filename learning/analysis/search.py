@@ -1,0 +1,143 @@
+"""The search for missing information of :func:`learning.analysis.analyze`: every
+(window length, number of modes) candidate ranked by how far its HMM modes lower the
+per-trial median quotients beyond the time-free reference grouping (and random groups)."""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
+from typing import TYPE_CHECKING, Callable
+
+import numpy as np
+
+from learning.analysis.predictability import voluntary_share
+from learning.analysis.reference import mode_evidence, random_labelings, reference_segmentation
+from learning.analysis.report import Candidate
+from learning.data import Demonstrations
+from learning.lipschitz import default_jobs, pointwise_quotients, pointwise_quotients_multi
+from learning.modes import TaskModes
+from learning.preprocessing.preprocess import causal_windows
+
+if TYPE_CHECKING:
+    from learning.analysis import AnalysisConfig
+
+__all__ = ["fit_modes", "mean_share", "search_candidates", "within_group_quotients"]
+
+
+def fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: AnalysisConfig
+              ) -> tuple[TaskModes, np.ndarray]:
+    """HMM task modes of the per-sample features ``Z`` (trials ``lengths``) and their labels."""
+    # Restarts in parallel processes (the result does not depend on it).
+    model = TaskModes(n_modes=n_modes, n_restarts=config.hmm_restarts, seed=config.seed,
+                      n_jobs=-1).fit(Z, lengths)
+    return model, model.predict(Z, lengths)
+
+
+
+
+def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
+                      fitted: dict[int, tuple[TaskModes, np.ndarray]], alpha: float,
+                      progress: bool = False,
+                      known_q_modes: dict[tuple[float, int], np.ndarray] | None = None) -> list[Candidate]:
+    """Rank (window, n_modes) candidates by the median over trials of
+    log10(median q within the reference / median q within modes) (per-trial inference).
+
+    ``fitted`` holds the HMMs already fitted (by number of modes); the others are fitted
+    and added. Per window, the quotients without modes and within every candidate's
+    random groupings come from one :func:`pointwise_quotients_multi` pass; within modes
+    and within the reference from one :func:`pointwise_quotients` call each, two calls at
+    a time (:func:`within_group_quotients`).
+    ``known_q_modes`` maps (window [s], n_modes) to quotients within those modes already
+    computed on the same windows (the main analysis's), which are then not recomputed."""
+    K0 = config.K[0]
+    rows = []
+    todo = [n for n in config.search_modes if n not in fitted]
+    known = known_q_modes or {}
+    bar = None
+    if progress:  # one step per HMM fit, per shared pass and per call within a grouping
+        from tqdm.auto import tqdm
+        n_known = sum((float(w), int(n)) in known for w in config.search_windows for n in config.search_modes)
+        bar = tqdm(total=len(todo) + len(config.search_windows) * (1 + 2 * len(config.search_modes)) - n_known,
+                   desc="search", unit="step", leave=False)
+    for n_modes in todo:
+        fitted[n_modes] = fit_modes(Z, lengths, n_modes, config)
+        if bar is not None:
+            bar.update(1)
+    R = config.search_random
+    # What does not depend on the window, once per number of modes: the time-free
+    # reference grouping (a mixture fit) and the HMM's BIC.
+    refs = {n: reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed + 1)
+            for n in config.search_modes}
+    bics = {n: float(fitted[n][0].bic(Z, lengths)) for n in config.search_modes}
+    for window in config.search_windows:
+        w = causal_windows(std, window, rms=True)
+        # No grouping and every candidate's random groupings: one pass over the pairs.
+        rand = [random_labelings(fitted[n][1][w.source_index], R, config.random_method, config.seed + 1)
+                for n in config.search_modes]
+        Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64)] + rand))
+        if bar is not None:
+            bar.update(1)
+        q0 = Q[0]
+        share0 = mean_share(q0, w.trial, K0)
+        jobs = {("reference", n): refs[n][w.source_index] for n in config.search_modes}
+        jobs.update({("modes", n): fitted[n][1][w.source_index] for n in config.search_modes
+                     if (float(window), int(n)) not in known})
+        within = within_group_quotients(w.X, w.Y, jobs, done=None if bar is None else lambda: bar.update(1))
+        for k, n_modes in enumerate(config.search_modes):
+            model, labels = fitted[n_modes]
+            q_modes = known.get((float(window), int(n_modes)), within.get(("modes", n_modes)))
+            ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
+                               reference=config.reference, n_random=R,
+                               random_method=config.random_method, alpha=alpha,
+                               min_effect=config.min_effect, seed=config.seed + 1,
+                               q_random=Q[1 + k * R:1 + (k + 1) * R], reference_labels=refs[n_modes],
+                               q_modes=q_modes, q_reference=within[("reference", n_modes)])
+            rows.append(Candidate(
+                window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
+                median_q_modes=float(np.median(ev.q_modes)),
+                median_q_reference=float(np.median(ev.q_reference)),
+                median_q_random=float(np.median(ev.q_random)),
+                gain_beyond_reference_log10=ev.vs_reference.effect / math.log(10),
+                p_value=ev.vs_reference.p_value,
+                gain_beyond_random_log10=ev.vs_random.effect / math.log(10),
+                share_K=float(K0), share_without_modes=share0, share_with_modes=mean_share(ev.q_modes, w.trial, K0),
+                share_reference=mean_share(ev.q_reference, w.trial, K0),
+                share_random=float(np.mean([mean_share(r, w.trial, K0) for r in ev.q_random])),
+                hmm_bic=bics[n_modes]))
+    if bar is not None:
+        bar.close()
+    rows.sort(key=lambda r: -r.gain_beyond_reference_log10)
+    return [replace(r, rank=rank) for rank, r in enumerate(rows, 1)]
+
+
+def within_group_quotients(X: np.ndarray, Y: np.ndarray, groupings: dict, max_parallel: int = 2,
+                           done: Callable[[], None] | None = None) -> dict:
+    """``pointwise_quotients(X, Y, g)`` for every grouping ``g`` of ``groupings`` (same keys),
+    up to ``max_parallel`` calls at a time, the cores shared among them. Each call has
+    serial parts (features, k-d leaves) during which its other threads wait; two calls
+    side by side fill those gaps (measured on 2 cores, the 107k windows of 3 × 60 min, the
+    search's 5 groupings of one window with 2, 4 and 6 modes: median 0.88 of the time one
+    after the other over 3 paired runs, range 0.75–1.06 on this shared machine). Two at a time
+    bounds the memory: each call holds its own copies of X and Y in pass order. The
+    quotients do not depend on it (exact). ``done()`` is called as each call finishes."""
+    keys = list(groupings)
+    if not keys:
+        return {}
+    cores = default_jobs()
+    workers = max(1, min(max_parallel, len(keys), cores))
+    threads = max(1, cores // workers)
+    def one(key) -> np.ndarray:
+        q = pointwise_quotients(X, Y, groupings[key], n_jobs=threads)
+        if done is not None:
+            done()
+        return q
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        qs = list(pool.map(one, keys))
+    return dict(zip(keys, qs))
+
+
+def mean_share(q: np.ndarray, trial: np.ndarray, K: float) -> float:
+    """Voluntary share at K, mean over trials."""
+    return float(np.mean(list(voluntary_share(q, trial, K).values())))

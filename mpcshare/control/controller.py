@@ -1,0 +1,375 @@
+"""The online shared controller, every 10 ms (docs/design.md, "Online control").
+
+Per :meth:`SharedController.step`:
+
+1. front end (:mod:`mpcshare.control.frontend`): Kalman filter over the fork, anti-aliased
+   10 Hz window, mode filter and novelty; on the 10 Hz ticks the gate of the most
+   probable mode (``gates.proba_one``) and the streaming reactive predictor
+   (``predictor.make_stream().step(concat(o_t, p_t))``), held between ticks;
+2. arbitration (:mod:`mpcshare.control.arbitration`): α, β; û = α·û_r + β·û_v [m/s], integrated
+   into the tip reference p_ref (plate frame), clamped to the workspace box and the
+   reach shell (:mod:`mpcshare.control.workspace`), then moved into the arm's model frame with
+   the base pose;
+3. ``robot.smoothing.ReferenceSmoother`` (ruckig, jerk-limited);
+4. optional MPC (``robot.mpc.tip_mpc.TipMPC``) on the smoothed reference extrapolated over its
+   horizon; its planned tip at t + dt (position, central-difference velocity and
+   acceleration) is the reference of
+5. ``robot.qp.QPController``, which enforces joint position, velocity, acceleration and
+   torque limits at the control rate. When the MPC fails or runs out of time, the QP
+   tracks the smoothed reference alone.
+
+``step`` never raises: every fault gives a safe command and a status (:data:`STATUSES`,
+most severe first; ``reasons`` lists every fault of the step):
+
+==========================  ==========================================================
+status                      what the step does
+==========================  ==========================================================
+internal_error              an unexpected exception (or a learned part raised): brake
+                            toward the smoothed reference within limits; a failing
+                            gate/predictor only sets α = 0
+invalid_joint_state         q or v NaN / wrong shape: the QP holds its last command
+time_went_backwards         t ≤ previous t (or NaN): nothing is updated, brake and hold
+no_observation              no fork sample ever measured: brake and hold
+stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β = 1 (the
+                            wearer has control), the reactive term is dropped
+invalid_shoulder            shoulder angles NaN / wrong shape: û = 0, reference held
+qp_failed                   both QPs failed: the QP's brake (torque limits hold)
+mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
+invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
+missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
+invalid_base_pose           the last valid base pose is kept
+reference_unreachable       the reference is clamped to the workspace box / reach shell
+==========================  ==========================================================
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
+from mpcshare.control.frontend import StreamingFrontEnd
+from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc
+from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
+from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
+from robot.kinematics import ReachShell, TipKinematics
+from robot.qp import QPConfig, QPController, QPStatus
+from robot.shoulder import ShoulderMap
+from robot.smoothing import ReferenceSmoother
+from robot.superlimb import TOOL_FRAME, SuperLimbParams
+
+__all__ = ["STATUSES", "ControlCommand", "ControllerConfig", "SharedController"]
+
+_RANK = {s: i for i, s in enumerate(STATUSES)}
+
+
+def _finite(x: np.ndarray) -> bool:
+    """True when every entry is finite (a NaN or inf makes the sum non-finite)."""
+    return math.isfinite(x.sum())
+
+
+class SharedController:
+    """Shared control of the SuperLimb's knife tip from a trained bundle (module docstring).
+
+    Build with :meth:`from_bundle`. Misuse at construction raises ValueError naming what
+    is wrong (channels, strategy, β, shapes of the learned parts).
+    """
+
+    default_base_pose = DEFAULT_BASE_POSE
+
+    def __init__(self, bundle, *, robot: SuperLimbParams | None = None, strategy: str = "gate",
+                 beta: float = 0.5, use_mpc: bool = True, shoulder: ShoulderMap | None = None,
+                 tip_channels: tuple[str, str, str] | None = None,
+                 fork_channels: tuple[str, str, str] | None = None, mpc=None,
+                 config: ControllerConfig | None = None) -> None:
+        check_strategy(strategy)
+        self.beta_user = check_beta(beta)
+        self.config = cfg = config or ControllerConfig()
+        self.layout: BundleLayout = check_bundle(bundle, tip_channels, fork_channels)
+        self.bundle, self.strategy = bundle, strategy
+        self.shoulder = shoulder if shoulder is not None else ShoulderMap()
+        self.params = robot if robot is not None else SuperLimbParams()
+        if not isinstance(self.params, SuperLimbParams):
+            raise TypeError(f"robot must be a robot.superlimb.SuperLimbParams or None, got {type(robot).__name__}")
+        self.dt = 1.0 / float(bundle.rate_hz)
+        qp_cfg = cfg.qp if abs(cfg.qp.dt - self.dt) < 1e-12 else QPConfig(**{**cfg.qp.__dict__, "dt": self.dt})
+        self.qp = QPController.for_superlimb(self.params, qp_cfg)
+        self.mpc = mpc if mpc is not None else (make_mpc(self.params, self.dt) if use_mpc else None)
+        if self.mpc is not None and not (hasattr(self.mpc, "solve") and int(getattr(self.mpc, "horizon", 0)) >= 2):
+            raise ValueError("mpc must have solve(q, v, p_ref, deadline_s) and a horizon of at least 2 steps")
+        self.tip = TipKinematics(self.qp.model, TOOL_FRAME)
+        self.reach = ReachShell(self.qp.model, self.tip.frame_id, margin=cfg.reach_margin)
+        self.frontend = StreamingFrontEnd(bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz,
+                                          model_hz=bundle.model_hz, window_s=bundle.window_s,
+                                          detect_stale=cfg.detect_stale)
+        self.arbiter = Arbiter(strategy, beta, novelty_threshold=float(bundle.novelty_threshold),
+                               on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
+                               min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range)
+        self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
+        self.reset()
+
+    @classmethod
+    def from_bundle(cls, folder_or_bundle, robot: SuperLimbParams | None = None, strategy: str = "gate",
+                    beta: float = 0.5, use_mpc: bool = True, shoulder: ShoulderMap | None = None,
+                    **options) -> SharedController:
+        """Controller from a bundle folder (``mpcshare.bundle.load_bundle``) or a loaded bundle.
+
+        ``options``: ``tip_channels``, ``fork_channels`` (act/obs names of the knife and fork
+        tip positions when they are not knife_x/y/z, fork_x/y/z), ``mpc`` (an MPC object),
+        ``config`` (:class:`ControllerConfig`).
+        """
+        check_strategy(strategy)
+        check_beta(beta)
+        bundle = folder_or_bundle
+        if isinstance(folder_or_bundle, (str, Path)):
+            from mpcshare.bundle import load_bundle
+
+            bundle = load_bundle(folder_or_bundle)
+        return cls(bundle, robot=robot, strategy=strategy, beta=beta, use_mpc=use_mpc, shoulder=shoulder,
+                   **options)
+
+    @property
+    def handovers(self):
+        """The arbitration's hand-over log (list of ``Handover``)."""
+        return self.arbiter.handovers
+
+    def reset(self) -> None:
+        """Start a new episode: filters, predictor state, reference and logs forgotten."""
+        self.frontend.reset()
+        self.arbiter.reset()
+        self.qp.reset()
+        if self.mpc is not None and hasattr(self.mpc, "reset"):
+            self.mpc.reset()
+        self.smoother = ReferenceSmoother(3, self.dt, self.config.max_velocity, self.config.max_acceleration,
+                                          self.config.max_jerk)
+        self._stream = self.bundle.predictor.make_stream()
+        K = self.layout.n_modes
+        self._mode_proba = np.full(K, 1.0 / K)
+        self._novelty = float("nan")
+        self._gate_proba: float | None = None
+        self._window_ready = False
+        self._p_pred = np.full(3, np.nan)
+        self._p_ref: np.ndarray | None = None  # plate frame
+        self._last_t = -math.inf
+        self._pose = np.array(self.default_base_pose, dtype=float)
+        self._fork_vel = np.zeros(self.layout.d_o)
+        self._last: ControlCommand | None = None
+        self._plan: np.ndarray | None = None  # last MPC tip plan (model frame)
+        self._plan_age = 0
+
+    # ------------------------------------------------------------------ helpers
+    def _to_model(self, p: np.ndarray) -> np.ndarray:
+        return self._pose[:3, :3].T @ (p - self._pose[:3, 3])
+
+    def _to_plate(self, p: np.ndarray) -> np.ndarray:
+        return self._pose[:3, :3] @ p + self._pose[:3, 3]
+
+    def _command(self, res, alpha: float, beta: float, faults: list[tuple[str, str]],
+                 timings: dict[str, float], t0: float) -> ControlCommand:
+        status = min((f[0] for f in faults), key=_RANK.__getitem__, default="ok")
+        timings["total"] = time.perf_counter() - t0
+        ref = self._p_ref.copy() if self._p_ref is not None else np.full(3, np.nan)
+        cmd = ControlCommand(tau=np.array(res.tau), q_cmd=np.array(res.q_next), v_cmd=np.array(res.v_next),
+                      a_cmd=np.array(res.a), alpha=float(alpha), beta=float(beta),
+                      mode_proba=self._mode_proba.copy(), novelty=self._novelty, tip_reference=ref,
+                      status=status, reasons=tuple(f"{s}: {r}" for s, r in faults), timings=timings,
+                      predicted_tip=self._p_pred.copy(), fork_velocity=self._fork_vel.copy())
+        self._last = cmd
+        return cmd
+
+    def _hold(self, q: np.ndarray, v: np.ndarray, faults, timings, t0) -> ControlCommand:
+        """Brake toward the current smoothed reference (or the measured tip) within the limits."""
+        if self.smoother.initialized:
+            p_hold = self.smoother.state()[0]
+        else:
+            p_hold = self.tip.position(q) if _finite(q) else None
+        res = self.qp.step(q, v, p_hold, np.zeros(3), np.zeros(3))
+        if res.status is QPStatus.SOLVER_FAILED:
+            faults.append(("qp_failed", res.reason))
+        return self._command(res, 0.0, 1.0, faults, timings, t0)
+
+    # ------------------------------------------------------------------ the loop
+    def step(self, t: float, obs, voluntary, q, v, base_pose=None) -> ControlCommand:
+        """One control period (module docstring). Never raises."""
+        t0 = time.perf_counter()
+        try:
+            return self._step(t0, t, obs, voluntary, q, v, base_pose)
+        except Exception as exc:  # noqa: BLE001 — last line of defence: brake within limits, say why
+            reason = f"{type(exc).__name__}: {exc}"
+            try:
+                qa, va = np.asarray(q, dtype=float).reshape(3), np.asarray(v, dtype=float).reshape(3)
+            except Exception:  # noqa: BLE001 — q, v unusable: hold
+                qa = va = np.full(3, np.nan)
+            try:
+                return self._hold(qa, va, [("internal_error", reason)], {}, t0)
+            except Exception:  # noqa: BLE001 — even the QP failed: repeat the last command at rest
+                n = self.qp.n
+                last = self._last
+                z = np.zeros(n)
+                return ControlCommand(z, last.q_cmd if last else z, z, z, 0.0, 1.0, self._mode_proba.copy(),
+                               self._novelty, np.full(3, np.nan), "internal_error", (reason,),
+                               {"total": time.perf_counter() - t0})
+
+    def _step(self, t0: float, t, obs, voluntary, q, v, base_pose) -> ControlCommand:
+        cfg, lay = self.config, self.layout
+        faults: list[tuple[str, str]] = []
+        timings: dict[str, float] = {}
+        n = self.qp.n
+        q = np.asarray(q, dtype=float) if np.size(q) == n else np.full(n, np.nan)
+        v = np.asarray(v, dtype=float) if np.size(v) == n else np.full(n, np.nan)
+        q, v = q.reshape(n), v.reshape(n)
+        if not (_finite(q) and _finite(v)):
+            faults.append(("invalid_joint_state", "q or v not finite or of the wrong shape: holding"))
+            return self._command(self.qp.step(q, v), 0.0, 1.0, faults, timings, t0)
+        t = float(t)
+        if not t > self._last_t:
+            faults.append(("time_went_backwards", f"t = {t!r} after {self._last_t!r}: holding"))
+            return self._hold(q, v, faults, timings, t0)
+        dt = min(t - self._last_t, cfg.max_dt)
+        self._last_t = t
+
+        if base_pose is not None:
+            try:
+                self._pose = check_base_pose(base_pose)
+            except ValueError as exc:
+                faults.append(("invalid_base_pose", f"{exc}: last valid pose kept"))
+
+        # 1. front end ------------------------------------------------------------
+        ta = time.perf_counter()
+        o = np.asarray(obs, dtype=float) if obs is not None else None
+        if o is not None and o.shape != (lay.d_o,):
+            faults.append(("invalid_observation_shape", f"obs has shape {o.shape}, expected ({lay.d_o},)"))
+            o = None
+        elif o is None or not _finite(o):
+            faults.append(("missing_observation", "fork sample missing or NaN: Kalman prediction substituted"))
+        try:
+            fe = self.frontend.step(t, o)
+        except ValueError as exc:
+            faults.append(("no_observation", f"{exc}: holding"))
+            return self._hold(q, v, faults, timings, t0)
+        self._fork_vel = fe.fork_velocity
+        stale = fe.predicting_for_s > cfg.stale_after_s
+        if fe.stale and not stale:
+            faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
+        timings["frontend"] = time.perf_counter() - ta
+
+        # 2. learned parts at the model rate ----------------------------------------
+        ta = time.perf_counter()
+        if fe.tick is not None:
+            self._models_tick(fe.tick, faults)
+        timings["models"] = time.perf_counter() - ta
+
+        # 3. arbitration and the tip reference (plate frame) ------------------------
+        ta = time.perf_counter()
+        if self._p_ref is None:
+            self._p_ref = self._to_plate(self.tip.position(q))
+        p_ref = self._p_ref
+        pred_ok = _finite(self._p_pred)
+        if stale:
+            why = f"no fork measurement for {fe.predicting_for_s:.2f} s: control handed to the wearer"
+            faults.append(("stale_fork_sensor", why))
+            alpha, beta = 0.0, 1.0
+            self.arbiter.decide(t, None, available=False)
+        else:
+            d = self.arbiter.decide(t, self._gate_proba, self._novelty, pred_ok, self._window_ready)
+            alpha, beta = d.alpha, d.beta
+        u_r = reactive_velocity(self._p_pred, p_ref, cfg.reactive_gain, cfg.reactive_max_speed) if pred_ok \
+            else np.zeros(3)
+        th = np.asarray(voluntary, dtype=float) if voluntary is not None else np.full(3, np.nan)
+        if th.shape == (3,) and _finite(th):
+            u = fuse(alpha, u_r, beta, self.shoulder.tip_velocity(th))
+        else:
+            faults.append(("invalid_shoulder", "shoulder signal NaN, missing or not (3,): reference held"))
+            u = np.zeros(3)
+        p_new, clamped = cfg.workspace.clamp(p_ref + u * dt)
+        if clamped:
+            faults.append(("reference_unreachable", "tip reference clamped to the workspace box"))
+        p_model, clamped = self.reach.clamp(self._to_model(p_new))
+        if clamped:
+            faults.append(("reference_unreachable", "tip reference projected onto the arm's reach"))
+            p_new = self._to_plate(p_model)
+        self._p_ref = p_new
+        timings["arbitration"] = time.perf_counter() - ta
+
+        # 4. smoothing, MPC, QP --------------------------------------------------------
+        ta = time.perf_counter()
+        if not self.smoother.initialized:
+            self.smoother.reset(self.tip.position(q))
+        u_model = self._pose[:3, :3].T @ u
+        sm = self.smoother.update(p_model, u_model)
+        timings["smoothing"] = time.perf_counter() - ta
+        p_qp, v_qp, a_qp = sm.position, sm.velocity, sm.acceleration
+        if self.mpc is not None:
+            ta = time.perf_counter()
+            refs = self._mpc_reference(q, v, sm, faults)
+            if refs is not None:
+                p_qp, v_qp, a_qp = refs
+            timings["mpc"] = time.perf_counter() - ta
+        ta = time.perf_counter()
+        res = self.qp.step(q, v, p_qp, v_qp, a_qp)
+        timings["qp"] = time.perf_counter() - ta
+        if res.status is QPStatus.SOLVER_FAILED:
+            faults.append(("qp_failed", res.reason))
+        return self._command(res, alpha, beta, faults, timings, t0)
+
+    def _models_tick(self, tick, faults: list[tuple[str, str]]) -> None:
+        """Gate and predictor on a 10 Hz tick (results held until the next tick)."""
+        lay = self.layout
+        self._mode_proba, self._novelty = tick.mode_proba, tick.novelty
+        self._window_ready = tick.window is not None
+        try:
+            x = np.concatenate([tick.sample, tick.mode_proba])
+            u_std = np.asarray(self._stream.step(x), dtype=float)
+            u = u_std * lay.act_scale + lay.act_mean
+            self._p_pred = u[lay.tip_index]
+        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
+            self._p_pred = np.full(3, np.nan)
+            faults.append(("internal_error", f"reactive predictor failed: {exc}"))
+        if tick.window is None:
+            self._gate_proba = None
+            return
+        try:
+            self._gate_proba = float(self.bundle.gates.proba_one(tick.window, int(np.argmax(tick.mode_proba))))
+        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
+            self._gate_proba = None
+            faults.append(("internal_error", f"gate failed: {exc}"))
+
+    def _mpc_reference(self, q, v, sm, faults):
+        """MPC over the smoothed reference extrapolated at constant velocity; QP references at t + dt.
+
+        With ``mpc_every = n > 1`` the MPC is solved every n-th step; in between the QP follows
+        the last plan shifted by the steps since it was solved.
+        """
+        H = int(self.mpc.horizon)
+        every = max(int(self.config.mpc_every), 1)
+        if self._plan is not None and 0 < self._plan_age < every and self._plan_age + 2 <= H:
+            j = self._plan_age
+            self._plan_age += 1
+            return self._plan_reference(self._plan, j)
+        self._plan, self._plan_age = None, 0
+        k = np.arange(H + 1)[:, None] * self.dt
+        p_ref = sm.position[None, :] + k * sm.velocity[None, :]
+        try:
+            r = self.mpc.solve(q, v, p_ref, deadline_s=self.config.mpc_deadline_s)
+        except Exception as exc:  # noqa: BLE001 — the QP takes over
+            faults.append(("mpc_failed", f"MPC raised {type(exc).__name__}: {exc}; QP tracks the smoothed reference"))
+            return None
+        timed_out = r.solve_time > self.config.mpc_deadline_s or "time" in str(r.status).lower()
+        if not r.ok or not np.all(np.isfinite(r.tip_plan)):
+            name = "mpc_timeout" if timed_out else "mpc_failed"
+            faults.append((name, f"MPC {r.status}; QP tracks the smoothed reference"))
+            return None
+        if timed_out:
+            why = f"MPC took {r.solve_time * 1e3:.2f} ms > deadline; QP tracks the smoothed reference"
+            faults.append(("mpc_timeout", why))
+            return None
+        self._plan, self._plan_age = np.asarray(r.tip_plan, dtype=float), 1
+        return self._plan_reference(self._plan, 0)
+
+    def _plan_reference(self, tp: np.ndarray, j: int):
+        """Tip position, velocity, acceleration of plan ``tp`` at step j + 1 (central differences)."""
+        dt = self.dt
+        return tp[j + 1], (tp[j + 2] - tp[j]) / (2 * dt), (tp[j + 2] - 2 * tp[j + 1] + tp[j]) / dt ** 2

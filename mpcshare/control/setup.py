@@ -1,0 +1,107 @@
+"""Construction-time checks of the controller: bundle channels, learned parts, MPC.
+
+Everything here runs once in ``SharedController.__init__`` and raises ValueError (or
+RuntimeError for a missing optional part) naming what was wrong; nothing here runs in
+the loop.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from learning.preprocessing.preprocess import window_lags
+from learning.preprocessing.resample import decimation_factor
+
+__all__ = ["BundleLayout", "check_bundle", "make_mpc"]
+
+DEFAULT_TIP = ("knife_x", "knife_y", "knife_z")
+DEFAULT_FORK = ("fork_x", "fork_y", "fork_z")
+_FIELDS = ("obs_names", "act_names", "rate_hz", "model_hz", "window_s", "preprocessor", "modes", "gates",
+           "predictor", "novelty_threshold")
+
+
+@dataclass(frozen=True)
+class BundleLayout:
+    """Where the controller finds its channels in a bundle.
+
+    d_o, d_u: obs/act dimensions; n_modes; lags: window length L; tip_index: (3,) act
+    columns of the knife tip x, y, z; fork_index: (3,) obs columns of the fork tip;
+    act_mean, act_scale: the act standardiser (u = u_std·scale + mean).
+    """
+
+    d_o: int
+    d_u: int
+    n_modes: int
+    lags: int
+    tip_index: np.ndarray
+    fork_index: np.ndarray
+    act_mean: np.ndarray
+    act_scale: np.ndarray
+
+
+def _indices(names: tuple[str, ...], wanted: tuple[str, ...], what: str, option: str) -> np.ndarray:
+    wanted = tuple(wanted)
+    if len(wanted) != 3:
+        raise ValueError(f"{option} must name 3 channels (x, y, z), got {wanted!r}")
+    missing = [w for w in wanted if w not in names]
+    if missing:
+        raise ValueError(f"the bundle's {what} {list(names)} have no channel(s) {missing}; the controller needs "
+                         f"the tip position channels: pass {option}=(x, y, z names) to map them explicitly")
+    return np.array([names.index(w) for w in wanted])
+
+
+def check_bundle(bundle, tip_channels=None, fork_channels=None) -> BundleLayout:
+    """Check that ``bundle`` fits the robot and is complete; return its :class:`BundleLayout`."""
+    absent = [f for f in _FIELDS if not hasattr(bundle, f)]
+    if absent:
+        raise ValueError(f"bundle lacks field(s) {absent} (a mpcshare.bundle.ModelBundle is expected)")
+    obs_names, act_names = tuple(bundle.obs_names), tuple(bundle.act_names)
+    tip = _indices(act_names, tip_channels or DEFAULT_TIP, "act_names", "tip_channels")
+    fork = _indices(obs_names, fork_channels or DEFAULT_FORK, "obs_names", "fork_channels")
+    vol = tuple(getattr(bundle, "vol_names", ()) or ())
+    if vol and len(vol) != 3:
+        raise ValueError(f"the bundle's vol_names {list(vol)} must be the 3 shoulder angles of the voluntary channel")
+    d_o, d_u = len(obs_names), len(act_names)
+    pre = bundle.preprocessor
+    for side, d in (("obs", d_o), ("act", d_u)):
+        got = int(getattr(getattr(pre, side), "n_features_in_", -1))
+        if got != d:
+            raise ValueError(f"bundle.preprocessor.{side} was fitted on {got} channels, {side}_names has {d}")
+    n_in = int(getattr(bundle.modes, "n_features_in_", -1))
+    if n_in != d_o:
+        raise ValueError(f"bundle.modes expects {n_in} features per sample, obs_names has {d_o}")
+    K = int(bundle.modes.model_.n_components)
+    decimation_factor(bundle.rate_hz, bundle.model_hz)  # raises for a non-integer factor
+    L = window_lags(float(bundle.window_s), float(bundle.model_hz))
+    if not (float(bundle.novelty_threshold) == float(bundle.novelty_threshold)):
+        raise ValueError("bundle.novelty_threshold is NaN")
+    # the learned parts must accept the controller's inputs
+    try:
+        p = float(bundle.gates.proba_one(np.zeros(L * d_o), 0))
+    except Exception as exc:
+        raise ValueError(f"bundle.gates.proba_one(window of {L * d_o}, mode 0) failed: {exc}") from exc
+    if not 0.0 <= p <= 1.0:
+        raise ValueError(f"bundle.gates.proba_one returned {p!r}, not a probability")
+    try:
+        out = np.asarray(bundle.predictor.make_stream().step(np.zeros(d_o + K)), dtype=float)
+    except Exception as exc:
+        raise ValueError(f"bundle.predictor stream step on an input of {d_o}+{K} failed: {exc}") from exc
+    if out.shape != (d_u,):
+        raise ValueError(f"bundle.predictor stream returns shape {out.shape}, expected ({d_u},) (act channels)")
+    return BundleLayout(d_o, d_u, K, L, tip, fork, np.asarray(pre.act.mean_, dtype=float),
+                        np.asarray(pre.act.scale_, dtype=float))
+
+
+def make_mpc(params, dt: float):
+    """The CasADi tip MPC (``robot.mpc.tip_mpc.TipMPC``) for ``params`` at period ``dt`` [s]."""
+    try:
+        from robot.mpc.tip_mpc import TipMPC
+    except ImportError as exc:
+        raise RuntimeError("use_mpc=True needs robot.mpc.tip_mpc.TipMPC, which cannot be imported "
+                           f"({exc}); pass use_mpc=False to run the QP on the smoothed reference") from exc
+    mpc = TipMPC(params=params, dt=dt)
+    if int(mpc.horizon) < 2:
+        raise ValueError(f"the MPC horizon must be ≥ 2 steps, got {mpc.horizon}")
+    return mpc

@@ -1,0 +1,8 @@
+"""Reports and plots (matplotlib, Markdown, self-contained HTML).
+
+- :mod:`mpcshare.reports.analysis` — the analysis report (``report.json``, ``report.md``, plots);
+- :mod:`mpcshare.reports.comparison` — the closed-loop comparison of strategies;
+- :mod:`mpcshare.reports.demo` — the demo's summary and its one report;
+- :mod:`mpcshare.reports.html` — Markdown to one self-contained HTML file;
+- :mod:`mpcshare.reports.episode_plot` — a plotted closed-loop trial.
+"""

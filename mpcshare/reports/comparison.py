@@ -1,0 +1,134 @@
+"""``comparison.json``, ``comparison.md`` and ``comparison.png`` of a strategy comparison.
+
+The Markdown states, in words, whether the comparison came out as the paper leads one
+to expect — the gate cuts the wearer's effort far below ``voluntary`` while keeping
+tracking error and conflicts far below ``reactive`` — and says so plainly where it
+does not.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from learning.atomic import atomic_open
+from mpcshare.experiments import Comparison
+
+__all__ = ["comparison_findings", "comparison_markdown", "strict_json", "write_comparison"]
+
+_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
+            ("tracking_p95_m", "tracking p95 [mm]", 1e3, "{:.1f}"),
+            ("voluntary_effort", "effort [rad]", 1.0, "{:.3f}"),
+            ("reactive_share", "reactive share", 100.0, "{:.0f} %"),
+            ("handovers", "hand-overs", 1.0, "{:.0f}"),
+            ("conflict_share", "conflicts", 100.0, "{:.1f} %"),
+            ("limit_violations", "limit violations", 1.0, "{:.0f}"),
+            ("step_p50_ms", "step p50 [ms]", 1.0, "{:.2f}"),
+            ("step_p99_ms", "step p99 [ms]", 1.0, "{:.2f}"),
+            ("realtime_factor", "× real time", 1.0, "{:.1f}"))
+
+
+def _ratio(a: float, b: float) -> float:
+    return float(a / b) if b > 0 else float("inf")
+
+
+def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
+    """Sentences comparing the gate with the baselines (only for the runs present)."""
+    s = strategies
+    out: list[str] = []
+    if "gate" in s and "voluntary" in s:
+        r = _ratio(s["gate"]["voluntary_effort"], s["voluntary"]["voluntary_effort"])
+        verdict = "far below" if r <= 0.5 else ("below" if r < 1 else "NOT below")
+        out.append(f"Effort: the gate needs {r:.0%} of the wearer's effort under `voluntary` ({verdict}).")
+    if "gate" in s and "reactive" in s:
+        g, r = s["gate"], s["reactive"]
+        e = _ratio(g["tracking_rmse_m"], r["tracking_rmse_m"])
+        verdict = "below" if e < 0.98 else ("about equal" if e <= 1.02 else "NOT below")
+        out.append(f"Accuracy: the gate's tracking RMS is {e:.0%} of `reactive`'s ({verdict}); the wearer and "
+                   f"the robot push the tip in opposite directions {g['conflict_share']:.1%} of the time under the "
+                   f"gate against {r['conflict_share']:.1%} under `reactive` (where the wearer's push is ignored).")
+    if "gate" in s and "gate_no_mpc" in s:
+        g, n = s["gate"], s["gate_no_mpc"]
+        rel = _ratio(g["tracking_rmse_m"], n["tracking_rmse_m"])
+        effect = ("helps" if rel < 0.98 else "hurts") if abs(rel - 1) > 0.02 else \
+            "makes no measurable difference (the error is in the reference, not in following it)"
+        out.append(f"MPC: with the MPC the gate tracks at {g['tracking_rmse_m'] * 1e3:.1f} mm RMS, without it at "
+                   f"{n['tracking_rmse_m'] * 1e3:.1f} mm: the MPC {effect}; its cost is a step p99 of "
+                   f"{g['step_p99_ms']:.2f} ms against {n['step_p99_ms']:.2f} ms.")
+    bad = [k for k, m in s.items() if m["limit_violations"]]
+    out.append("Limits: no violation at the physics rate in any run." if not bad else
+               f"Limits: VIOLATED at the physics rate in {', '.join(bad)}.")
+    return out
+
+
+def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.png",
+                        trial_plot: str | None = None) -> str:
+    """The Markdown section: table, findings, plot."""
+    head = "| run | " + " | ".join(c[1] for c in _COLUMNS) + " |"
+    rule = "|---|" + "---|" * len(_COLUMNS)
+    rows = []
+    for name, m in comp.strategies.items():
+        cells = [fmt.format(m[key] * scale) if np.isfinite(m[key]) else "–" for key, _, scale, fmt in _COLUMNS]
+        rows.append(f"| {name} | " + " | ".join(cells) + " |")
+    span = "whole trials" if comp.duration_s is None else f"the first {comp.duration_s:g} s of each"
+    lines = [f"Held-out trials {comp.trials}, {span}; pooled over trials.", "", head, rule, *rows, "",
+             *[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
+    if plot_name:
+        lines += [f"![strategies]({plot_name})", ""]
+    if trial_plot:
+        lines += ["A trial: the knife tip against the wearer's intent, α and β, the shoulder:", "",
+                  f"![a trial]({trial_plot})", ""]
+    if comp.video:
+        lines += [f"The gate on trial {comp.trials[0]} (offscreen MuJoCo render):", "",
+                  f"![the gate]({comp.video})", ""]
+    return "\n".join(lines)
+
+
+def _plot(comp: Comparison, path: Path) -> None:
+    names = list(comp.strategies)
+    keys = (("tracking_rmse_m", "tracking RMS [mm]", 1e3), ("voluntary_effort", "effort: mean ‖θ‖ [rad]", 1.0),
+            ("conflict_share", "conflicts [%]", 100.0), ("reactive_share", "reactive share [%]", 100.0))
+    fig = Figure(figsize=(11, 3.2), constrained_layout=True)
+    for ax, (key, label, scale) in zip(fig.subplots(1, len(keys)), keys):
+        ax.bar(range(len(names)), [comp.strategies[n][key] * scale for n in names], color="#4C72B0")
+        ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
+        ax.set_title(label, fontsize=9)
+    fig.savefig(path, dpi=110)
+
+
+def strict_json(x: Any) -> Any:
+    """``x`` with every non-finite float as None: the project writes strict JSON (docs/design.md)."""
+    if isinstance(x, dict):
+        return {k: strict_json(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [strict_json(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
+    """Write comparison.json, comparison.md and comparison.png into ``out``; returns the JSON object."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    obj = comp.to_dict()
+    with atomic_open(out / "comparison.json", "w") as f:
+        json.dump(strict_json(obj), f, indent=2, allow_nan=False)
+    _plot(comp, out / "comparison.png")
+    trial_plot = None
+    shown = "gate" if comp.run_files.get("gate") else next((k for k, v in comp.run_files.items() if v), None)
+    if shown is not None:
+        from mpcshare.reports.episode_plot import plot_episode
+        from sim.closed_loop import Episode
+
+        episode = Episode.load(out / comp.run_files[shown][0])
+        trial_plot = "trial.png"
+        plot_episode(episode, out / trial_plot, title=f"{shown}, trial {comp.trials[0]}")
+    with atomic_open(out / "comparison.md", "w") as f:
+        f.write("# Closed-loop comparison of strategies\n\n" + comparison_markdown(comp, trial_plot=trial_plot))
+    return obj

@@ -1,0 +1,102 @@
+"""Settings of training a model bundle: :class:`TrainConfig`, validated on construction.
+
+JSON-able (:meth:`TrainConfig.to_dict`, stored in the bundle); read by
+:func:`mpcshare.training.train_bundle`, :func:`mpcshare.training.sweep.run_sweep` and the
+``train`` and ``demo`` commands.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+__all__ = ["DEFAULT_PERCENTILES", "TrainConfig"]
+
+#: percentiles of the K trade-off sweep (``mpcshare train --sweep``, :func:`~mpcshare.training.sweep.run_sweep`)
+DEFAULT_PERCENTILES: tuple[float, ...] = (100.0, 90.0, 80.0, 70.0, 60.0, 50.0)
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Settings of :func:`~mpcshare.training.train_bundle` (JSON-able; stored in the bundle).
+
+    Attributes:
+        percentile: K is this percentile of the within-mode quotients of the training
+            trials (100: every windowed point is reactive).
+        model_hz: rate of the models after causal downsampling [Hz].
+        window_s: causal window of the gates [s].
+        n_modes, hmm_restarts: HMM task modes and EM restarts.
+        heldout_fraction: share of trials held out for evaluation (at least one).
+        val_fraction: share of the training trials used for the LSTM's early stopping.
+        hidden_size, batch_size, max_epochs, patience, learning_rate: LSTM settings
+            (the paper's 28 hidden units, batch 64).
+        chunk_len, burn_in: training chunks of the LSTM (steps with loss, warm-up steps);
+            short chunks give more gradient steps per epoch at about the same cost
+            (measured on the default data: chunks of 25 reach a lower validation loss than
+            chunks of 100 in less time).
+        torch_threads: torch CPU threads while training the LSTM. 1 by default: the
+            network is small, and on a busy 2-core machine two threads were many times
+            slower than one (synchronisation, not arithmetic).
+        gate_kernel, gate_max_samples: gate classifier ("rbf" SVM or "nystroem") and
+            the per-mode subsample it is fitted on.
+        lstm_baseline: also train the LSTM on all points (baseline; doubles LSTM time).
+        device: torch device of the LSTM ("cpu", "cuda").
+        zero_phase_targets: the actions (quotients' outputs, the LSTM's targets) are
+            downsampled with a zero-phase filter, the observations causally (see
+            :func:`learning.preprocessing.resample.causal_downsample`): the model learns the knife at
+            t, not the knife a filter delay earlier. False: both causal.
+        seed: seed of everything random.
+    """
+
+    percentile: float = 90.0
+    model_hz: float = 10.0
+    window_s: float = 1.0
+    n_modes: int = 4
+    hmm_restarts: int = 3
+    heldout_fraction: float = 0.25
+    val_fraction: float = 0.2
+    hidden_size: int = 28
+    batch_size: int = 64
+    max_epochs: int = 80
+    patience: int = 10
+    learning_rate: float = 1e-2
+    chunk_len: int = 25
+    burn_in: int = 20
+    torch_threads: int = 1
+    gate_kernel: str = "rbf"
+    gate_max_samples: int | None = 2000
+    lstm_baseline: bool = False
+    device: str = "cpu"
+    zero_phase_targets: bool = True
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.percentile <= 100.0:
+            raise ValueError(f"percentile must be in [0, 100], got {self.percentile!r}")
+        if not (math.isfinite(self.model_hz) and self.model_hz > 0):
+            raise ValueError(f"model_hz must be > 0, got {self.model_hz!r}")
+        if not (math.isfinite(self.window_s) and self.window_s >= 0):
+            raise ValueError(f"window_s must be >= 0, got {self.window_s!r}")
+        for name in ("n_modes", "hmm_restarts", "hidden_size", "batch_size", "max_epochs", "patience",
+                     "chunk_len", "torch_threads"):
+            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)!r}")
+        if int(self.burn_in) != self.burn_in or self.burn_in < 0:
+            raise ValueError(f"burn_in must be an integer >= 0, got {self.burn_in!r}")
+        for name in ("heldout_fraction", "val_fraction"):
+            if not 0.0 < getattr(self, name) < 1.0:
+                raise ValueError(f"{name} must be in (0, 1), got {getattr(self, name)!r}")
+        if self.gate_kernel not in ("rbf", "nystroem"):
+            raise ValueError(f"gate_kernel must be 'rbf' or 'nystroem', got {self.gate_kernel!r}")
+        if self.gate_max_samples is not None and (int(self.gate_max_samples) != self.gate_max_samples
+                                                  or self.gate_max_samples < 40):
+            raise ValueError(f"gate_max_samples must be None or an integer >= 40, got {self.gate_max_samples!r}")
+        if self.device not in ("cpu", "cuda", "auto"):
+            raise ValueError(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
+        if not self.learning_rate > 0:
+            raise ValueError(f"learning_rate must be > 0, got {self.learning_rate!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The settings as a JSON-able dict (field name → value)."""
+        return asdict(self)

@@ -1,0 +1,152 @@
+"""Held-out evaluation of a trained gate + reactive predictor at a threshold K.
+
+Held-out labels. Held-out points get their modes from the HMM fitted on the training
+trials (Viterbi over each held-out trial); their quotients are computed *within modes on
+the held-out data only* (pairs of held-out points), and compared with the training K:
+``Z_t = 1[q_t ≤ K]``. This keeps the held-out trials out of every fit, at the price of
+fewer partners per point than in training (a quotient is a maximum over partners, so the
+held-out reactive share at a given K is somewhat higher than the training one).
+
+Reported (all on held-out windowed steps, i.e. steps with a full causal window):
+
+- ``rmse_reactive`` / ``rmse_all``: the predictor's RMSE on R = {Z = 1} / on every step,
+  as one number in standardised action units, RMSE = sqrt(mean_{t, c} (û_{t,c} − u_{t,c})²);
+  the same per channel group in physical units (``*_by_group``, via
+  :func:`learning.predictor.rmse_by_group`); ``rmse_gated``: on the steps the gate hands
+  to the robot (ĥ = 1);
+- the gates' accuracy, F1 and Brier score per mode (:func:`learning.gates.metrics.gate_metrics`);
+- ``voluntary_share`` = mean_t (1 − ĥ_t): steps the gate hands to the wearer, ĥ_t =
+  1[gate probability ≥ 0.5];
+- ``voluntary_effort`` (Song & Asada: the wearer's command that the hand-over requires)::
+
+      E = (1/N) · Σ_t (1 − ĥ_t) · ‖θ_t‖
+
+  over the N held-out windowed steps, θ the voluntary channel (shoulder angles [rad]
+  away from the neutral posture, after causal downsampling); E in rad. It is the
+  closed loop's ``voluntary_effort`` (:mod:`sim.metrics`: mean_k ‖θ_k‖) with the
+  wearer at rest wherever the gate hands to the robot, so the two tables read on one
+  scale. A data set without a voluntary channel uses the knife speed as the proxy
+  (the shoulder commands a knife velocity, :class:`robot.shoulder.ShoulderMap`):
+  ‖u_t − u_{t−1}‖/Δt of the standardised action u, Δt = 1/model_hz, E in standardised
+  units/s. ``effort_source`` says which; ``effort_if_all_voluntary`` is E with ĥ ≡ 0
+  (the wearer does everything), the scale against which E is read.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+import numpy as np
+
+from mpcshare.training.data import SplitData, TrainingData, reactive_labels
+
+__all__ = ["command_magnitude", "voluntary_effort", "rmse", "evaluate", "fit_ridge", "predict_side",
+           "RMSE_UNITS"]
+
+RMSE_UNITS = "standardised action units (per-sensor unit RMS), RMS over channels and steps"
+
+
+def command_magnitude(side: SplitData, model_hz: float) -> tuple[np.ndarray, str, str]:
+    """(n_windows,) the wearer's command magnitude at the windowed steps; source; units.
+
+    ‖θ_t‖ [rad] of the voluntary channel θ if every trial has one; else the proxy
+    ‖u_t − u_{t−1}‖·model_hz of the standardised action u (the first step of a trial
+    counts as still).
+    """
+    has_vol = side.std.has_voluntary and side.std.trials[0].voluntary.shape[1] > 0
+    if has_vol:
+        mags = [np.linalg.norm(tr.voluntary, axis=1) for tr in side.std.trials]
+    else:
+        mags = [np.concatenate([[0.0], np.linalg.norm(np.diff(tr.act, axis=0), axis=1) * float(model_hz)])
+                for tr in side.std.trials]
+    magnitude = np.concatenate(mags)[side.windows.source_index]
+    if has_vol:
+        return magnitude, "voluntary", "rad (shoulder angles from neutral)"
+    return magnitude, "action_proxy", "standardised action units/s (knife speed, no voluntary channel)"
+
+
+def voluntary_effort(gate: np.ndarray, magnitude: np.ndarray) -> float:
+    """E = mean_t (1 − ĥ_t)·m_t, m_t the command magnitude (module docstring)."""
+    gate = np.asarray(gate, dtype=float)
+    return float(np.mean((1.0 - gate) * np.asarray(magnitude, dtype=float))) if gate.size else float("nan")
+
+
+def rmse(pred: np.ndarray, true: np.ndarray, mask: np.ndarray | None = None) -> float | None:
+    """sqrt(mean over steps and channels of the squared error), on ``mask`` rows; None if empty."""
+    e = np.asarray(pred) - np.asarray(true)
+    if mask is not None:
+        e = e[np.asarray(mask, dtype=bool)]
+    return None if e.size == 0 else float(np.sqrt(np.mean(e ** 2)))
+
+
+def fit_ridge(data: TrainingData) -> Any:
+    """The ridge baseline: ridge regression on the causal window (L samples) of the LSTM's
+    input concat(o_t, p_t) → standardised act, fitted on every windowed training step."""
+    from learning.predictor import RidgeWindowBaseline
+
+    side = data.train
+    mask = side.masks(np.ones(len(side.q), dtype=bool))
+    return RidgeWindowBaseline(lags=side.windows.lags).fit(side.sequences(), side.targets(), mask)
+
+
+def predict_side(model: Any, side: SplitData) -> np.ndarray:
+    """(n_windows, d_u) standardised predictions at the windowed steps of ``side``: the
+    model (LSTM or ridge) runs over each trial's sequence concat(o_t, p_t)."""
+    return side.stacked_predictions(model)
+
+
+def _errors(data: TrainingData, pred: np.ndarray, R: np.ndarray,
+            gated: np.ndarray | None) -> dict[str, Any]:
+    from learning.predictor import rmse_by_group
+
+    side = data.heldout
+    true = side.windows.Y
+    act = data.preprocessor.act
+    phys_pred, phys_true = act.inverse_transform(pred), act.inverse_transform(true)
+    names = list(data.act_names)
+    out: dict[str, Any] = {
+        "rmse_reactive": rmse(pred, true, R), "rmse_all": rmse(pred, true),
+        "rmse_reactive_by_group": rmse_by_group(phys_true[R], phys_pred[R], names) if R.any() else None,
+        "rmse_all_by_group": rmse_by_group(phys_true, phys_pred, names),
+    }
+    if gated is not None:
+        out["rmse_gated"] = rmse(pred, true, gated)
+    return out
+
+
+def evaluate(data: TrainingData, gates: Any, predictor: Any, K: float,
+             baselines: Mapping[str, Any] | None = None,
+             baseline_predictions: Mapping[str, np.ndarray] | None = None) -> dict[str, Any]:
+    """Held-out metrics of ``gates`` + ``predictor`` at threshold ``K`` (module docstring).
+
+    ``baselines``: name → fitted model (LSTM or window model), evaluated on the same R;
+    ``baseline_predictions``: name → precomputed held-out predictions (n_windows, d_u).
+    Returns a JSON-able dict.
+    """
+    from learning.gates.metrics import gate_metrics
+
+    side = data.heldout
+    Z = reactive_labels(side.q, K)
+    R = Z.astype(bool)
+    modes = side.window_modes
+    proba = gates.predict_proba(side.windows.X, modes)
+    h = (proba >= 0.5).astype(int)
+    magnitude, source, units = command_magnitude(side, data.config.model_hz)
+    preds = {name: predict_side(m, side) for name, m in (baselines or {}).items()}
+    preds.update(baseline_predictions or {})
+    return {
+        "K": None if math.isinf(K) else float(K),
+        "n_heldout_steps": int(len(Z)),
+        "heldout_reactive_share": float(R.mean()),
+        "predictor": _errors(data, predict_side(predictor, side), R, h.astype(bool)),
+        "baselines": {name: _errors(data, p, R, None) for name, p in preds.items()},
+        "gate": gate_metrics(gates, side.windows.X, modes, Z),
+        "voluntary_share": float(np.mean(1 - h)),
+        "voluntary_effort": voluntary_effort(h, magnitude),
+        "effort_if_all_voluntary": float(np.mean(magnitude)),
+        "effort_source": source,
+        "effort_units": units,
+        "rmse_units": RMSE_UNITS,
+        "rmse_by_group_units": "physical units of each channel group (e.g. m, rad, N)",
+    }

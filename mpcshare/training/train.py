@@ -1,0 +1,132 @@
+"""Training a model bundle from demonstrations: ``train_bundle(demos, config)``.
+
+Works on any data set in the project format (channel names need not be physical).
+Steps (all at the model rate ``model_hz``, default 10 Hz):
+
+1. split whole trials into training and held-out (``heldout_fraction``, seeded); the
+   training trials are split again by trial into fit / validation trials for the LSTM's
+   early stopping (everything else is fitted on all training trials);
+2. :func:`learning.preprocessing.resample.causal_downsample` (the controller reproduces it online,
+   never the zero-phase ``downsample``); the :class:`~learning.preprocessing.preprocess.Preprocessor`
+   (``Standardizer(scope="sensor")`` for obs and act) fitted on the training trials;
+   causal windows ``causal_windows(std, window_s, rms=True)``;
+3. HMM :class:`~learning.modes.TaskModes` on the standardised per-sample obs of the
+   training trials; Viterbi labels for the quotients, causal posteriors
+   (``filter_proba``) as the predictor's input;
+4. within-mode point-wise quotients ``q_t`` (windows → standardised act);
+   ``K = percentile(q, p)``; labels ``Z_t = 1[q_t ≤ K]``; the reactive subset R = {Z = 1};
+5. gates ``ModeGates.fit(windows, modes, Z)``; ``ReactivePredictor.fit`` on each trial's
+   sequence ``concat(o_t, p_t)`` with the loss masked to R (the first L−1 samples of a
+   trial have no window and so no label: masked out);
+6. held-out evaluation (:mod:`mpcshare.training.evaluation`);
+7. ``novelty_threshold`` = the 99.9th percentile of ``−log p(o_t | o_<t)`` per step on
+   the training trials (``TaskModes.log_predictive``).
+
+Data preparation (1–4 without K, and 7) is :func:`prepare_training_data`; the sweep
+(:mod:`mpcshare.training.sweep`) reuses it for every K. The settings are a
+:class:`~mpcshare.training.config.TrainConfig`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from learning.analysis.predictability import threshold_from_percentile
+from learning.data import Demonstrations
+from mpcshare.training.config import TrainConfig
+from mpcshare.training.data import (
+    SplitData,
+    TrainingData,
+    TrainingError,
+    check_training_data,
+    prepare_training_data,
+    reactive_labels,
+)
+from mpcshare.training.evaluation import evaluate, fit_ridge
+from mpcshare.training.stages import Stages
+
+__all__ = ["TrainingError", "SplitData", "TrainingData", "prepare_training_data",
+           "reactive_labels", "fit_gates", "fit_predictor", "train_bundle", "Stages"]
+
+
+def fit_gates(data: TrainingData, labels: np.ndarray) -> Any:
+    """``ModeGates`` fitted on the training windows, their modes and ``labels`` (Z)."""
+    from learning.gates.gate import ModeGates
+
+    c = data.config
+    gates = ModeGates(kernel=c.gate_kernel, max_samples_per_mode=c.gate_max_samples, seed=c.seed)
+    return gates.fit(data.train.windows.X, data.train.window_modes, labels, c.n_modes)
+
+
+def fit_predictor(data: TrainingData, window_mask: np.ndarray, progress: bool = False) -> Any:
+    """``ReactivePredictor`` trained on the fit trials with the loss masked to
+    ``window_mask`` (n_windows,) of the training side; early stopping on the val trials."""
+    from learning.predictor import ReactivePredictor
+
+    c = data.config
+    seqs, tgts, masks = data.train.sequences(), data.train.targets(), data.train.masks(window_mask)
+    ids = data.train.trial_ids
+    fit_pos = [i for i, t in enumerate(ids) if t in set(data.fit_trials)]
+    val_pos = [i for i, t in enumerate(ids) if t in set(data.val_trials)]
+    if not any(masks[i].any() for i in fit_pos):
+        raise TrainingError("no reactive point in the fit trials at this K; raise the percentile")
+    model = ReactivePredictor(hidden_size=c.hidden_size, batch_size=c.batch_size, max_epochs=c.max_epochs,
+                              patience=c.patience, learning_rate=c.learning_rate, chunk_len=c.chunk_len,
+                              burn_in=c.burn_in, num_threads=c.torch_threads, seed=c.seed, device=c.device)
+    return model.fit([seqs[i] for i in fit_pos], [tgts[i] for i in fit_pos], [masks[i] for i in fit_pos],
+                     val_sequences=[seqs[i] for i in val_pos], val_targets=[tgts[i] for i in val_pos],
+                     val_masks=[masks[i] for i in val_pos], progress=progress)
+
+
+def train_bundle(demos: Demonstrations, config: TrainConfig | None = None, progress: bool = True):
+    """Train every model of the shared controller and evaluate it on held-out trials.
+
+    Returns a :class:`mpcshare.bundle.ModelBundle` (``metrics`` holds the held-out
+    evaluation of :func:`mpcshare.training.evaluation.evaluate`, the K, the timings).
+
+    Raises:
+        TrainingError: the data cannot be used (see :func:`prepare_training_data`), or no
+            training point is reactive at this percentile.
+    """
+    from mpcshare.bundle import ModelBundle
+
+    config = config or TrainConfig()
+    check_training_data(demos, config)
+    names = ["preprocess", "modes", "quotients", "gates", "predictor", "baselines", "evaluation"]
+    stages = Stages(names, progress)
+    t0 = time.perf_counter()
+    try:
+        data = prepare_training_data(demos, config, stages, progress=progress)
+        K = threshold_from_percentile(data.train.q, config.percentile)
+        Z = reactive_labels(data.train.q, K)
+        gates = fit_gates(data, Z)
+        stages.done("gates")
+        predictor = fit_predictor(data, Z.astype(bool), progress=progress)
+        stages.done("predictor")
+        baselines = {"ridge": fit_ridge(data)}
+        if config.lstm_baseline:
+            baselines["lstm_all"] = fit_predictor(data, np.ones(len(Z), dtype=bool), progress=progress)
+        stages.done("baselines")
+        metrics = evaluate(data, gates, predictor, K, baselines=baselines)
+        stages.done("evaluation")
+    finally:
+        stages.close()
+    metrics["training"] = {
+        "K": None if math.isinf(K) else float(K), "percentile": float(config.percentile),
+        "reactive_share_train": float(Z.mean()), "n_train_windows": int(len(Z)),
+        "n_heldout_windows": int(len(data.heldout.q)),
+        "train_trials": data.train_trials, "fit_trials": data.fit_trials, "val_trials": data.val_trials,
+        "heldout_trials": data.heldout_trials, "novelty_threshold": data.novelty_threshold,
+        "gates": gates.describe(), "timings_s": dict(stages.timings),
+        "total_s": round(time.perf_counter() - t0, 3)}
+    return ModelBundle(
+        obs_names=tuple(data.obs_names), act_names=tuple(data.act_names), vol_names=tuple(data.vol_names),
+        rate_hz=data.rate_hz, model_hz=config.model_hz, window_s=config.window_s,
+        preprocessor=data.preprocessor, modes=data.modes, gates=gates, predictor=predictor, K=float(K),
+        percentile=float(config.percentile), novelty_threshold=data.novelty_threshold,
+        train_trials=data.train_trials, heldout_trials=data.heldout_trials, metrics=metrics,
+        config=config.to_dict())

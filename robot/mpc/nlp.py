@@ -1,0 +1,119 @@
+"""The MPC problem as a multiple-shooting NLP for CasADi ``nlpsol`` (IPOPT, fatrop, sqpmethod).
+
+Variables in stage order (x_0, a_0, x_1, a_1, …, x_{H−1}, a_{H−1}, x_H),
+x_k = (q_k, v_k); per stage the constraints are the dynamics gap
+x_{k+1} − F(x_k, a_k) = 0 first, then the path rows (x_0 = measured state at
+stage 0, τ_k, and v, φ⁺, φ⁻ of x_k from stage 1 on), the terminal rows last:
+the order fatrop's structure detection reads.  Cost and constraints are those
+of :mod:`robot.mpc.problem` (exact Hessian here, solved to convergence), so
+these solvers are the reference the real-time iteration is measured against.
+Tolerances are absolute on a cost of order 1e4 (w_p = 1e4 /m²): fatrop's
+1e-5 is where its dual infeasibility stalls; sqpmethod (exact Hessian,
+regularised, DAQP subproblems, no line search) does not reach 1e-5 within
+100 iterations here and reports failure (measured in ``benchmarks/bench_mpc.py``).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from robot.mpc.problem import Weights, _state_rows, state_row_bounds
+from robot.mpc.symbolic import SymbolicArm
+from robot.superlimb import SuperLimbParams
+
+_OPTIONS = {
+    "ipopt": {"ipopt": {"print_level": 0, "tol": 1e-8, "max_iter": 200, "warm_start_init_point": "yes",
+                        "mu_init": 1e-3, "sb": "yes"}, "print_time": False},
+    "fatrop": {"structure_detection": "auto", "fatrop": {"print_level": 0, "tol": 1e-5, "max_iter": 200},
+               "print_time": False},
+    "sqpmethod": {"qpsol": "daqp", "qpsol_options": {"error_on_fail": False},
+                  "convexify_strategy": "regularize", "max_iter": 100, "print_header": False,
+                  "print_iteration": False, "print_status": False, "print_time": False, "tol_pr": 1e-6,
+                  "tol_du": 1e-5},
+}
+
+
+class NlpSolver:
+    """``nlpsol(plugin)`` on the multiple-shooting NLP, warm-started (primal and dual)."""
+
+    def __init__(self, plugin: str, params: SuperLimbParams, horizon: int, dt: float, weights: Weights) -> None:
+        H = horizon
+        arm = SymbolicArm(params)
+        P = ca.SX.sym("P", 6 + 3 * (H + 1) + 3)
+        x0p, p_ref, a_prev = P[:6], ca.reshape(P[6:6 + 3 * (H + 1)], 3, H + 1), P[6 + 3 * (H + 1):]
+        xs = [ca.SX.sym(f"x{k}", 6) for k in range(H + 1)]
+        as_ = [ca.SX.sym(f"a{k}", 3) for k in range(H)]
+        lb_s, ub_s = state_row_bounds(params)
+        tau_max = params.torque_limit
+        w, g, lbg, ubg, eq = [], [], [], [], []
+        cost = 0
+        a_last = a_prev
+        for k in range(H):
+            x, a = xs[k], as_[k]
+            w += [x, a]
+            q, v = x[:3], x[3:]
+            step = ca.vertcat(q + dt * v + 0.5 * dt * dt * a, v + dt * a)
+            rows = [(xs[k + 1] - step, np.zeros(6), np.zeros(6), True)]
+            if k == 0:
+                rows.append((x - x0p, np.zeros(6), np.zeros(6), True))
+            rows.append((arm.inverse_dynamics(q, v, a), -tau_max, tau_max, False))
+            if k > 0:
+                rows.append((_state_rows(params, dt, q, v), lb_s, ub_s, False))
+                cost += weights.tracking * ca.sumsqr(arm.tip_position(q) - p_ref[:, k])
+            for expr, lo, hi, is_eq in rows:
+                g.append(expr)
+                lbg.append(lo)
+                ubg.append(hi)
+                eq += [is_eq] * int(expr.numel())
+            cost += weights.acceleration * ca.sumsqr(a) + weights.jerk * ca.sumsqr(a - a_last)
+            a_last = a
+        w.append(xs[H])
+        g.append(_state_rows(params, dt, xs[H][:3], xs[H][3:]))
+        lbg.append(lb_s)
+        ubg.append(ub_s)
+        eq += [False] * 9
+        cost += weights.terminal * ca.sumsqr(arm.tip_position(xs[H][:3]) - p_ref[:, H])
+        nlp = {"x": ca.vertcat(*w), "p": P, "f": cost, "g": ca.vertcat(*g)}
+        opts = dict(_OPTIONS[plugin])
+        if plugin == "fatrop":
+            opts["equality"] = eq
+        self.solver = ca.nlpsol(f"tip_mpc_{plugin}", plugin, nlp, opts)
+        self.horizon, self.plugin = H, plugin
+        self.lbg, self.ubg = np.concatenate(lbg), np.concatenate(ubg)
+        n_x = 9 * H + 6
+        self.lbx, self.ubx = np.full(n_x, -np.inf), np.full(n_x, np.inf)
+        a_idx = np.concatenate([9 * k + 6 + np.arange(3) for k in range(H)])
+        self.lbx[a_idx] = np.tile(-params.acceleration_limit, H)
+        self.ubx[a_idx] = np.tile(params.acceleration_limit, H)
+        self._a_idx = a_idx
+        self._lam_x: np.ndarray | None = None
+        self._lam_g: np.ndarray | None = None
+        self._dt = dt
+
+    def reset(self) -> None:
+        self._lam_x = self._lam_g = None
+
+    def solve(self, w0: np.ndarray, q: np.ndarray, v: np.ndarray, p_ref: np.ndarray,
+              a_prev: np.ndarray) -> tuple[np.ndarray | None, int, str]:
+        """(accelerations (3H,) or None, iterations, status) from the guess w0."""
+        H, dt = self.horizon, self._dt
+        x_guess = np.zeros(9 * H + 6)
+        qk, vk = q.copy(), v.copy()
+        for k in range(H):
+            a = w0[3 * k:3 * k + 3]
+            x_guess[9 * k:9 * k + 9] = np.concatenate([qk, vk, a])
+            qk, vk = qk + dt * vk + 0.5 * dt * dt * a, vk + dt * a
+        x_guess[9 * H:] = np.concatenate([qk, vk])
+        args = {"x0": x_guess, "p": np.concatenate([q, v, p_ref.reshape(-1), a_prev]),
+                "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
+        if self._lam_g is not None:
+            args["lam_x0"], args["lam_g0"] = self._lam_x, self._lam_g
+        sol = self.solver(**args)
+        stats = self.solver.stats()
+        iterations = int(stats.get("iter_count", 0) or 0)
+        if not stats.get("success", False):
+            self.reset()
+            return None, iterations, str(stats.get("return_status", "failed"))
+        self._lam_x, self._lam_g = np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel()
+        return np.asarray(sol["x"]).ravel()[self._a_idx], iterations, "ok"

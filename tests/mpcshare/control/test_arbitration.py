@@ -1,0 +1,94 @@
+"""Arbitration: the paper's rule, the additions (hysteresis, dwell, overrides) and the baselines."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mpcshare.control.arbitration import STRATEGIES, Arbiter, fuse, reactive_velocity
+
+
+def test_gate_rule_alpha_and_beta():
+    arb = Arbiter("gate", beta=0.3, min_dwell_s=0.0)
+    d = arb.decide(0.0, 0.9)
+    assert (d.alpha, d.beta) == (1.0, 0.3)
+    d = arb.decide(0.1, 0.1)
+    assert (d.alpha, d.beta) == (0.0, 1.0)
+    assert [(h.alpha_from, h.alpha_to) for h in arb.handovers] == [(0.0, 1.0), (1.0, 0.0)]
+    assert arb.handovers[0].t == 0.0 and "predictable" in arb.handovers[0].reason
+
+
+def test_baselines_are_fixed():
+    v, r = Arbiter("voluntary", beta=0.2), Arbiter("reactive", beta=0.2)
+    for t, p in enumerate([0.0, 1.0, float("nan"), 0.5]):
+        assert (v.decide(t, p).alpha, v.decide(t, p).beta) == (0.0, 1.0)
+        dr = r.decide(t, p, novelty=1e9, prediction_finite=False)
+        assert (dr.alpha, dr.beta) == (1.0, 0.0)
+    assert v.handovers == [] and r.handovers == []
+
+
+def test_blend_ramp_and_beta():
+    arb = Arbiter("blend", beta=0.4, blend_range=(0.5, 0.9))
+    for p, a in [(0.2, 0.0), (0.5, 0.0), (0.7, 0.5), (0.9, 1.0), (1.0, 1.0)]:
+        d = arb.decide(0.0, p)
+        assert d.alpha == pytest.approx(a)
+        assert d.beta == pytest.approx(1.0 - a * 0.6)
+    d = arb.decide(1.0, 0.95, novelty=50.0)  # no threshold given: novelty ignored
+    assert d.alpha == 1.0
+
+
+def test_hysteresis_does_not_chatter():
+    """A probability oscillating around 0.5 every tick leaves α where it was."""
+    arb = Arbiter("gate", beta=0.5, on_threshold=0.6, off_threshold=0.4, min_dwell_s=0.0)
+    alphas = [arb.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
+    assert set(alphas) == {0.0} and arb.handovers == []
+    arb.decide(10.0, 0.95)  # the robot leads, then the same oscillation: it keeps leading
+    alphas = [arb.decide(10.1 + 0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
+    assert set(alphas) == {1.0} and len(arb.handovers) == 1
+    # without hysteresis (thresholds equal) and without dwell it toggles every tick: the test can fail
+    raw = Arbiter("gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.0)
+    toggles = [raw.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
+    assert len(raw.handovers) == 100 and len(set(toggles)) == 2
+
+
+def test_dwell_time_limits_switch_rate():
+    arb = Arbiter("gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.5)
+    for k in range(100):  # 10 s of a gate flipping between 0.1 and 0.9 every 0.1 s
+        arb.decide(0.1 * k, 0.9 if k % 2 == 0 else 0.1)
+    times = [h.t for h in arb.handovers]
+    assert len(times) >= 2 and np.all(np.diff(times) >= 0.5 - 1e-12)
+
+
+@pytest.mark.parametrize("strategy", ["gate", "blend"])
+def test_overrides_force_alpha_zero_at_once(strategy):
+    arb = Arbiter(strategy, beta=0.5, novelty_threshold=10.0, min_dwell_s=5.0)
+    assert arb.decide(0.0, 1.0).alpha == 1.0
+    d = arb.decide(0.1, 1.0, novelty=11.0)  # within the dwell time, yet α = 0 at once
+    assert (d.alpha, d.beta) == (0.0, 1.0) and "novelty" in d.reason
+    assert arb.handovers[-1].reason.startswith("novelty")
+    assert arb.decide(0.2, 1.0, novelty=float("nan")).alpha == 0.0
+    assert "not finite" in arb.decide(0.3, 1.0, prediction_finite=False).reason
+    assert arb.decide(0.4, 1.0, available=False).reason == "no gate decision available"
+    assert arb.decide(0.5, float("nan")).alpha == 0.0
+
+
+def test_misuse_raises_clear_errors():
+    with pytest.raises(ValueError, match="valid choices: voluntary, reactive, gate, blend"):
+        Arbiter("paper")
+    for b in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ValueError, match="beta must be in"):
+            Arbiter("gate", beta=b)
+    with pytest.raises(ValueError, match="off_threshold"):
+        Arbiter("gate", on_threshold=0.3, off_threshold=0.6)
+    assert STRATEGIES == ("voluntary", "reactive", "gate", "blend")
+
+
+def test_reactive_velocity_and_fusion():
+    p_ref = np.array([0.1, 0.0, 0.05])
+    u = reactive_velocity(p_ref + [0.01, 0.0, 0.0], p_ref, gain=5.0, max_speed=0.2)
+    np.testing.assert_allclose(u, [0.05, 0.0, 0.0])
+    u = reactive_velocity(p_ref + [0.3, 0.4, 0.0], p_ref, gain=5.0, max_speed=0.2)
+    assert math.isclose(np.linalg.norm(u), 0.2) and np.allclose(u / 0.2, [0.6, 0.8, 0.0])
+    np.testing.assert_allclose(fuse(0.5, np.ones(3), 0.25, np.full(3, 2.0)), np.ones(3))

@@ -1,0 +1,165 @@
+"""Training a bundle: any channels, refusals of unusable data, K and novelty checked
+against independent computations, the `train` command end to end."""
+
+import json
+
+import numpy as np
+import pytest
+
+from learning.data import Demonstrations, Trial, save
+from learning.preprocessing.resample import causal_downsample
+from mpcshare.bundle import load_bundle
+from mpcshare.cli import main
+from mpcshare.commands.train import TRAIN_COMMAND
+from mpcshare.training import TrainingError, prepare_training_data, train_bundle
+from mpcshare.training.config import TrainConfig
+from sim.demonstrator import GeneratorConfig, generate_demonstrations
+
+SMALL = TrainConfig(percentile=80, n_modes=3, hmm_restarts=1, max_epochs=3, patience=2,
+                    gate_max_samples=200, seed=0)
+
+
+@pytest.fixture(scope="module")
+def demos():
+    return generate_demonstrations(2, 1.5, seed=1, config=GeneratorConfig(trial_minutes=0.5))
+
+
+def _anonymous(demos: Demonstrations, d_obs: int = 5, d_act: int = 4) -> Demonstrations:
+    """The same trials with fewer, unnamed-style channels and no voluntary channel."""
+    trials = [Trial(obs=tr.obs[:, :d_obs] * 7.0, act=tr.act[:, 2:2 + d_act] + 3.0, t=tr.t,
+                    trial_id=tr.trial_id + 100, subject=tr.subject) for tr in demos.trials]
+    return Demonstrations(trials, demos.rate_hz, [f"sensor{j}" for j in range(d_obs)],
+                          [f"motor{j}" for j in range(d_act)]).validate()
+
+
+def test_trains_on_channels_without_physical_names(demos):
+    anon = _anonymous(demos)
+    b = train_bundle(anon, SMALL, progress=False)
+    assert b.obs_names == tuple(f"sensor{j}" for j in range(5)) and b.vol_names == ()
+    assert set(b.train_trials) | set(b.heldout_trials) == set(anon.trial_ids)
+    m = b.metrics
+    assert m["effort_source"] == "action_proxy" and "knife speed" in m["effort_units"]
+    assert 0 <= m["voluntary_share"] <= 1 and m["voluntary_effort"] >= 0
+    assert m["predictor"]["rmse_all"] > 0 and "ridge" in m["baselines"]
+    json.dumps(m, allow_nan=False)
+    seq = np.zeros((20, 5 + b.n_modes))
+    assert b.predictor.predict(seq).shape == (20, 4)
+
+
+def test_voluntary_channel_gives_the_effort_in_rad(demos):
+    b = train_bundle(demos, SMALL, progress=False)
+    m = b.metrics
+    assert m["effort_source"] == "voluntary" and m["effort_units"].startswith("rad ")
+    assert 0 <= m["voluntary_effort"] <= m["effort_if_all_voluntary"]
+    assert set(m["gate"]["per_mode"]) == {"0", "1", "2"}
+
+
+def _brute_quotients(X, Y, groups):
+    q = np.zeros(len(X))
+    for g in np.unique(groups):
+        idx = np.flatnonzero(groups == g)
+        dx = np.linalg.norm(X[idx, None, :] - X[None, idx, :], axis=2)
+        dy = np.linalg.norm(Y[idx, None, :] - Y[None, idx, :], axis=2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(dx > 0, dy / dx, np.where(dy > 0, np.inf, 0.0))
+        np.fill_diagonal(r, 0.0)
+        q[idx] = r.max(axis=1)
+    return q
+
+
+def test_K_and_novelty_threshold_match_independent_computations(demos):
+    data = prepare_training_data(demos, SMALL)
+    w = data.train.windows
+    q = _brute_quotients(w.X, w.Y, data.train.window_modes)
+    np.testing.assert_allclose(data.train.q, q, rtol=1e-9)
+    # every point's window holds L samples, causal: row 0 of a trial's windows is its sample L-1
+    L = w.lags
+    assert np.all(np.diff(w.source_index) >= 1) and w.X.shape[1] == L * len(demos.obs_names)
+    # novelty: recomputed from the raw training trials with the fitted preprocessing
+    low = causal_downsample(demos.select(data.train_trials), 10.0)
+    obs = np.concatenate([data.preprocessor.obs.transform(tr.obs) for tr in low.trials])
+    lengths = [len(tr) for tr in low.trials]
+    ref = np.percentile(-data.modes.log_predictive(obs, lengths), 99.9)
+    assert data.novelty_threshold == pytest.approx(ref, rel=1e-12)
+    assert not set(data.fit_trials) & set(data.val_trials)
+    assert sorted(data.fit_trials + data.val_trials) == sorted(data.train_trials)
+
+
+def test_held_out_labels_use_the_training_K(demos):
+    from mpcshare.training import fit_gates, reactive_labels
+    from mpcshare.training.evaluation import evaluate
+
+    data = prepare_training_data(demos, SMALL)
+    K = float(np.percentile(data.train.q, 60))
+    gates = fit_gates(data, reactive_labels(data.train.q, K))
+
+    class Zero:  # a predictor that always predicts the standardised mean (0)
+        def predict(self, windows):
+            return np.zeros((len(windows), len(demos.act_names)))
+
+    m = evaluate(data, gates, Zero(), K)
+    R = data.heldout.q <= K
+    assert m["heldout_reactive_share"] == pytest.approx(R.mean())
+    Y = data.heldout.windows.Y
+    assert m["predictor"]["rmse_reactive"] == pytest.approx(np.sqrt(np.mean(Y[R] ** 2)))
+    assert m["predictor"]["rmse_all"] == pytest.approx(np.sqrt(np.mean(Y ** 2)))
+
+
+@pytest.mark.parametrize("case, match", [
+    ("two_trials", "at least 3"),
+    ("short", "too short"),
+    ("rate", "integer factor"),
+    ("no_act", "act channels"),
+])
+def test_unusable_data_is_refused(demos, case, match):
+    if case == "two_trials":
+        bad = demos.select(demos.trial_ids[:2])
+    elif case == "short":
+        trials = list(demos.trials)
+        tr = trials[1]
+        trials[1] = Trial(obs=tr.obs[:50], act=tr.act[:50], t=tr.t[:50], trial_id=tr.trial_id)
+        bad = demos.with_trials(trials)
+    elif case == "rate":
+        bad = demos.with_trials(demos.trials)
+        bad.rate_hz = 25.0
+    else:
+        bad = Demonstrations([Trial(obs=tr.obs, act=np.zeros((len(tr), 0)), t=tr.t, trial_id=tr.trial_id)
+                              for tr in demos.trials], demos.rate_hz, demos.obs_names, [])
+    with pytest.raises(TrainingError, match=match):
+        train_bundle(bad, SMALL, progress=False)
+
+
+@pytest.fixture(scope="module")
+def data_file(demos, tmp_path_factory):
+    path = tmp_path_factory.mktemp("d") / "demos.npz"
+    save(demos, path)
+    return path
+
+
+def test_cli_trains_a_bundle_and_prints_the_metrics(data_file, demos, tmp_path, capsys):
+    out = tmp_path / "model"
+    argv = ["train", str(data_file), "--percentile", "70", "--out", str(out), "--modes", "3",
+            "--epochs", "2", "--hmm-restarts", "1", "--quiet"]
+    assert main(argv, commands=(TRAIN_COMMAND,)) == 0
+    text = capsys.readouterr().out
+    assert "K = " in text and "percentile 70" in text and "gate: accuracy" in text and str(out) in text
+    b = load_bundle(out, expect_obs_names=demos.obs_names, expect_act_names=demos.act_names)
+    assert b.percentile == 70 and b.n_modes == 3 and b.config["max_epochs"] == 2
+
+
+def test_cli_refuses_unusable_data_and_outputs_with_one_message(demos, data_file, tmp_path, capsys):
+    two = tmp_path / "two.npz"
+    save(demos.select(demos.trial_ids[:2]), two)
+    assert main(["train", str(two), "--out", str(tmp_path / "m")], commands=(TRAIN_COMMAND,)) == 1
+    err = capsys.readouterr().err
+    assert "mpcshare train:" in err and "at least 3" in err and "Traceback" not in err
+    assert not (tmp_path / "m").exists()
+    other = tmp_path / "notes"
+    other.mkdir()
+    (other / "a.txt").write_text("x")
+    assert main(["train", str(data_file), "--out", str(other)], commands=(TRAIN_COMMAND,)) == 1
+    assert "not a model bundle" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        main(["train", str(data_file), "--out", str(tmp_path / "m"), "--percentile", "120"],
+             commands=(TRAIN_COMMAND,))
+    assert e.value.code == 2
