@@ -46,6 +46,7 @@ from tqdm.auto import tqdm
 
 from learning.predictor.sequences import check_sequence_set, chunk_sequences, pad_sequences
 from learning.predictor.stream import PredictorStream
+from learning.torch_threads import torch_threads
 
 __all__ = ["DEVICES", "ReactivePredictor"]
 
@@ -208,15 +209,9 @@ class ReactivePredictor(BaseEstimator):
             vx = vy = vm = None
         device = _resolve_device(self.device)
         t0 = time.perf_counter()
-        old_threads = torch.get_num_threads()
-        if self.num_threads is not None:
-            torch.set_num_threads(int(self.num_threads))
-        try:
-            with torch.random.fork_rng(devices=[]):
-                torch.manual_seed(int(self.seed))
-                net, history, best_epoch = self._train(xs, ys, ms, vx, vy, vm, device, progress)
-        finally:
-            torch.set_num_threads(old_threads)
+        with torch_threads(self.num_threads), torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(self.seed))
+            net, history, best_epoch = self._train(xs, ys, ms, vx, vy, vm, device, progress)
         # fitted attributes only once training has succeeded (nothing half-written)
         self.input_dim_, self.output_dim_ = int(xs[0].shape[1]), int(ys[0].shape[1])
         self.device_, self.net_, self.history_ = device, net, history

@@ -54,12 +54,7 @@ def compiled(f: ca.Function, enable: bool = True, timeout_s: float = 120.0) -> t
             source_name = f"{f.name()}.c"
             cg = ca.CodeGenerator(source_name, {"with_header": False})
             cg.add(f)
-            cwd = os.getcwd()
-            try:
-                os.chdir(tmp)
-                cg.generate()
-            finally:
-                os.chdir(cwd)
+            cg.generate(tmp + os.sep)  # the prefix is the folder: no change of the working directory
             source = (Path(tmp) / source_name).read_bytes()
             key = hashlib.sha256(source + " ".join((os.path.basename(compiler),) + CFLAGS).encode()).hexdigest()[:20]
             folder = cache_dir()

@@ -251,7 +251,6 @@ def test_evaluate_is_the_state_the_controller_sees() -> None:
 
 
 def test_solvers_agree() -> None:
-    pytest.importorskip("daqp")
     a = QPController.for_superlimb(config=QPConfig(solver="daqp"))
     b = QPController.for_superlimb(config=QPConfig(solver="osqp"))
     c = QPController.for_superlimb(config=QPConfig(solver="qpsolvers:daqp"))

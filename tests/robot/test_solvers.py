@@ -55,8 +55,6 @@ TOL = {"osqp": 1e-6, "daqp": 1e-9, "qpsolvers:osqp": 1e-6}
 
 @pytest.mark.parametrize("name", list(BACKENDS))
 def test_backend_matches_the_exact_solution_over_a_sequence(name: str) -> None:
-    if name == "daqp" and not daqp_available():
-        pytest.skip("daqp not installed")
     backend = BACKENDS[name](3, 4)
     active = 0
     for seed in range(12):  # one backend object: the persistent workspace is updated, not rebuilt
@@ -72,8 +70,6 @@ def test_backend_matches_the_exact_solution_over_a_sequence(name: str) -> None:
 @pytest.mark.parametrize("name", list(BACKENDS))
 def test_backend_accepts_read_only_inputs(name: str) -> None:
     """Limits and tasks return read-only arrays; every back-end must take them as they are."""
-    if name == "daqp" and not daqp_available():
-        pytest.skip("daqp not installed")
     problem = _problem(4)
     for a in problem:
         a.flags.writeable = False
@@ -83,8 +79,6 @@ def test_backend_accepts_read_only_inputs(name: str) -> None:
 
 
 def test_daqp_and_osqp_agree_with_infinite_bounds() -> None:
-    if not daqp_available():
-        pytest.skip("daqp not installed")
     P, c, _, _, G, h = _problem(3, n=4, m=3)
     lb, ub = np.full(4, -1e30), np.full(4, 1e30)  # 1e30: "no bound" for both
     xa = DaqpBackend(4, 3).solve(P, c, lb, ub, G, h).x
@@ -96,8 +90,6 @@ def test_daqp_and_osqp_agree_with_infinite_bounds() -> None:
 
 @pytest.mark.parametrize("name", list(BACKENDS))
 def test_infeasible_problem_gives_no_answer(name: str) -> None:
-    if name == "daqp" and not daqp_available():
-        pytest.skip("daqp not installed")
     n = 2
     P, c = np.eye(n), np.zeros(n)
     lb, ub = np.full(n, -1.0), np.full(n, 1.0)
