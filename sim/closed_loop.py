@@ -30,16 +30,15 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
 import mujoco
 import numpy as np
 
-from learning.atomic import atomic_open
 from learning.data import Trial
 from robot.kinematics import ArmGeometry, nearest_reachable_q
+from sim.episode import Episode
 from sim.scene import EatingScene, SceneConfig
 from sim.servo import JointServo, ServoConfig
 from sim.wearer import SimulatedWearer, WearerConfig
@@ -57,71 +56,6 @@ class Controller(Protocol):
 
     def step(self, t: float, obs: np.ndarray, voluntary: np.ndarray, q: np.ndarray, v: np.ndarray,
              base_pose: np.ndarray | None = None) -> Any: ...
-
-
-#: run-file arrays: physics rate, then control rate (the keys of issue 12, plus base_pose and novelty)
-PHYSICS_KEYS = ("t_physics", "q", "v", "tau")
-CONTROL_KEYS = ("t", "alpha", "beta", "mode", "tip", "tip_reference", "tip_intent", "voluntary", "status",
-                "step_time", "base_pose", "novelty")
-
-
-@dataclass
-class Episode:
-    """The record of one closed-loop run.
-
-    Physics rate (1 kHz): ``t_physics`` (Np,) [s] (time after each step), ``q``,
-    ``v`` (Np, 3) realized [rad, rad/s], ``tau`` (Np, 3) applied [N·m].
-    Control rate (100 Hz): ``t`` (Nc,) [s], ``alpha``, ``beta`` (Nc,), ``mode`` (Nc,)
-    int (argmax of ``mode_proba``, −1 if none), ``tip``, ``tip_reference``,
-    ``tip_intent`` (Nc, 3) [m] plate frame, ``voluntary`` (Nc, 3) [rad], ``status``
-    (Nc,) str, ``step_time`` (Nc,) [s], ``base_pose`` (Nc, 4, 4), ``novelty`` (Nc,)
-    (the command's ``novelty`` where it has one, else NaN).
-    ``info``: scalars — limit_violations (physics steps with any limit exceeded),
-    the largest excesses, servo counters, wall_time_s, shoulder gain/deadband, the
-    trial id, render result.
-    """
-
-    t_physics: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    tau: np.ndarray
-    t: np.ndarray
-    alpha: np.ndarray
-    beta: np.ndarray
-    mode: np.ndarray
-    tip: np.ndarray
-    tip_reference: np.ndarray
-    tip_intent: np.ndarray
-    voluntary: np.ndarray
-    status: np.ndarray
-    step_time: np.ndarray
-    base_pose: np.ndarray
-    novelty: np.ndarray
-    info: dict[str, Any] = field(default_factory=dict)
-
-    def save(self, path: str | Path) -> Path:
-        """Write the run file (NPZ, atomic): every array above plus ``info_<name>`` scalars."""
-        path = Path(path)
-        if path.suffix != ".npz":
-            raise ValueError(f"run file must end in .npz, got {path.name!r}")
-        arrays = {k: getattr(self, k) for k in PHYSICS_KEYS + CONTROL_KEYS}
-        arrays["status"] = np.asarray(self.status, dtype=str)
-        for k, v in self.info.items():
-            arrays[f"info_{k}"] = np.asarray("" if v is None else v)
-        with atomic_open(path, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
-        return path
-
-    @classmethod
-    def load(cls, path: str | Path) -> Episode:
-        """Read a run file written by :meth:`save`."""
-        with np.load(path, allow_pickle=False) as z:
-            missing = [k for k in PHYSICS_KEYS + CONTROL_KEYS if k not in z.files]
-            if missing:
-                raise ValueError(f"{path}: not a run file, missing {missing}")
-            arrays = {k: z[k] for k in PHYSICS_KEYS + CONTROL_KEYS}
-            info = {k[5:]: z[k].item() for k in z.files if k.startswith("info_")}
-        return cls(**arrays, info=info)
 
 
 def _columns(names: list[str] | None, wanted: tuple[str, ...], where: str) -> list[int]:
@@ -146,6 +80,163 @@ def _scalar(x: Any) -> float:
         return float(x)
     except (TypeError, ValueError):
         return float("nan")
+
+
+class _Loop:
+    """The state of one episode between control steps: the world, the wearer, the servo and the logs.
+
+    One control period is :meth:`control_step` (items 1–4 of the module docstring) then
+    :meth:`physics_period` (item 5); hooks (video, progress) run after each period.
+    """
+
+    def __init__(self, controller: Controller, trial: Trial, sc: SceneConfig, wc: WearerConfig,
+                 servo: ServoConfig | None, seed: int, n_ctrl: int, fork_cols: list[int], intent_raw: np.ndarray,
+                 record: bool) -> None:
+        self.controller, self.trial, self.sc, self.wc, self.fork_cols = controller, trial, sc, wc, fork_cols
+        self.n_ctrl, self.record = n_ctrl, record
+        self.world = EatingScene(sc, seed=seed)
+        self.person = SimulatedWearer(intent_raw, 1.0 / sc.control_period, wc, seed=seed)
+        geom = ArmGeometry.from_params(sc.params)
+        q0 = nearest_reachable_q(geom, self.world.plate_to_torso(self.world.base_pose(0.0),
+                                                                  self.person.intent[0][None])[0])
+        self.world.set_state(q0, np.zeros(3), 0.0)
+        self.world.set_fork(trial.obs[0, fork_cols])
+        self.servo = JointServo(self.world.model, self.world.data, sc.params, servo)
+        # control-rate log
+        self.out = {k: np.full((n_ctrl, 3), np.nan) for k in ("tip", "tip_reference", "voluntary")}
+        self.alpha, self.beta, self.novelty = (np.full(n_ctrl, np.nan) for _ in range(3))
+        self.mode = np.full(n_ctrl, -1, dtype=int)
+        self.status = np.empty(n_ctrl, dtype=object)
+        self.step_time = np.zeros(n_ctrl)
+        self.base_poses = np.zeros((n_ctrl, 4, 4))
+        # physics-rate log and the limits checked on it
+        n_sub, n_phys = sc.substeps, n_ctrl * sc.substeps if record else 0
+        self.rec_t, self.rec_q = np.zeros(n_phys), np.zeros((n_phys, 3))
+        self.rec_v, self.rec_tau = np.zeros((n_phys, 3)), np.zeros((n_phys, 3))
+        self._buf = (np.zeros(n_sub), np.zeros((n_sub, 3)), np.zeros((n_sub, 3)), np.zeros((n_sub, 3)))
+        self.q_lo, self.q_hi = sc.params.lower - LIMIT_TOL, sc.params.upper + LIMIT_TOL
+        self.v_lim = sc.params.velocity_limit + LIMIT_TOL
+        self.tau_lim = sc.params.torque_limit + TORQUE_TOL
+        self.violations, self.worst = 0, {"q": 0.0, "v": 0.0, "tau": 0.0}
+
+    def control_step(self, k: int) -> None:
+        """Sense, let the wearer act, call the controller (timed, never fatal) and give the servo its segment."""
+        sc, world, d = self.sc, self.world, self.world.data
+        t_k = k * sc.control_period
+        world.set_time(t_k)
+        world.set_fork(self.trial.obs[k, self.fork_cols])
+        mujoco.mj_step1(world.model, d)
+        tip = world.tip_in_plate().copy()
+        base = world.base_pose(t_k)
+        theta = self.person.step(k, tip)
+        q, v = d.qpos[:3].copy(), d.qvel[:3].copy()
+        t0 = time.perf_counter()
+        try:
+            cmd = self.controller.step(t_k, self.trial.obs[k].copy(), theta.copy(), q, v, base)
+            err = None
+        except Exception as exc:  # noqa: BLE001  (the loop must go on: hold, and say why)
+            cmd, err = None, f"controller_error: {type(exc).__name__}: {exc}"
+        self.step_time[k] = time.perf_counter() - t0
+        seg = None if cmd is None else [_vec3(getattr(cmd, a, None)) for a in ("q_cmd", "v_cmd", "a_cmd")]
+        if seg is not None and all(x is not None for x in seg):
+            self.servo.set_segment(seg[0], seg[1], seg[2], t_k + sc.control_period)
+            self.status[k] = str(getattr(cmd, "status", "ok"))
+        else:
+            self.servo.hold()
+            self.status[k] = err or "invalid_command"
+        if cmd is not None:
+            self._log_command(k, cmd)
+        self.out["tip"][k], self.out["voluntary"][k], self.base_poses[k] = tip, theta, base
+
+    def _log_command(self, k: int, cmd: Any) -> None:
+        self.alpha[k], self.beta[k] = _scalar(getattr(cmd, "alpha", np.nan)), _scalar(getattr(cmd, "beta", np.nan))
+        self.novelty[k] = _scalar(getattr(cmd, "novelty", np.nan))
+        ref = _vec3(getattr(cmd, "tip_reference", None))
+        if ref is not None:
+            self.out["tip_reference"][k] = ref
+        proba = np.asarray(getattr(cmd, "mode_proba", ()), dtype=float).reshape(-1)
+        if proba.size and np.isfinite(proba).all():
+            self.mode[k] = int(np.argmax(proba))
+
+    def physics_period(self, k: int) -> None:
+        """The period's physics steps (servo torque, ``mj_step2``), recorded and checked against the limits."""
+        sc, world, m, d = self.sc, self.world, self.world.model, self.world.data
+        n_sub, t_k = sc.substeps, k * sc.control_period
+        if self.record:
+            blk = slice(k * n_sub, (k + 1) * n_sub)
+            bt, bq, bv, bf = self.rec_t[blk], self.rec_q[blk], self.rec_v[blk], self.rec_tau[blk]
+        else:
+            bt, bq, bv, bf = self._buf
+        for j in range(n_sub):
+            if j:  # the first sub-step's kinematics were computed by control_step
+                world.set_time(t_k + j * sc.timestep)
+                mujoco.mj_step1(m, d)
+            d.ctrl = self.servo.torque()
+            mujoco.mj_step2(m, d)
+            bt[j] = d.time
+            bq[j], bv[j], bf[j] = d.qpos, d.qvel, d.actuator_force  # the arm is the whole state
+        self._check_limits(bq, bv, bf)
+
+    def _check_limits(self, bq: np.ndarray, bv: np.ndarray, bf: np.ndarray) -> None:
+        """Count the physics steps of the period with any limit exceeded (vectorised once per period)."""
+        eq = np.maximum(self.q_lo - bq, bq - self.q_hi).max(axis=1)
+        ev = (np.abs(bv) - self.v_lim).max(axis=1)
+        et = (np.abs(bf) - self.tau_lim).max(axis=1)
+        bad = (eq > 0.0) | (ev > 0.0) | (et > 0.0)
+        if bad.any():
+            self.violations += int(bad.sum())
+            w = self.worst
+            w["q"], w["v"], w["tau"] = max(w["q"], float(eq.max())), max(w["v"], float(ev.max())), \
+                max(w["tau"], float(et.max()))
+
+    def info(self, seed: int, wall: float, cpu: float) -> dict[str, Any]:
+        sc, wc, srv, w = self.sc, self.wc, self.servo, self.worst
+        return {
+            "trial_id": self.trial.trial_id, "seed": seed, "duration_s": self.n_ctrl * sc.control_period,
+            "control_period_s": sc.control_period, "physics_dt_s": sc.timestep, "wall_time_s": wall,
+            "cpu_time_s": cpu,
+            "limit_violations": self.violations, "max_q_excess_rad": w["q"], "max_v_excess_rad_s": w["v"],
+            "max_tau_excess_nm": w["tau"], "servo_qp_steps": srv.qp_steps,
+            "servo_fallback_steps": srv.fallback_steps, "brake_infeasible_steps": srv.brake_infeasible,
+            "shoulder_gain": wc.shoulder.gain, "shoulder_deadband_rad": wc.shoulder.deadband_rad,
+            "wearer_deadband_m": wc.deadband_m, "video": None, "render_message": None,
+        }
+
+    def episode(self, info: dict[str, Any]) -> Episode:
+        o = self.out
+        t = np.arange(self.n_ctrl) * self.sc.control_period
+        return Episode(self.rec_t, self.rec_q, self.rec_v, self.rec_tau, t, self.alpha, self.beta, self.mode,
+                       o["tip"], o["tip_reference"], self.person.intent.copy(), o["voluntary"],
+                       self.status.astype(str), self.step_time, self.base_poses, self.novelty, info)
+
+
+def _check_inputs(controller: Controller, trial: Trial, sc: SceneConfig, obs_names: list[str],
+                  act_names: list[str], duration_s: float | None) -> tuple[list[int], np.ndarray, int]:
+    """(fork columns, the intended knife tip (n_ctrl, 3), n_ctrl), or a clear error naming what is wrong."""
+    if not callable(getattr(controller, "step", None)):
+        raise TypeError(f"controller must have a step(t, obs, voluntary, q, v, base_pose) method, "
+                        f"got {type(controller).__name__}")
+    tip_cols = _columns(act_names, TIP_CHANNELS, "trial act")
+    fork_cols = _columns(obs_names, FORK_CHANNELS, "trial obs")
+    if trial.obs.shape[1] != len(obs_names) or trial.act.shape[1] != len(act_names):
+        raise ValueError(f"trial {trial.trial_id}: obs/act have {trial.obs.shape[1]}/{trial.act.shape[1]} "
+                         f"columns, names give {len(obs_names)}/{len(act_names)}")
+    if len(trial) < 2:
+        raise ValueError(f"trial {trial.trial_id} has {len(trial)} samples; need at least 2")
+    dt_trial = float(np.median(np.diff(trial.t)))
+    if abs(dt_trial - sc.control_period) > 1e-6:
+        raise ValueError(f"trial {trial.trial_id} is sampled every {dt_trial:g} s; the loop runs at "
+                         f"{sc.control_period:g} s (resample the trial to {1 / sc.control_period:g} Hz)")
+    n_ctrl = len(trial)
+    if duration_s is not None:
+        if not duration_s > 0:
+            raise ValueError(f"duration_s must be > 0, got {duration_s}")
+        n_ctrl = min(n_ctrl, round(duration_s / sc.control_period))
+    intent_raw = trial.act[:n_ctrl][:, tip_cols]
+    bad = ~np.isfinite(intent_raw).all(axis=1)
+    if bad.any():
+        raise ValueError(f"trial {trial.trial_id}: knife tip not finite at row {int(np.flatnonzero(bad)[0])}")
+    return fork_cols, intent_raw, n_ctrl
 
 
 def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | None = None,
@@ -173,63 +264,15 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     wc = wearer or WearerConfig()
     obs_names = list(OBS_NAMES) if obs_names is None else list(obs_names)
     act_names = list(ACT_NAMES) if act_names is None else list(act_names)
-    if not callable(getattr(controller, "step", None)):
-        raise TypeError(f"controller must have a step(t, obs, voluntary, q, v, base_pose) method, "
-                        f"got {type(controller).__name__}")
-    tip_cols = _columns(act_names, TIP_CHANNELS, "trial act")
-    fork_cols = _columns(obs_names, FORK_CHANNELS, "trial obs")
-    if trial.obs.shape[1] != len(obs_names) or trial.act.shape[1] != len(act_names):
-        raise ValueError(f"trial {trial.trial_id}: obs/act have {trial.obs.shape[1]}/{trial.act.shape[1]} "
-                         f"columns, names give {len(obs_names)}/{len(act_names)}")
-    if len(trial) < 2:
-        raise ValueError(f"trial {trial.trial_id} has {len(trial)} samples; need at least 2")
-    dt_trial = float(np.median(np.diff(trial.t)))
-    if abs(dt_trial - sc.control_period) > 1e-6:
-        raise ValueError(f"trial {trial.trial_id} is sampled every {dt_trial:g} s; the loop runs at "
-                         f"{sc.control_period:g} s (resample the trial to {1 / sc.control_period:g} Hz)")
-    n_ctrl = len(trial)
-    if duration_s is not None:
-        if not duration_s > 0:
-            raise ValueError(f"duration_s must be > 0, got {duration_s}")
-        n_ctrl = min(n_ctrl, round(duration_s / sc.control_period))
-    intent_raw = trial.act[:n_ctrl][:, tip_cols]
-    bad = ~np.isfinite(intent_raw).all(axis=1)
-    if bad.any():
-        raise ValueError(f"trial {trial.trial_id}: knife tip not finite at row {int(np.flatnonzero(bad)[0])}")
-
-    world = EatingScene(sc, seed=seed)
-    m, d = world.model, world.data
-    person = SimulatedWearer(intent_raw, 1.0 / sc.control_period, wc, seed=seed)
-    intent = person.intent
-    geom = ArmGeometry.from_params(sc.params)
-    base0 = world.base_pose(0.0)
-    q0 = nearest_reachable_q(geom, world.plate_to_torso(base0, intent[0][None])[0])
-    world.set_state(q0, np.zeros(3), 0.0)
-    world.set_fork(trial.obs[0, fork_cols])
-    srv = JointServo(m, d, sc.params, servo)
+    fork_cols, intent_raw, n_ctrl = _check_inputs(controller, trial, sc, obs_names, act_names, duration_s)
+    loop = _Loop(controller, trial, sc, wc, servo, seed, n_ctrl, fork_cols, intent_raw, record)
     if callable(getattr(controller, "reset", None)):
         controller.reset()
-
-    n_sub, h = sc.substeps, sc.timestep
-    n_phys = n_ctrl * n_sub if record else 0
-    rec_t, rec_q = np.zeros(n_phys), np.zeros((n_phys, 3))
-    rec_v, rec_tau = np.zeros((n_phys, 3)), np.zeros((n_phys, 3))
-    out = {k: np.full((n_ctrl, 3), np.nan) for k in ("tip", "tip_reference", "voluntary")}
-    alpha, beta, novelty = np.full(n_ctrl, np.nan), np.full(n_ctrl, np.nan), np.full(n_ctrl, np.nan)
-    mode = np.full(n_ctrl, -1, dtype=int)
-    status = np.empty(n_ctrl, dtype=object)
-    step_time = np.zeros(n_ctrl)
-    base_poses = np.zeros((n_ctrl, 4, 4))
-    q_lo, q_hi = sc.params.lower - LIMIT_TOL, sc.params.upper + LIMIT_TOL
-    v_lim, tau_lim = sc.params.velocity_limit + LIMIT_TOL, sc.params.torque_limit + TORQUE_TOL
-    buf_t, buf_q, buf_v, buf_f = np.zeros(n_sub), np.zeros((n_sub, 3)), np.zeros((n_sub, 3)), np.zeros((n_sub, 3))
-    violations, worst = 0, {"q": 0.0, "v": 0.0, "tau": 0.0}
-    renderer = None
+    renderer = bar = None
     if render is not None:
         from sim.render import VideoRecorder
 
-        renderer = VideoRecorder(m, render, fps=25, control_rate_hz=1.0 / sc.control_period)
-    bar = None
+        renderer = VideoRecorder(loop.world.model, render, fps=25, control_rate_hz=1.0 / sc.control_period)
     if progress:
         from tqdm.auto import tqdm
 
@@ -237,84 +280,20 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
     for k in range(n_ctrl):
-        t_k = k * sc.control_period
-        world.set_time(t_k)
-        world.set_fork(trial.obs[k, fork_cols])
-        mujoco.mj_step1(m, d)
-        tip = world.tip_in_plate().copy()
-        base = world.base_pose(t_k)
-        theta = person.step(k, tip)
-        q, v = d.qpos[:3].copy(), d.qvel[:3].copy()
-        t0 = time.perf_counter()
-        try:
-            cmd = controller.step(t_k, trial.obs[k].copy(), theta.copy(), q, v, base)
-            err = None
-        except Exception as exc:  # noqa: BLE001  (the loop must go on: hold, and say why)
-            cmd, err = None, f"controller_error: {type(exc).__name__}: {exc}"
-        step_time[k] = time.perf_counter() - t0
-        seg = None if cmd is None else [_vec3(getattr(cmd, a, None)) for a in ("q_cmd", "v_cmd", "a_cmd")]
-        if seg is not None and all(x is not None for x in seg):
-            srv.set_segment(seg[0], seg[1], seg[2], t_k + sc.control_period)
-            status[k] = str(getattr(cmd, "status", "ok"))
-        else:
-            srv.hold()
-            status[k] = err or "invalid_command"
-        if cmd is not None:
-            alpha[k], beta[k] = _scalar(getattr(cmd, "alpha", np.nan)), _scalar(getattr(cmd, "beta", np.nan))
-            novelty[k] = _scalar(getattr(cmd, "novelty", np.nan))
-            ref = _vec3(getattr(cmd, "tip_reference", None))
-            if ref is not None:
-                out["tip_reference"][k] = ref
-            proba = np.asarray(getattr(cmd, "mode_proba", ()), dtype=float).reshape(-1)
-            if proba.size and np.isfinite(proba).all():
-                mode[k] = int(np.argmax(proba))
-        out["tip"][k], out["voluntary"][k], base_poses[k] = tip, theta, base
+        loop.control_step(k)
         if renderer is not None:
-            renderer.maybe_capture(d, k)
-
-        if record:
-            blk = slice(k * n_sub, (k + 1) * n_sub)
-            bt, bq, bv, bf = rec_t[blk], rec_q[blk], rec_v[blk], rec_tau[blk]
-        else:
-            bt, bq, bv, bf = buf_t, buf_q, buf_v, buf_f
-        for j in range(n_sub):
-            if j:  # the first sub-step's kinematics were computed above
-                world.set_time(t_k + j * h)
-                mujoco.mj_step1(m, d)
-            d.ctrl = srv.torque()
-            mujoco.mj_step2(m, d)
-            bt[j] = d.time
-            bq[j], bv[j], bf[j] = d.qpos, d.qvel, d.actuator_force  # the arm is the whole state
-        # the limits, checked on every physics step of the period (vectorised once per period)
-        eq = np.maximum(q_lo - bq, bq - q_hi).max(axis=1)
-        ev = (np.abs(bv) - v_lim).max(axis=1)
-        et = (np.abs(bf) - tau_lim).max(axis=1)
-        bad = (eq > 0.0) | (ev > 0.0) | (et > 0.0)
-        if bad.any():
-            violations += int(bad.sum())
-            worst["q"], worst["v"] = max(worst["q"], float(eq.max())), max(worst["v"], float(ev.max()))
-            worst["tau"] = max(worst["tau"], float(et.max()))
+            renderer.maybe_capture(loop.world.data, k)
+        loop.physics_period(k)
         if bar is not None:
             bar.update(1)
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     if bar is not None:
         bar.close()
 
-    info: dict[str, Any] = {
-        "trial_id": trial.trial_id, "seed": seed, "duration_s": n_ctrl * sc.control_period,
-        "control_period_s": sc.control_period, "physics_dt_s": h, "wall_time_s": wall,
-        "cpu_time_s": cpu,
-        "limit_violations": violations, "max_q_excess_rad": worst["q"], "max_v_excess_rad_s": worst["v"],
-        "max_tau_excess_nm": worst["tau"], "servo_qp_steps": srv.qp_steps,
-        "servo_fallback_steps": srv.fallback_steps, "brake_infeasible_steps": srv.brake_infeasible,
-        "shoulder_gain": wc.shoulder.gain, "shoulder_deadband_rad": wc.shoulder.deadband_rad,
-        "wearer_deadband_m": wc.deadband_m, "video": None, "render_message": None,
-    }
+    info = loop.info(seed, wall, cpu)
     if renderer is not None:
         video, message = renderer.close()
         info["video"], info["render_message"] = (str(video) if video else None), message
         if message:
             warnings.warn(message, RuntimeWarning, stacklevel=2)
-    return Episode(rec_t, rec_q, rec_v, rec_tau, np.arange(n_ctrl) * sc.control_period, alpha, beta, mode,
-                   out["tip"], out["tip_reference"], intent.copy(), out["voluntary"], status.astype(str),
-                   step_time, base_poses, novelty, info)
+    return loop.episode(info)

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from robot.shoulder import ShoulderMap
-from sim.closed_loop import Episode
+from sim.episode import Episode
 
 __all__ = ["METRIC_KEYS", "conflict_mask", "episode_metrics"]
 

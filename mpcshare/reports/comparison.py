@@ -124,7 +124,7 @@ def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
     shown = "gate" if comp.run_files.get("gate") else next((k for k, v in comp.run_files.items() if v), None)
     if shown is not None:
         from mpcshare.reports.episode_plot import plot_episode
-        from sim.closed_loop import Episode
+        from sim.episode import Episode
 
         episode = Episode.load(out / comp.run_files[shown][0])
         trial_plot = "trial.png"

@@ -12,8 +12,8 @@ from learning.data import Demonstrations, load, save
 from mpcshare.cli import main
 from mpcshare.experiments import METRIC_KEYS, pool_metrics
 from mpcshare.reports.html import markdown_to_html
-from sim.closed_loop import Episode
 from sim.demonstrator import generate_demonstrations
+from sim.episode import Episode
 
 
 @pytest.fixture(scope="module")

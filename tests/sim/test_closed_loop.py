@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from robot.superlimb import SuperLimbParams
-from sim.closed_loop import CONTROL_KEYS, PHYSICS_KEYS, Episode, run_episode
+from sim.closed_loop import run_episode
 from sim.demonstrator import generate_demonstrations
+from sim.episode import CONTROL_KEYS, PHYSICS_KEYS, Episode
 from sim.metrics import METRIC_KEYS, episode_metrics
 from tests.sim.controllers import (
     AggressiveController,

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from robot.shoulder import ShoulderMap
-from sim.closed_loop import Episode
+from sim.episode import Episode
 from sim.metrics import conflict_mask, episode_metrics
 
 

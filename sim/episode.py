@@ -1,0 +1,78 @@
+"""The record of one closed-loop episode and its run file (NPZ): :class:`Episode`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from learning.atomic import atomic_open
+
+__all__ = ["CONTROL_KEYS", "PHYSICS_KEYS", "Episode"]
+
+
+#: run-file arrays: physics rate, then control rate (the keys of issue 12, plus base_pose and novelty)
+PHYSICS_KEYS = ("t_physics", "q", "v", "tau")
+CONTROL_KEYS = ("t", "alpha", "beta", "mode", "tip", "tip_reference", "tip_intent", "voluntary", "status",
+                "step_time", "base_pose", "novelty")
+
+
+@dataclass
+class Episode:
+    """The record of one closed-loop run.
+
+    Physics rate (1 kHz): ``t_physics`` (Np,) [s] (time after each step), ``q``,
+    ``v`` (Np, 3) realized [rad, rad/s], ``tau`` (Np, 3) applied [N·m].
+    Control rate (100 Hz): ``t`` (Nc,) [s], ``alpha``, ``beta`` (Nc,), ``mode`` (Nc,)
+    int (argmax of ``mode_proba``, −1 if none), ``tip``, ``tip_reference``,
+    ``tip_intent`` (Nc, 3) [m] plate frame, ``voluntary`` (Nc, 3) [rad], ``status``
+    (Nc,) str, ``step_time`` (Nc,) [s], ``base_pose`` (Nc, 4, 4), ``novelty`` (Nc,)
+    (the command's ``novelty`` where it has one, else NaN).
+    ``info``: scalars — limit_violations (physics steps with any limit exceeded),
+    the largest excesses, servo counters, wall_time_s, shoulder gain/deadband, the
+    trial id, render result.
+    """
+
+    t_physics: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    tau: np.ndarray
+    t: np.ndarray
+    alpha: np.ndarray
+    beta: np.ndarray
+    mode: np.ndarray
+    tip: np.ndarray
+    tip_reference: np.ndarray
+    tip_intent: np.ndarray
+    voluntary: np.ndarray
+    status: np.ndarray
+    step_time: np.ndarray
+    base_pose: np.ndarray
+    novelty: np.ndarray
+    info: dict[str, Any] = field(default_factory=dict)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the run file (NPZ, atomic): every array above plus ``info_<name>`` scalars."""
+        path = Path(path)
+        if path.suffix != ".npz":
+            raise ValueError(f"run file must end in .npz, got {path.name!r}")
+        arrays = {k: getattr(self, k) for k in PHYSICS_KEYS + CONTROL_KEYS}
+        arrays["status"] = np.asarray(self.status, dtype=str)
+        for k, v in self.info.items():
+            arrays[f"info_{k}"] = np.asarray("" if v is None else v)
+        with atomic_open(path, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> Episode:
+        """Read a run file written by :meth:`save`."""
+        with np.load(path, allow_pickle=False) as z:
+            missing = [k for k in PHYSICS_KEYS + CONTROL_KEYS if k not in z.files]
+            if missing:
+                raise ValueError(f"{path}: not a run file, missing {missing}")
+            arrays = {k: z[k] for k in PHYSICS_KEYS + CONTROL_KEYS}
+            info = {k[5:]: z[k].item() for k in z.files if k.startswith("info_")}
+        return cls(**arrays, info=info)
