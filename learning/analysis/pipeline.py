@@ -150,6 +150,74 @@ def _check_windows(std: Demonstrations, config: AnalysisConfig) -> None:
                 f"trial ({longest} samples = {longest / std.rate_hz:g} s); use a shorter window")
 
 
+def _preprocess(demos: Demonstrations, config: AnalysisConfig) -> tuple[Demonstrations, WindowedData]:
+    """Downsampled and standardised data, and its causal windows (normalised by √L)."""
+    try:
+        low = downsample(demos, config.target_hz) if demos.rate_hz != config.target_hz else demos
+    except ValueError as exc:  # a trial too short to keep 2 samples
+        raise AnalysisError(str(exc)) from exc
+    pre = Preprocessor(obs=Standardizer(config.scope, field="obs").fit(low),
+                       act=Standardizer(config.scope, field="act").fit(low),
+                       target_hz=config.target_hz, window_s=config.window_s)
+    std = pre.standardize(low)
+    _check_windows(std, config)
+    return std, causal_windows(std, config.window_s, rms=True)
+
+
+def _voluntary_shares(trial: np.ndarray, q: np.ndarray, q_modes: np.ndarray, q_ref: np.ndarray,
+                      q_random: np.ndarray, config: AnalysisConfig
+                      ) -> tuple[dict[str, VoluntaryShare], dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    """The voluntary share (fraction of windows with q > K) per trial at each K, and its paired test.
+
+    Quotients within any grouping can only fall (fewer partners), so the paired test that
+    means something is HMM modes against the time-free reference ("p_value"); against random
+    groups and no modes are reported too.
+    """
+    share_report: dict[str, VoluntaryShare] = {}
+    shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    for K in config.K:
+        by_trial = voluntary_share(q_modes, trial, K)
+        ids = np.array(list(by_trial))
+        with_m = np.array([by_trial[i] for i in ids])
+        without = _shares(q, trial, K, ids)
+        ref_share = _shares(q_ref, trial, K, ids)
+        rand = np.mean([_shares(r, trial, K, ids) for r in q_random], axis=0)
+        stat, p, eff = paired_wilcoxon(with_m, ref_share, alternative="less")
+        shares[K] = (ids, without, with_m)
+        mean_without, mean_with = float(np.mean(without)), float(np.mean(with_m))
+        share_report[f"{K:g}"] = VoluntaryShare(
+            without_modes=mean_without, with_modes=mean_with, reference=float(np.mean(ref_share)),
+            random=float(np.mean(rand)),
+            fold_reduction=_json_float(mean_without / mean_with) if mean_with > 0 else None,
+            statistic=stat, p_value=p, effect_size=eff,
+            test=f"wilcoxon signed-rank over trials, one-sided: share within HMM modes < share within "
+                 f"the {config.reference} reference",
+            p_value_vs_random=paired_wilcoxon(with_m, rand, alternative="less")[1],
+            p_value_vs_without_modes=paired_wilcoxon(with_m, without, alternative="less")[1],
+            n_trials=int(len(ids)))
+    return share_report, shares
+
+
+def _segmentation_test(ev: Any, config: AnalysisConfig) -> SegmentationTest:
+    """The report's record of :func:`~learning.analysis.reference.mode_evidence`'s two tests."""
+    t_ref, t_rand = ev.vs_reference, ev.vs_random
+    q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
+    return SegmentationTest(
+        test=f"wilcoxon signed-rank over trials, one-sided: ln(reference / HMM per-trial median q) "
+             f"> {config.min_effect:.4g}, for the time-free reference and for random groups (both)",
+        unit="trial", n_trials=int(t_ref.n_trials), statistic=float(t_ref.statistic),
+        p_value=float(ev.p_value), reference_p_value=float(t_ref.p_value), reference=config.reference,
+        hmm_median_q=float(np.median(q_modes)), reference_median_q=float(np.median(q_ref)),
+        random_median_q=float(np.median(q_random)),
+        effect_size=float(t_ref.effect), ci_low=float(t_ref.ci_low), ci_high=float(t_ref.ci_high),
+        ci_level=float(t_ref.ci_level), min_effect=float(config.min_effect),
+        random_p_value=float(t_rand.p_value), random_effect_size=float(t_rand.effect),
+        random_ci_low=float(t_rand.ci_low), random_ci_high=float(t_rand.ci_high),
+        n_random=int(config.n_random), random_method=config.random_method,
+        reachable=bool(t_ref.reachable), min_trials=min_trials_for(SIGNIFICANCE),
+        significant=bool(ev.claimed), alpha=SIGNIFICANCE)
+
+
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             progress: bool = False) -> AnalysisResult:
     """Run the whole predictability analysis (see module docstring).
@@ -175,16 +243,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     t_start = time.perf_counter()
 
     # 1. preprocessing (and every check on the data, before the progress bar starts)
-    try:
-        low = downsample(demos, config.target_hz) if demos.rate_hz != config.target_hz else demos
-    except ValueError as exc:  # a trial too short to keep 2 samples
-        raise AnalysisError(str(exc)) from exc
-    pre = Preprocessor(obs=Standardizer(config.scope, field="obs").fit(low),
-                       act=Standardizer(config.scope, field="act").fit(low),
-                       target_hz=config.target_hz, window_s=config.window_s)
-    std = pre.standardize(low)
-    _check_windows(std, config)
-    w = causal_windows(std, config.window_s, rms=True)
+    std, w = _preprocess(demos, config)
     steps = _Steps(5 + bool(n_search) + config.select_modes, progress, start=t_start)
     steps.done("preprocess")
 
@@ -224,31 +283,8 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     steps.done("segmentation test")
 
     # 5. voluntary share per trial: without modes, within HMM modes, within the reference
-    #    and within random groups. Quotients within any grouping can only fall (fewer
-    #    partners), so the paired test that means something is HMM modes against the
-    #    time-free reference ("p_value"); against random groups and no modes are reported too.
-    share_report: dict[str, VoluntaryShare] = {}
-    shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-    for K in config.K:
-        by_trial = voluntary_share(q_modes, w.trial, K)
-        ids = np.array(list(by_trial))
-        with_m = np.array([by_trial[i] for i in ids])
-        without = _shares(q, w.trial, K, ids)
-        ref_share = _shares(q_ref, w.trial, K, ids)
-        rand = np.mean([_shares(r, w.trial, K, ids) for r in q_random], axis=0)
-        stat, p, eff = paired_wilcoxon(with_m, ref_share, alternative="less")
-        shares[K] = (ids, without, with_m)
-        mean_without, mean_with = float(np.mean(without)), float(np.mean(with_m))
-        share_report[f"{K:g}"] = VoluntaryShare(
-            without_modes=mean_without, with_modes=mean_with, reference=float(np.mean(ref_share)),
-            random=float(np.mean(rand)),
-            fold_reduction=_json_float(mean_without / mean_with) if mean_with > 0 else None,
-            statistic=stat, p_value=p, effect_size=eff,
-            test=f"wilcoxon signed-rank over trials, one-sided: share within HMM modes < share within "
-                 f"the {config.reference} reference",
-            p_value_vs_random=paired_wilcoxon(with_m, rand, alternative="less")[1],
-            p_value_vs_without_modes=paired_wilcoxon(with_m, without, alternative="less")[1],
-            n_trials=int(len(ids)))
+    #    and within random groups
+    share_report, shares = _voluntary_shares(w.trial, q, q_modes, q_ref, q_random, config)
     steps.done("voluntary share")
 
     # 6. search for missing information
@@ -267,7 +303,6 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         steps.done("mode selection")
     steps.close()
 
-    t_ref, t_rand = ev.vs_reference, ev.vs_random
     summary = AnalysisReport(
         n_samples=int(len(w)), n_trials=int(len(np.unique(w.trial))),
         input_dim=int(w.X.shape[1]), output_dim=int(w.Y.shape[1]),
@@ -279,20 +314,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             occupancy=[float(np.mean(modes == k)) for k in range(config.n_modes)],
             converged=bool(model.converged_), loglik=float(model.loglik_), bic=float(model.bic(Z, lengths)),
             restart_logliks=[float(v) for v in model.restart_logliks_]),
-        segmentation_test=SegmentationTest(
-            test=f"wilcoxon signed-rank over trials, one-sided: ln(reference / HMM per-trial median q) "
-                 f"> {config.min_effect:.4g}, for the time-free reference and for random groups (both)",
-            unit="trial", n_trials=int(t_ref.n_trials), statistic=float(t_ref.statistic),
-            p_value=float(ev.p_value), reference_p_value=float(t_ref.p_value), reference=config.reference,
-            hmm_median_q=float(np.median(q_modes)), reference_median_q=float(np.median(q_ref)),
-            random_median_q=float(np.median(q_random)),
-            effect_size=float(t_ref.effect), ci_low=float(t_ref.ci_low), ci_high=float(t_ref.ci_high),
-            ci_level=float(t_ref.ci_level), min_effect=float(config.min_effect),
-            random_p_value=float(t_rand.p_value), random_effect_size=float(t_rand.effect),
-            random_ci_low=float(t_rand.ci_low), random_ci_high=float(t_rand.ci_high),
-            n_random=int(config.n_random), random_method=config.random_method,
-            reachable=bool(t_ref.reachable), min_trials=min_trials_for(SIGNIFICANCE),
-            significant=bool(ev.claimed), alpha=SIGNIFICANCE),
+        segmentation_test=_segmentation_test(ev, config),
         voluntary_share=share_report,
         candidates=candidates,
         mode_selection=selection,
