@@ -202,40 +202,52 @@ class QPController:
         if not (_finite(q) and _finite(v)):
             return self._hold(q, v, t0)
         reasons: list[str] = []
-        status = QPStatus.OK
-
-        # reference ------------------------------------------------------
-        task = self.tip_task
-        if p_ref is None:
-            task.clear_reference()
-        else:
-            p_ref = self._vector("p_ref", p_ref, 3)
-            v_ref = None if v_ref is None else self._vector("v_ref", v_ref, 3)
-            a_ref = None if a_ref is None else self._vector("a_ref", a_ref, 3)
-            if not _finite(p_ref):
-                task.clear_reference()
-                status = QPStatus.INVALID_REFERENCE
-                reasons.append("non-finite p_ref: tip tracking dropped")
-            else:
-                if v_ref is not None and not _finite(v_ref):
-                    v_ref = None
-                    reasons.append("non-finite v_ref ignored")
-                if a_ref is not None and not _finite(a_ref):
-                    a_ref = None
-                    reasons.append("non-finite a_ref ignored")
-                task.set_reference(p_ref, v_ref, a_ref)
-
+        status = self._set_reference(p_ref, v_ref, a_ref, reasons)
         state = self._evaluator(q, v, dt)
         manip = manipulability(state.J)
         if manip < self.config.singular_threshold:
             reasons.append(f"near singular pose (manipulability {manip:.2e})")
+        task = self.tip_task
         if task.p_ref is not None:
             e = task.p_ref - state.p
             tip_error = math.sqrt(float(e @ e))
         else:
             tip_error = float("nan")
+        lo, hi, G, h, status = self._limits(state, status, reasons)
+        H, c = self._objective(state)
+        a, tau, status, slack, iterations = self._solve(state, H, c, lo, hi, G, h, status, reasons)
+        v_next = v + a * dt
+        q_next = q + (v + 0.5 * dt * a) * dt
+        self._last_tau, self._last_q, self._last_v = tau, q_next, v_next
+        return QPResult(a, tau, v_next, q_next, status, "; ".join(reasons), tip_error, slack, manip,
+                        iterations, time.perf_counter() - t0)
 
-        # constraints ----------------------------------------------------
+    def _set_reference(self, p_ref: np.ndarray | None, v_ref: np.ndarray | None, a_ref: np.ndarray | None,
+                       reasons: list[str]) -> QPStatus:
+        """Give the tip task its reference (None: no tip task); non-finite parts are dropped and said."""
+        task = self.tip_task
+        if p_ref is None:
+            task.clear_reference()
+            return QPStatus.OK
+        p_ref = self._vector("p_ref", p_ref, 3)
+        v_ref = None if v_ref is None else self._vector("v_ref", v_ref, 3)
+        a_ref = None if a_ref is None else self._vector("a_ref", a_ref, 3)
+        if not _finite(p_ref):
+            task.clear_reference()
+            reasons.append("non-finite p_ref: tip tracking dropped")
+            return QPStatus.INVALID_REFERENCE
+        if v_ref is not None and not _finite(v_ref):
+            v_ref = None
+            reasons.append("non-finite v_ref ignored")
+        if a_ref is not None and not _finite(a_ref):
+            a_ref = None
+            reasons.append("non-finite a_ref ignored")
+        task.set_reference(p_ref, v_ref, a_ref)
+        return QPStatus.OK
+
+    def _limits(self, state: ControlState, status: QPStatus, reasons: list[str]
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, QPStatus]:
+        """Box bounds ``lo ≤ a ≤ hi`` (by priority) and inequality rows ``G·a ≤ h`` of every limit."""
         lo, hi, conflict = intersect_by_priority([c.bounds(state) for c in self.box_constraints])
         if conflict.any():
             if status is QPStatus.OK:
@@ -250,44 +262,45 @@ class QPController:
             h = np.concatenate([r.h for r in rows])
         else:
             G, h = self._no_rows
+        return lo, hi, G, h, status
 
-        # cost -------------------------------------------------------------
+    def _objective(self, state: ControlState) -> tuple[np.ndarray, np.ndarray]:
+        """The summed cost ½·aᵀHa + cᵀa of every task."""
         H, c = self.tasks[0].compute_qp_objective(state)
         for t in self._other_tasks:
             objective = t.compute_qp_objective(state)
             H = H + objective.H
             c = c + objective.c
+        return H, c
 
-        # solve ------------------------------------------------------------
+    def _solve(self, state: ControlState, H: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+               G: np.ndarray, h: np.ndarray, status: QPStatus, reasons: list[str]
+               ) -> tuple[np.ndarray, np.ndarray, QPStatus, float, int]:
+        """(a, τ, status, slack, iterations): the primary QP, else the box-relaxed one, else braking."""
         slack = 0.0
         out = self._primary.solve(H, c, lo, hi, G, h)
         iterations = out.iterations
-        done = False
         if out.x is not None:
             a, tau, done = self._finalize(state, out.x, lo, hi)
-        if not done:
-            a_r, s, it2, why = self._solve_relaxed(H, c, lo, hi, G, h)
-            iterations += it2
-            if a_r is not None:
-                slack = float(s.max())
-                a, tau, done = self._finalize(state, a_r, lo - s, hi + s)
-            if done and slack <= 1e-9:  # the primary answer was only inaccurate, nothing had to give
-                slack = 0.0
-                reasons.append(f"primary QP inaccurate ({out.status}): answer of the slack QP, zero slack")
-            elif done:
-                if status in (QPStatus.OK, QPStatus.RECOVERING):
-                    status = QPStatus.RELAXED
-                reasons.append(f"box and torque limits conflict ({out.status}): box relaxed by {slack:.3g} rad/s²")
-            else:
-                status = QPStatus.SOLVER_FAILED
-                reasons.append(f"QP failed ({out.status}; relaxed: {why}): braking")
-                a, tau = self._brake(state, lo, hi)
-
-        v_next = v + a * dt
-        q_next = q + (v + 0.5 * dt * a) * dt
-        self._last_tau, self._last_q, self._last_v = tau, q_next, v_next
-        return QPResult(a, tau, v_next, q_next, status, "; ".join(reasons), tip_error, slack, manip,
-                        iterations, time.perf_counter() - t0)
+            if done:
+                return a, tau, status, slack, iterations
+        a_r, s, it2, why = self._solve_relaxed(H, c, lo, hi, G, h)
+        iterations += it2
+        done = False
+        if a_r is not None:
+            slack = float(s.max())
+            a, tau, done = self._finalize(state, a_r, lo - s, hi + s)
+        if done and slack <= 1e-9:  # the primary answer was only inaccurate, nothing had to give
+            reasons.append(f"primary QP inaccurate ({out.status}): answer of the slack QP, zero slack")
+            return a, tau, status, 0.0, iterations
+        if done:
+            if status in (QPStatus.OK, QPStatus.RECOVERING):
+                status = QPStatus.RELAXED
+            reasons.append(f"box and torque limits conflict ({out.status}): box relaxed by {slack:.3g} rad/s²")
+            return a, tau, status, slack, iterations
+        reasons.append(f"QP failed ({out.status}; relaxed: {why}): braking")
+        a, tau = self._brake(state, lo, hi)
+        return a, tau, QPStatus.SOLVER_FAILED, slack, iterations
 
     # ------------------------------------------------------------------
     def _solve_relaxed(self, H: np.ndarray, c: np.ndarray, lo: np.ndarray, hi: np.ndarray,
