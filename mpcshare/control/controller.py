@@ -214,7 +214,6 @@ class SharedController:
                                {"total": time.perf_counter() - t0})
 
     def _step(self, t0: float, t, obs, voluntary, q, v, base_pose) -> ControlCommand:
-        cfg, lay = self.config, self.layout
         faults: list[tuple[str, str]] = []
         timings: dict[str, float] = {}
         n = self.qp.n
@@ -228,17 +227,32 @@ class SharedController:
         if not t > self._last_t:
             faults.append(("time_went_backwards", f"t = {t!r} after {self._last_t!r}: holding"))
             return self._hold(q, v, faults, timings, t0)
-        dt = min(t - self._last_t, cfg.max_dt)
+        dt = min(t - self._last_t, self.config.max_dt)
         self._last_t = t
-
         if base_pose is not None:
             try:
                 self._pose = check_base_pose(base_pose)
             except ValueError as exc:
                 faults.append(("invalid_base_pose", f"{exc}: last valid pose kept"))
 
-        # 1. front end ------------------------------------------------------------
-        ta = time.perf_counter()
+        ta = time.perf_counter()  # 1. front end
+        fe = self._sense(t, obs, faults)
+        if fe is None:
+            return self._hold(q, v, faults, timings, t0)
+        timings["frontend"] = time.perf_counter() - ta
+        ta = time.perf_counter()  # 2. learned parts at the model rate
+        if fe.tick is not None:
+            self._models_tick(fe.tick, faults)
+        timings["models"] = time.perf_counter() - ta
+        ta = time.perf_counter()  # 3. arbitration and the tip reference (plate frame)
+        alpha, beta, u, p_model = self._arbitrate(t, dt, q, voluntary, fe, faults)
+        timings["arbitration"] = time.perf_counter() - ta
+        res = self._track(q, v, u, p_model, faults, timings)  # 4. smoothing, MPC, QP
+        return self._command(res, alpha, beta, faults, timings, t0)
+
+    def _sense(self, t: float, obs, faults: list[tuple[str, str]]):
+        """The front end's output for this sample (None: no observation yet, hold)."""
+        lay = self.layout
         o = np.asarray(obs, dtype=float) if obs is not None else None
         if o is not None and o.shape != (lay.d_o,):
             faults.append(("invalid_observation_shape", f"obs has shape {o.shape}, expected ({lay.d_o},)"))
@@ -249,26 +263,24 @@ class SharedController:
             fe = self.frontend.step(t, o)
         except ValueError as exc:
             faults.append(("no_observation", f"{exc}: holding"))
-            return self._hold(q, v, faults, timings, t0)
+            return None
         self._fork_vel = fe.fork_velocity
-        stale = fe.predicting_for_s > cfg.stale_after_s
-        if fe.stale and not stale:
+        if fe.stale and not fe.predicting_for_s > self.config.stale_after_s:
             faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
-        timings["frontend"] = time.perf_counter() - ta
+        return fe
 
-        # 2. learned parts at the model rate ----------------------------------------
-        ta = time.perf_counter()
-        if fe.tick is not None:
-            self._models_tick(fe.tick, faults)
-        timings["models"] = time.perf_counter() - ta
+    def _arbitrate(self, t: float, dt: float, q: np.ndarray, voluntary, fe, faults: list[tuple[str, str]]
+                   ) -> tuple[float, float, np.ndarray, np.ndarray]:
+        """(α, β, the fused tip velocity u [m/s] (plate frame), the new tip reference (model frame)).
 
-        # 3. arbitration and the tip reference (plate frame) ------------------------
-        ta = time.perf_counter()
+        û = α·û_r + β·û_v integrated over ``dt``, kept in the workspace box and the arm's reach.
+        """
+        cfg = self.config
         if self._p_ref is None:
             self._p_ref = self._to_plate(self.tip.position(q))
         p_ref = self._p_ref
         pred_ok = _finite(self._p_pred)
-        if stale:
+        if fe.predicting_for_s > cfg.stale_after_s:
             why = f"no fork measurement for {fe.predicting_for_s:.2f} s: control handed to the wearer"
             faults.append(("stale_fork_sensor", why))
             alpha, beta = 0.0, 1.0
@@ -292,9 +304,11 @@ class SharedController:
             faults.append(("reference_unreachable", "tip reference projected onto the arm's reach"))
             p_new = self._to_plate(p_model)
         self._p_ref = p_new
-        timings["arbitration"] = time.perf_counter() - ta
+        return alpha, beta, u, p_model
 
-        # 4. smoothing, MPC, QP --------------------------------------------------------
+    def _track(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, p_model: np.ndarray,
+               faults: list[tuple[str, str]], timings: dict[str, float]):
+        """Smooth the reference (ruckig), plan with the MPC when there is one, and step the QP."""
         ta = time.perf_counter()
         if not self.smoother.initialized:
             self.smoother.reset(self.tip.position(q))
@@ -313,7 +327,7 @@ class SharedController:
         timings["qp"] = time.perf_counter() - ta
         if res.status is QPStatus.SOLVER_FAILED:
             faults.append(("qp_failed", res.reason))
-        return self._command(res, alpha, beta, faults, timings, t0)
+        return res
 
     def _models_tick(self, tick, faults: list[tuple[str, str]]) -> None:
         """Gate and predictor on a 10 Hz tick (results held until the next tick)."""
