@@ -15,13 +15,16 @@ import math
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
 from learning.data import Demonstrations
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
+
+if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
+    from mpcshare.bundle import ModelBundle
 
 __all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "pool_metrics",
            "render_clip"]
@@ -66,7 +69,7 @@ class Comparison:
                 "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video}
 
 
-def _from_bundle(bundle: Any, **options: Any) -> Any:
+def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
     """The default controller factory: :meth:`SharedController.from_bundle` (imported when first used)."""
     from mpcshare.control.controller import SharedController
 
@@ -108,7 +111,7 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
     }
 
 
-def compare_strategies(bundle: Any, demos: Demonstrations, trial_ids: Sequence[int], *,
+def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Sequence[int], *,
                        runs: Sequence[StrategyRun] = DEFAULT_RUNS, duration_s: float | None = None,
                        out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
                        make_controller: Callable[..., Any] | None = None,
@@ -163,7 +166,7 @@ def compare_strategies(bundle: Any, demos: Demonstrations, trial_ids: Sequence[i
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files)
 
 
-def render_clip(bundle: Any, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
+def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
                 strategy: str = "gate", use_mpc: bool = True, seed: int = 0, beta: float = 0.5,
                 make_controller: Callable[..., Any] | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).

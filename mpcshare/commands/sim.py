@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from learning.data import Demonstrations
 from mpcshare.commands.base import (
@@ -25,6 +25,9 @@ from mpcshare.commands.base import (
     positive_int,
     prepare_output_folder,
 )
+
+if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
+    from mpcshare.bundle import ModelBundle
 
 __all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "run_comparison"]
 
@@ -64,7 +67,7 @@ def _parse_map(items: Any) -> dict[str, str]:
     return mapping
 
 
-def align_channels(demos: Demonstrations, bundle: Any, mapping: dict[str, str] | None = None) -> Demonstrations:
+def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str, str] | None = None) -> Demonstrations:
     """The data's trials with their obs columns in the bundle's order (raises CommandError naming what is missing).
 
     ``mapping``: bundle channel name → the data's channel name, for data whose channels
@@ -89,7 +92,7 @@ def align_channels(demos: Demonstrations, bundle: Any, mapping: dict[str, str] |
     return Demonstrations(trials, demos.rate_hz, list(bundle.obs_names), act_names, list(demos.vol_names))
 
 
-def run_comparison(bundle: Any, demos: Demonstrations, out: Path, args: argparse.Namespace,
+def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
                    trial_ids: list[int]) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
     from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip

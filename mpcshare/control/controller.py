@@ -47,6 +47,7 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -60,6 +61,9 @@ from robot.qp import QPConfig, QPController, QPStatus
 from robot.shoulder import ShoulderMap
 from robot.smoothing import ReferenceSmoother
 from robot.superlimb import TOOL_FRAME, SuperLimbParams
+
+if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
+    from mpcshare.bundle import ModelBundle
 
 __all__ = ["STATUSES", "ControlCommand", "ControllerConfig", "SharedController"]
 
@@ -80,7 +84,7 @@ class SharedController:
 
     default_base_pose = DEFAULT_BASE_POSE
 
-    def __init__(self, bundle, *, robot: SuperLimbParams | None = None, strategy: str = "gate",
+    def __init__(self, bundle: ModelBundle, *, robot: SuperLimbParams | None = None, strategy: str = "gate",
                  beta: float = 0.5, use_mpc: bool = True, shoulder: ShoulderMap | None = None,
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
@@ -112,8 +116,9 @@ class SharedController:
         self.reset()
 
     @classmethod
-    def from_bundle(cls, folder_or_bundle, robot: SuperLimbParams | None = None, strategy: str = "gate",
-                    beta: float = 0.5, use_mpc: bool = True, shoulder: ShoulderMap | None = None,
+    def from_bundle(cls, folder_or_bundle: str | Path | ModelBundle, robot: SuperLimbParams | None = None,
+                    strategy: str = "gate", beta: float = 0.5, use_mpc: bool = True,
+                    shoulder: ShoulderMap | None = None,
                     **options) -> SharedController:
         """Controller from a bundle folder (``mpcshare.bundle.load_bundle``) or a loaded bundle.
 

@@ -8,11 +8,15 @@ the loop.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import decimation_factor
+
+if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
+    from mpcshare.bundle import ModelBundle
 
 __all__ = ["BundleLayout", "check_bundle", "make_mpc"]
 
@@ -52,7 +56,8 @@ def _indices(names: tuple[str, ...], wanted: tuple[str, ...], what: str, option:
     return np.array([names.index(w) for w in wanted])
 
 
-def check_bundle(bundle, tip_channels=None, fork_channels=None) -> BundleLayout:
+def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
+                 fork_channels: Sequence[str] | None = None) -> BundleLayout:
     """Check that ``bundle`` fits the robot and is complete; return its :class:`BundleLayout`."""
     absent = [f for f in _FIELDS if not hasattr(bundle, f)]
     if absent:

@@ -5,7 +5,7 @@ every K of a sweep and by the held-out evaluation."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -14,6 +14,9 @@ from learning.preprocessing.preprocess import Preprocessor, Standardizer, Window
 from learning.preprocessing.resample import causal_downsample, decimation_factor
 from mpcshare.training.config import TrainConfig
 from mpcshare.training.stages import Stages
+
+if TYPE_CHECKING:  # annotations only
+    from learning.modes import TaskModes
 
 __all__ = ["TrainingError", "SplitData", "TrainingData", "check_training_data", "prepare_training_data",
            "reactive_labels"]
@@ -84,7 +87,7 @@ class TrainingData:
     act_names: list[str]
     vol_names: list[str]
     preprocessor: Preprocessor
-    modes: Any  # learning.modes.TaskModes
+    modes: TaskModes
     train: SplitData
     heldout: SplitData
     fit_trials: list[int]
@@ -129,7 +132,7 @@ def check_training_data(demos: Demonstrations, config: TrainConfig) -> int:
     return L
 
 
-def _side(std: Demonstrations, modes: Any, window_s: float, progress: bool) -> SplitData:
+def _side(std: Demonstrations, modes: TaskModes, window_s: float, progress: bool) -> SplitData:
     from learning.lipschitz import pointwise_quotients
 
     obs, lengths = std.obs_sequences()

@@ -35,11 +35,15 @@ Reported (all on held-out windowed steps, i.e. steps with a full causal window):
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from mpcshare.training.data import SplitData, TrainingData, reactive_labels
+
+if TYPE_CHECKING:  # annotations only
+    from learning.gates import ModeGates
+    from learning.predictor import ReactivePredictor
 
 __all__ = ["command_magnitude", "voluntary_effort", "rmse", "evaluate", "fit_ridge", "predict_side",
            "RMSE_UNITS"]
@@ -115,7 +119,7 @@ def _errors(data: TrainingData, pred: np.ndarray, R: np.ndarray,
     return out
 
 
-def evaluate(data: TrainingData, gates: Any, predictor: Any, K: float,
+def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor, K: float,
              baselines: Mapping[str, Any] | None = None,
              baseline_predictions: Mapping[str, np.ndarray] | None = None) -> dict[str, Any]:
     """Held-out metrics of ``gates`` + ``predictor`` at threshold ``K`` (module docstring).

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -49,11 +49,16 @@ from mpcshare.training.data import (
 from mpcshare.training.evaluation import evaluate, fit_ridge
 from mpcshare.training.stages import Stages
 
+if TYPE_CHECKING:  # annotations only (imported where they are used: torch loads on first use)
+    from learning.gates import ModeGates
+    from learning.predictor import ReactivePredictor
+    from mpcshare.bundle import ModelBundle
+
 __all__ = ["TrainingError", "SplitData", "TrainingData", "prepare_training_data",
            "reactive_labels", "fit_gates", "fit_predictor", "train_bundle", "Stages"]
 
 
-def fit_gates(data: TrainingData, labels: np.ndarray) -> Any:
+def fit_gates(data: TrainingData, labels: np.ndarray) -> ModeGates:
     """``ModeGates`` fitted on the training windows, their modes and ``labels`` (Z)."""
     from learning.gates.gate import ModeGates
 
@@ -62,7 +67,7 @@ def fit_gates(data: TrainingData, labels: np.ndarray) -> Any:
     return gates.fit(data.train.windows.X, data.train.window_modes, labels, c.n_modes)
 
 
-def fit_predictor(data: TrainingData, window_mask: np.ndarray, progress: bool = False) -> Any:
+def fit_predictor(data: TrainingData, window_mask: np.ndarray, progress: bool = False) -> ReactivePredictor:
     """``ReactivePredictor`` trained on the fit trials with the loss masked to
     ``window_mask`` (n_windows,) of the training side; early stopping on the val trials."""
     from learning.predictor import ReactivePredictor
@@ -82,7 +87,7 @@ def fit_predictor(data: TrainingData, window_mask: np.ndarray, progress: bool = 
                      val_masks=[masks[i] for i in val_pos], progress=progress)
 
 
-def train_bundle(demos: Demonstrations, config: TrainConfig | None = None, progress: bool = True):
+def train_bundle(demos: Demonstrations, config: TrainConfig | None = None, progress: bool = True) -> ModelBundle:
     """Train every model of the shared controller and evaluate it on held-out trials.
 
     Returns a :class:`mpcshare.bundle.ModelBundle` (``metrics`` holds the held-out
