@@ -1,20 +1,18 @@
-"""Learning from demonstrations: data, preprocessing, Lipschitz analysis, task modes.
+"""Learning from demonstrations: data, preprocessing, Lipschitz analysis, task modes, gates, predictor.
 
 - :mod:`learning.data` — trials, NPZ / CSV-folder formats, validation, train/test splits.
-- :mod:`learning.preprocessing.preprocess` — downsampling, standardisation, causal windows.
-- :mod:`learning.preprocessing.resample` — causal anti-aliased downsampling, offline and streaming.
+- :mod:`learning.preprocessing` — downsampling, standardisation, causal windows; causal
+  anti-aliased downsampling offline and streaming (:mod:`learning.preprocessing.resample`).
 - :mod:`learning.lipschitz` — exact, fast point-wise Lipschitz quotients.
-- :mod:`learning.analysis.predictability` — thresholds, voluntary shares, segmentation tests, model order.
 - :mod:`learning.modes` — HMM task modes offline (``TaskModes``) and online (``ModeFilter``).
-- :mod:`learning.analysis` — the paper's analysis end to end (``analyze``); its search
-  over windows and numbers of modes in :mod:`learning.analysis.search`.
-- :mod:`learning.gates.gate` — per-mode calibrated gates ``ModeGates``; their scores
-  (accuracy, F1, Brier) in :mod:`learning.gates.metrics` (``gate_metrics``).
-- :mod:`learning.predictor` — the LSTM reactive predictor ``ReactivePredictor`` with its
-  NumPy ``PredictorStream`` (:mod:`learning.predictor.stream`);
-  :mod:`learning.predictor.baseline` (ridge on the window),
-  :mod:`learning.predictor.metrics` (RMSE per physical channel group),
-  :mod:`learning.predictor.sequences` (per-trial sequence sets: checks, chunks, padding).
+- :mod:`learning.analysis` — the paper's analysis end to end (``analyze``): thresholds and
+  voluntary shares (``predictability``), the calibrated segmentation test (``reference``), the
+  search over windows and numbers of modes (``search``), the report's records (``report``).
+- :mod:`learning.gates` — per-mode calibrated gates ``ModeGates`` and their scores.
+- :mod:`learning.predictor` — the LSTM reactive predictor ``ReactivePredictor``, its NumPy
+  ``PredictorStream``, the ridge baseline, RMSE per channel group, sequence sets.
+- :mod:`learning.atomic`, :mod:`learning.torch_threads` — atomic writes; torch's thread count
+  scoped to a call.
 
 Imports only numpy, scipy, scikit-learn, threadpoolctl, hmmlearn, numba, torch and tqdm.
 """

@@ -8,6 +8,9 @@
   and tasks (``Objective(H, c)`` costs); :mod:`robot.solvers` — the QP back-ends.
 - :mod:`robot.smoothing` — ruckig jerk-limited smoothing of the reference stream.
 - :mod:`robot.shoulder` — shoulder angles → knife-tip velocity (the voluntary channel).
+- :mod:`robot.kinematics` — the tip's position: closed form (reach, start pose), a cheap
+  Pinocchio FK for the controller, the reach shell.
+- :mod:`robot.mpc` — the knife-tip MPC (CasADi), imported on demand.
 """
 
 from .constraints import Bounds, Constraint, Limit

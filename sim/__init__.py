@@ -2,10 +2,10 @@
 
 - :mod:`sim.demonstrator` — synthetic bimanual-eating demonstrations.
 - :mod:`sim.scene` — the MuJoCo scene (swaying torso with the SuperLimb, table, plate, food, fork).
-- :mod:`robot.kinematics` — closed-form knife-tip kinematics (reachability, start pose).
 - :mod:`sim.servo` — the joint servo at the physics rate, limits held in MuJoCo.
 - :mod:`sim.wearer` — the simulated wearer (shoulder commands toward the intent).
-- :mod:`sim.closed_loop` — ``run_episode`` and the run file; :mod:`sim.metrics` — episode metrics.
+- :mod:`sim.closed_loop` — ``run_episode``; :mod:`sim.episode` — its record and run file;
+  :mod:`sim.metrics` — episode metrics.
 - :mod:`sim.render` — offscreen video.
 
 ``sim`` imports ``learning`` and ``robot``, never ``mpcshare``: the command line
