@@ -1,0 +1,92 @@
+"""Task figures on signals written here (not the generator's): lag, sawing, strokes, RMS per mode."""
+
+import numpy as np
+import pytest
+
+from sim.task_metrics import rms_by_mode, sawing_fidelity, time_lag
+
+DT = 0.01
+
+
+def _smooth(n: int, seed: int, f_max: float = 1.5) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * DT
+    f, ph, a = rng.uniform(0.05, f_max, (3, 4)), rng.uniform(0, 2 * np.pi, (3, 4)), rng.uniform(0.005, 0.03, (3, 4))
+    return np.stack([np.sum(a[i] * np.sin(2 * np.pi * f[i] * t[:, None] + ph[i]), axis=1) for i in range(3)], 1)
+
+
+@pytest.mark.parametrize("shift_s", [0.3, 0.0, -0.2, 0.47])
+def test_lag_recovers_a_known_shift(shift_s):
+    base = _smooth(3000, seed=1)
+    s = round(shift_s / DT)
+    intent = base[100:2100]
+    tip = base[100 - s:2100 - s]  # tip(t) = intent(t − shift): late by shift_s
+    lag, rms = time_lag(tip, intent, DT)
+    assert lag == pytest.approx(shift_s, abs=1e-12) and rms == pytest.approx(0.0, abs=1e-12)
+
+
+def test_lag_of_a_noisy_copy_and_bad_input():
+    intent = _smooth(2000, seed=2)
+    tip = np.roll(intent, 25, axis=0) + np.random.default_rng(0).normal(0, 1e-4, intent.shape)
+    lag, rms = time_lag(tip, intent, DT)
+    assert lag == pytest.approx(0.25) and rms < 1e-3
+    with pytest.raises(ValueError, match="one shape"):
+        time_lag(tip[:10], intent, DT)
+    with pytest.raises(ValueError, match="dt must be > 0"):
+        time_lag(tip, intent, 0.0)
+
+
+def _cutting(freq_hz=2.0, amp=0.01, n=2400):
+    t = np.arange(n) * DT
+    drift = 0.5 * _smooth(n, seed=3, f_max=0.3) * np.array([1, 1, 0.2])  # below the stroke band
+    mask = (t >= 4) & (t < 16)
+    stroke = np.zeros((n, 3))
+    stroke[mask, 0] = amp * np.sin(2 * np.pi * freq_hz * t[mask])
+    return t, drift, stroke, mask
+
+
+@pytest.mark.parametrize("freq_hz", [2.0, 1.3])
+def test_a_knife_that_saws_as_intended_scores_one(freq_hz):
+    _, drift, stroke, mask = _cutting(freq_hz)
+    f = sawing_fidelity(drift + stroke, drift + stroke, mask, DT)
+    assert f.amplitude_ratio == pytest.approx(1.0) and f.correlation == pytest.approx(1.0)
+    assert abs(f.strokes_intended - freq_hz * 12.0) <= 1.0 and f.stroke_share == 1.0 and f.cutting_s == pytest.approx(12.0)
+
+
+def test_a_knife_that_never_saws_scores_near_zero():
+    _, drift, stroke, mask = _cutting()
+    f = sawing_fidelity(drift, drift + stroke, mask, DT)
+    assert f.amplitude_ratio < 0.1 and f.stroke_share == 0.0
+
+
+def test_half_strokes_and_late_strokes():
+    t, drift, stroke, mask = _cutting()
+    half = sawing_fidelity(drift + 0.5 * stroke, drift + stroke, mask, DT)
+    assert half.amplitude_ratio == pytest.approx(0.5, abs=0.02) and half.correlation > 0.99
+    assert sawing_fidelity(drift + 0.6 * stroke, drift + stroke, mask, DT).stroke_share == 1.0
+    assert sawing_fidelity(drift + 0.4 * stroke, drift + stroke, mask, DT).stroke_share == 0.0
+    late = np.zeros_like(stroke)
+    late[mask, 0] = 0.01 * np.sin(2 * np.pi * 2.0 * (t[mask] - 0.125))  # a quarter cycle late
+    q = sawing_fidelity(drift + late, drift + stroke, mask, DT)
+    assert q.amplitude_ratio == pytest.approx(1.0, abs=0.05) and abs(q.correlation) < 0.1
+
+
+def test_no_cutting_and_bad_input():
+    _, drift, stroke, mask = _cutting()
+    none = sawing_fidelity(drift, drift, np.zeros(len(drift), bool), DT)
+    assert none.amplitude_ratio is None and none.stroke_share is None and none.cutting_s == 0.0
+    with pytest.raises(ValueError, match="cutting_mask must have shape"):
+        sawing_fidelity(drift, drift, mask[:-1], DT)
+    with pytest.raises(ValueError, match="stroke band"):
+        sawing_fidelity(drift, drift, mask, DT, band=(1.0, 80.0))
+
+
+def test_rms_by_mode_matches_a_direct_computation():
+    rng = np.random.default_rng(4)
+    tip, intent = rng.normal(size=(500, 3)), rng.normal(size=(500, 3))
+    modes = rng.integers(-1, 3, 500)
+    got = rms_by_mode(tip, intent, modes, names=("cutting", "repositioning", "collecting"))
+    for m, name in enumerate(("cutting", "repositioning", "collecting")):
+        e = tip[modes == m] - intent[modes == m]
+        assert got[name] == pytest.approx(np.sqrt(np.mean(np.sum(e**2, axis=1))))
+    assert set(got) == {"cutting", "repositioning", "collecting"}
