@@ -22,6 +22,7 @@ import numpy as np
 from learning.data import Demonstrations
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
+from sim.task_metrics import TASK_KEYS, episode_task_metrics
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -111,11 +112,37 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
     }
 
 
+def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np.ndarray]) -> dict[str, Any]:
+    """Pool the task figures: lag and RMS at it weighted by steps; the sawing amplitude and correlation
+    weighted by cutting time; strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n)."""
+    n = np.array([len(s) for s in step_times], dtype=float)
+
+    def weighted(key: str, w: np.ndarray) -> float | None:
+        vals = np.array([np.nan if m.get(key) is None else m[key] for m in metrics], dtype=float)
+        ok = np.isfinite(vals) & (w > 0)
+        return float(np.sum(w[ok] * vals[ok]) / np.sum(w[ok])) if ok.any() else None
+
+    cut = np.array([float(m.get("cutting_s") or 0.0) for m in metrics])
+    intended = sum(int(m.get("strokes_intended") or 0) for m in metrics)
+    executed = sum(int(m.get("strokes_executed") or 0) for m in metrics)
+    by_mode: dict[str, float | None] = {}
+    for name in sorted({k for m in metrics for k in (m.get("rms_by_mode_m") or {})}):
+        vals = [(w, (m.get("rms_by_mode_m") or {}).get(name)) for w, m in zip(n, metrics)]
+        vals = [(w, v) for w, v in vals if v is not None]
+        by_mode[name] = float(math.sqrt(sum(w * v * v for w, v in vals) / sum(w for w, _ in vals))) if vals else None
+    return {"lag_s": weighted("lag_s", n), "rms_at_lag_m": weighted("rms_at_lag_m", n),
+            "saw_amplitude_ratio": weighted("saw_amplitude_ratio", cut),
+            "saw_correlation": weighted("saw_correlation", cut), "strokes_intended": intended,
+            "strokes_executed": executed, "stroke_share": executed / intended if intended else None,
+            "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode}
+
+
 def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Sequence[int], *,
                        runs: Sequence[StrategyRun] = DEFAULT_RUNS, duration_s: float | None = None,
                        out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
                        make_controller: Callable[..., Any] | None = None,
-                       log: Callable[[str], None] | None = print) -> Comparison:
+                       log: Callable[[str], None] | None = print,
+                       mode_names: Sequence[str] | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -123,7 +150,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     first seconds of each trial (None: whole trials). With ``out``, each episode's run
     file is written to ``out/runs/<run>_trial<id>.npz``. ``make_controller(bundle,
     strategy=..., use_mpc=..., beta=...)`` builds a controller (default:
-    :meth:`SharedController.from_bundle`).
+    :meth:`SharedController.from_bundle`). ``mode_names``: the names of the data's mode labels;
+    with them (and labels in the data) each run also gets the task figures of
+    :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode).
     """
     make_controller = make_controller or _from_bundle
     known = set(demos.trial_ids)
@@ -149,10 +178,14 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed,
                                   obs_names=list(demos.obs_names), act_names=list(demos.act_names))
             m = episode_metrics(episode)
+            trial = by_id[int(tid)]
+            true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
+            m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
+                                          true_mode, tuple(mode_names) if mode_names else None))
             metrics.append(m)
             steps.append(np.asarray(episode.step_time, dtype=float))
             seconds.append(float(episode.t[-1] - episode.t[0]) + float(np.median(np.diff(episode.t))))
-            per_trial[run.name][str(int(tid))] = {k: m[k] for k in METRIC_KEYS}
+            per_trial[run.name][str(int(tid))] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS}
             if runs_dir is not None:
                 path = runs_dir / f"{run.name}_trial{int(tid)}.npz"
                 episode.save(path)
@@ -161,7 +194,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                 log(f"  {run.name:12s} trial {int(tid)}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
                     f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
-        pooled[run.name] = pool_metrics(metrics, steps, seconds)
+        pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files)
 

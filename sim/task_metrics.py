@@ -28,7 +28,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-__all__ = ["STROKE_BAND_HZ", "SawingFidelity", "rms_by_mode", "sawing_fidelity", "time_lag"]
+__all__ = ["STROKE_BAND_HZ", "TASK_KEYS", "SawingFidelity", "episode_task_metrics", "rms_by_mode", "sawing_fidelity",
+           "time_lag"]
 
 STROKE_BAND_HZ = (0.8, 3.0)  # [Hz] the band of the sawing strokes (2 Hz strokes in the demonstrations)
 
@@ -141,4 +142,32 @@ def rms_by_mode(tip: np.ndarray, intent: np.ndarray, modes: np.ndarray,
         sel = (modes == m) & np.isfinite(e2)
         key = names[m] if names is not None and m < len(names) else str(m)
         out[key] = float(np.sqrt(e2[sel].mean())) if sel.any() else None
+    return out
+
+
+#: keys of :func:`episode_task_metrics` (``comparison.json`` per strategy)
+TASK_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "strokes_intended",
+             "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m")
+
+
+def episode_task_metrics(tip: np.ndarray, intent: np.ndarray, dt: float, true_mode: np.ndarray | None,
+                         mode_names: tuple[str, ...] | None = None, cutting: str = "cutting") -> dict:
+    """The task figures of one episode (keys :data:`TASK_KEYS`, JSON-able; None where undefined).
+
+    ``true_mode`` (N,): the demonstration's mode labels at the control steps (None: unknown, no
+    sawing or per-mode figures); the cutting mode is the label named ``cutting`` in ``mode_names``.
+    """
+    lag, rms_lag = time_lag(tip, intent, dt)
+    out: dict = {"lag_s": None if not np.isfinite(lag) else lag,
+                 "rms_at_lag_m": None if not np.isfinite(rms_lag) else rms_lag,
+                 "saw_amplitude_ratio": None, "saw_correlation": None, "strokes_intended": 0,
+                 "strokes_executed": 0, "stroke_share": None, "cutting_s": 0.0, "rms_by_mode_m": {}}
+    if true_mode is None or not np.any(np.asarray(true_mode) >= 0):
+        return out
+    out["rms_by_mode_m"] = rms_by_mode(tip, intent, true_mode, mode_names)
+    if mode_names is not None and cutting in mode_names:
+        f = sawing_fidelity(tip, intent, np.asarray(true_mode) == mode_names.index(cutting), dt)
+        out.update(saw_amplitude_ratio=f.amplitude_ratio, saw_correlation=f.correlation,
+                   strokes_intended=f.strokes_intended, strokes_executed=f.strokes_executed,
+                   stroke_share=f.stroke_share, cutting_s=f.cutting_s)
     return out

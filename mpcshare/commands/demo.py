@@ -131,7 +131,8 @@ def _demo(args: argparse.Namespace) -> int:
     ids = bundle.heldout_trials[:args.sim_trials]
     _stage(6, f"closed loop in MuJoCo: 5 strategies x {len(ids)} held-out trial(s) x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")
-    comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed)
+    comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
+                              mode_names=MODE_NAMES)
     if not args.no_video:
         video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
                                      seed=args.seed)

@@ -25,6 +25,7 @@ from mpcshare.commands.base import (
     positive_int,
     prepare_output_folder,
 )
+from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -104,7 +105,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'})")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
-                              seed=args.sim_seed, beta=args.beta)
+                              seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES)
     if args.video:
         shown = next((r for r in runs if r.name == "gate"), runs[0])
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",

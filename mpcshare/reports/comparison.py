@@ -31,6 +31,14 @@ _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("step_p50_ms", "step p50 [ms]", 1.0, "{:.2f}"),
             ("step_p99_ms", "step p99 [ms]", 1.0, "{:.2f}"),
             ("realtime_factor", "× real time", 1.0, "{:.1f}"))
+#: the task's figures (sim.task_metrics): on time, and sawing while cutting
+_TASK_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
+                 ("lag_s", "lag [ms]", 1e3, "{:.0f}"),
+                 ("rms_at_lag_m", "RMS at that lag [mm]", 1e3, "{:.1f}"),
+                 ("saw_amplitude_ratio", "sawing amplitude", 1.0, "{:.2f}"),
+                 ("saw_correlation", "sawing correlation", 1.0, "{:.2f}"),
+                 ("stroke_share", "strokes executed", 100.0, "{:.0f} %"))
+SAWING_TARGET = (0.6, 0.7)  # amplitude ratio and correlation of the stroke that count as sawing (docs/design.md)
 
 
 def _ratio(a: float, b: float) -> float:
@@ -60,24 +68,50 @@ def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
         out.append(f"MPC: with the MPC the gate tracks at {g['tracking_rmse_m'] * 1e3:.1f} mm RMS, without it at "
                    f"{n['tracking_rmse_m'] * 1e3:.1f} mm: the MPC {effect}; its cost is a step p99 of "
                    f"{g['step_p99_ms']:.2f} ms against {n['step_p99_ms']:.2f} ms.")
+    if "gate" in s and s["gate"].get("saw_amplitude_ratio") is not None:
+        out.append(task_sentence("gate", s["gate"]))
     bad = [k for k, m in s.items() if m["limit_violations"]]
     out.append("Limits: no violation at the physics rate in any run." if not bad else
                f"Limits: VIOLATED at the physics rate in {', '.join(bad)}.")
     return out
 
 
+def task_sentence(name: str, m: dict[str, Any]) -> str:
+    """Did the knife do the task under ``name``: its lag, and whether it sawed while cutting."""
+    amp, corr = m.get("saw_amplitude_ratio"), m.get("saw_correlation")
+    lag = m.get("lag_s")
+    lag_text = "" if lag is None else f"the knife follows the wearer's intent {lag * 1e3:.0f} ms late; "
+    if amp is None or corr is None:
+        return f"Task under `{name}`: {lag_text}no cutting in these trials."
+    cut = amp >= SAWING_TARGET[0] and corr >= SAWING_TARGET[1]
+    share = m.get("stroke_share")
+    strokes = "" if share is None else f", {share:.0%} of the intended strokes executed"
+    return (f"Task under `{name}`: {lag_text}while cutting, the stroke's amplitude is {amp:.2f} of the intended "
+            f"and its correlation with it {corr:.2f}{strokes}: the knife "
+            f"{'CUT' if cut else 'did NOT saw'} (sawing needs ≥ {SAWING_TARGET[0]:g} and ≥ {SAWING_TARGET[1]:g}).")
+
+
+def _table(strategies: dict[str, dict[str, Any]], columns: tuple) -> list[str]:
+    head = "| run | " + " | ".join(c[1] for c in columns) + " |"
+    rule = "|---|" + "---|" * len(columns)
+    rows = []
+    for name, m in strategies.items():
+        cells = [fmt.format(m[key] * scale) if m.get(key) is not None and np.isfinite(m[key]) else "–"
+                 for key, _, scale, fmt in columns]
+        rows.append(f"| {name} | " + " | ".join(cells) + " |")
+    return [head, rule, *rows]
+
+
 def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.png",
                         trial_plot: str | None = None) -> str:
     """The Markdown section: table, findings, plot."""
-    head = "| run | " + " | ".join(c[1] for c in _COLUMNS) + " |"
-    rule = "|---|" + "---|" * len(_COLUMNS)
-    rows = []
-    for name, m in comp.strategies.items():
-        cells = [fmt.format(m[key] * scale) if np.isfinite(m[key]) else "–" for key, _, scale, fmt in _COLUMNS]
-        rows.append(f"| {name} | " + " | ".join(cells) + " |")
     span = "whole trials" if comp.duration_s is None else f"the first {comp.duration_s:g} s of each"
-    lines = [f"Held-out trials {comp.trials}, {span}; pooled over trials.", "", head, rule, *rows, "",
-             *[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
+    lines = [f"Held-out trials {comp.trials}, {span}; pooled over trials.", "", *_table(comp.strategies, _COLUMNS), ""]
+    if any(m.get("lag_s") is not None for m in comp.strategies.values()):
+        lines += ["The task: the knife's lag behind the wearer's intent (the time shift that minimises the RMS) "
+                  "and, while cutting, its motion in the stroke band (0.8–3 Hz) against the intended stroke:", "",
+                  *_table(comp.strategies, _TASK_COLUMNS), ""]
+    lines += [*[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
     if plot_name:
         lines += [f"![strategies]({plot_name})", ""]
     if trial_plot:
