@@ -70,6 +70,9 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
     assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_no_mpc"}
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
+    gate = comparison["strategies"]["gate"]  # the task figures: lag, sawing while cutting, RMS per mode
+    assert -1.0 <= gate["lag_s"] <= 1.0 and gate["rms_at_lag_m"] <= gate["tracking_rmse_m"] + 1e-12
+    assert set(gate["rms_by_mode_m"]) <= {"cutting", "repositioning", "collecting", "removing"}
     report = json.loads((out / "report.json").read_text())
     assert report["analysis"]["n_samples"] == analysis["n_samples"]
     assert report["comparison"]["trials"] == comparison["trials"]
