@@ -27,6 +27,7 @@ from .commands.base import (
 )
 from .commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from .commands.demo import DEMO_COMMAND
+from .commands.ros_import import IMPORT_COMMAND
 from .commands.sim import SIM_COMMAND
 from .commands.train import TRAIN_COMMAND
 
@@ -37,6 +38,7 @@ __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "posit
 COMMANDS: tuple[Command, ...] = (
     GENERATE_COMMAND,
     INSPECT_COMMAND,
+    IMPORT_COMMAND,
     ANALYZE_COMMAND,
     TRAIN_COMMAND,
     SIM_COMMAND,
