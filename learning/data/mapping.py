@@ -159,6 +159,8 @@ def parse_field_path(text: str) -> FieldPath:
 
 
 def _subject(value: Any, source: str | None) -> int | re.Pattern[str] | dict[str, int] | None:
+    if value is None:
+        return None
     if isinstance(value, bool):
         raise DataFormatError("must be an integer, a regular expression or a table", path=source, field="subject")
     if isinstance(value, int):

@@ -63,12 +63,13 @@ shoulder_protraction = "/shoulder position[1]"
 
 @dataclass(frozen=True)
 class TopicPlan:
-    """A topic's messages: type, rate [Hz], start [s], stamp jitter [s] (uniform ±)."""
+    """A topic's messages: type, rate [Hz], start [s], stamp jitter [s] (uniform ±), end [s] (None: the bag's)."""
 
     msgtype: str
     rate_hz: float
     start_s: float = 0.0
     jitter_s: float = 0.0
+    stop_s: float | None = None
 
 
 TOPICS: dict[str, TopicPlan] = {
@@ -92,7 +93,8 @@ def rpy_quaternion(roll, pitch, yaw):
 def stamps(plan: TopicPlan, duration_s: float, rng: np.random.Generator, gap: tuple[float, float] | None = None
            ) -> np.ndarray:
     """Header stamps [s]: a regular clock from ``start_s`` with jitter (the first sample exact), minus a gap."""
-    n = int(np.floor((duration_s - plan.start_s) * plan.rate_hz))
+    stop = duration_s if plan.stop_s is None else min(plan.stop_s, duration_s)
+    n = int(np.floor((stop - plan.start_s) * plan.rate_hz))
     t = plan.start_s + np.arange(n) / plan.rate_hz
     t[1:] += rng.uniform(-plan.jitter_s, plan.jitter_s, n - 1)
     if gap is not None:
