@@ -61,14 +61,14 @@ def _span_error(series: list[TopicSeries], path: str | None) -> DataFormatError:
 
 
 def regrid(series: list[TopicSeries], rate_hz: float, *, max_gap: float = 0.1, on_gap: str = "error",
-           path: str | None = None, min_samples: int = 2) -> list[Segment]:
+           path: str | None = None, min_samples: int = 2, time_origin: str = "") -> list[Segment]:
     """Interpolate every topic onto one grid of ``rate_hz`` over the common span (module docstring).
 
     The grid is ``t_0 + k / rate_hz`` with ``t_0`` the latest first sample over the
     topics, up to the earliest last sample. Segments with fewer than ``min_samples``
     grid points (between two gaps) are dropped. ``path`` names the recording in
-    errors. Raises :class:`DataFormatError` for an empty overlap, a gap (with
-    ``on_gap="error"``), or when no segment is left.
+    errors, ``time_origin`` says in them what t = 0 is. Raises :class:`DataFormatError`
+    for an empty overlap, a gap (with ``on_gap="error"``), or when no segment is left.
     """
     if on_gap not in ON_GAP:
         raise ValueError(f"on_gap must be one of {ON_GAP}, got {on_gap!r}")
@@ -96,9 +96,10 @@ def regrid(series: list[TopicSeries], rate_hz: float, *, max_gap: float = 0.1, o
     if gaps:
         if on_gap == "error":
             _, topic, a, b = min(gaps)
+            where = f" ({time_origin})" if time_origin else ""
             raise DataFormatError(
-                f"gap in topic {topic}: no message for {b - a:.3f} s after t = {a:.3f} s (longer than "
-                f"max-gap {max_gap:g} s); use --on-gap split to cut the trial there", path=path)
+                f"gap in topic {topic}: no message for {b - a:.3f} s after t = {a:.3f} s{where}, longer than "
+                f"max-gap {max_gap:g} s; use --on-gap split to cut the trial there", path=path)
         for _, _, a, b in gaps:
             keep[(grid > a) & (grid < b)] = False
 

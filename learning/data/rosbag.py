@@ -194,8 +194,9 @@ class _TopicReader:
                 try:
                     g(msg)
                 except IndexError:
-                    raise DataFormatError(f"topic {self.topic}: the message of time {self.times[-1]} ns has "
-                                          f"no element for '{c.path.text}'", path=self.bag, field=c.label) from None
+                    ns = self.times[-1]
+                    raise DataFormatError(f"topic {self.topic}: the message stamped {ns // 10**9}.{ns % 10**9:09d} s "
+                                          f"has no element for '{c.path.text}'", path=self.bag, field=c.label) from None
             raise
 
     def series(self, t0_ns: int) -> TopicSeries:
@@ -274,13 +275,16 @@ def read_bag(path: PathLike, mapping: BagMapping, *, progress: bool = True) -> t
     except DataFormatError:
         raise
     except Exception as exc:  # noqa: BLE001  (rosbags, sqlite, mcap, zstd: any failure means unreadable)
-        raise DataFormatError(f"cannot read the bag ({type(exc).__name__}: {exc})", path=bag) from None
+        reason = " ".join(str(exc).split())  # one line, whatever the library's message looks like
+        raise DataFormatError(f"cannot read the bag ({type(exc).__name__}: {reason})", path=bag) from None
     for topic, tr in per_topic.items():
         if not tr.times:
             raise DataFormatError(f"topic {topic} has no messages", path=bag, field=tr.channels[0].label)
     t0 = min(min(tr.times) for tr in per_topic.values())
     try:
         return [per_topic[t].series(t0) for t in mapping.topics], count
+    except DataFormatError:
+        raise
     except (TypeError, ValueError) as exc:  # a value that is not a number, whatever its declared type
         raise DataFormatError(f"a mapped field is not numeric ({exc})", path=bag) from None
 
@@ -302,10 +306,11 @@ def import_bags(bags: Sequence[PathLike], mapping: BagMapping, *, rate_hz: float
              for kind in ("obs", "act", "voluntary")}
     for path in bags:
         bag = str(path)
-        subject = mapping.subject_for(bag_name(_bag_path(path)))
         series, n = read_bag(path, mapping, progress=progress)
+        subject = mapping.subject_for(bag_name(_bag_path(path)))
         messages += n
-        segments = regrid(series, rate_hz, max_gap=max_gap, on_gap=on_gap, path=bag)
+        segments = regrid(series, rate_hz, max_gap=max_gap, on_gap=on_gap, path=bag,
+                          time_origin="from the bag's first mapped message")
         per_bag[bag] = len(segments)
         first = len(trials)
         for seg in segments:
