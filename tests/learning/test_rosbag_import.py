@@ -196,3 +196,14 @@ def test_regrid_empty_overlap():
         regrid([TopicSeries("/a", np.array([0.0, 1.0]), np.zeros((2, 1)), np.array([False])),
                 TopicSeries("/b", np.array([2.0, 3.0]), np.zeros((2, 1)), np.array([False]))], 100.0,
                path="bag")
+
+
+def test_the_example_mapping_names_the_channels_the_simulator_finds():
+    from pathlib import Path
+
+    from sim.demonstrator import ACT_NAMES, OBS_NAMES, VOL_NAMES
+
+    m = load_mapping(Path(__file__).resolve().parents[2] / "examples" / "superlimb_mapping.toml")
+    assert m.names("obs") == list(OBS_NAMES) and m.names("act") == list(ACT_NAMES)
+    assert m.names("voluntary") == list(VOL_NAMES)
+    assert m.subject_for("s2_lunch") == 2 and m.time == "header"
