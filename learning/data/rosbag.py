@@ -170,7 +170,7 @@ class _TopicReader:
 
     def __init__(self, topic: str, channels: list[ChannelSource], msgtype: str, fielddefs: dict[str, Any],
                  use_header: bool, bag: str) -> None:
-        self.topic, self.channels, self.bag = topic, channels, bag
+        self.topic, self.channels, self.bag, self.msgtype = topic, channels, bag, msgtype
         for c in channels:
             try:
                 check_field(fielddefs, msgtype, c.path)
@@ -253,6 +253,9 @@ def read_bag(path: PathLike, mapping: BagMapping, *, progress: bool = True) -> t
                 if conn.topic not in by_topic:
                     continue
                 tr = per_topic.get(conn.topic)
+                if tr is not None and tr.msgtype != conn.msgtype:
+                    raise DataFormatError(f"topic {conn.topic} has messages of two types ({tr.msgtype}, "
+                                          f"{conn.msgtype})", path=bag, field=tr.channels[0].label)
                 if tr is None:
                     tr = _TopicReader(conn.topic, by_topic[conn.topic], conn.msgtype, fielddefs,
                                       mapping.time == "header", bag)
