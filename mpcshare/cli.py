@@ -27,6 +27,7 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from mpcshare.commands.demo import DEMO_COMMAND
+from mpcshare.commands.ros_import import IMPORT_COMMAND
 from mpcshare.commands.sim import SIM_COMMAND
 from mpcshare.commands.train import TRAIN_COMMAND
 
@@ -37,6 +38,7 @@ __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "posit
 COMMANDS: tuple[Command, ...] = (
     GENERATE_COMMAND,
     INSPECT_COMMAND,
+    IMPORT_COMMAND,
     ANALYZE_COMMAND,
     TRAIN_COMMAND,
     SIM_COMMAND,

@@ -22,6 +22,7 @@ import numpy as np
 from learning.data import Demonstrations
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
+from sim.run_mcap import fork_poses, write_run_mcap
 from sim.task_metrics import TASK_KEYS, episode_task_metrics
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
@@ -142,13 +143,14 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
                        make_controller: Callable[..., Any] | None = None,
                        log: Callable[[str], None] | None = print,
-                       mode_names: Sequence[str] | None = None) -> Comparison:
+                       mode_names: Sequence[str] | None = None, mcap: bool = False) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
     bundle's channels and rate) holding those trials; ``duration_s``: simulate only the
     first seconds of each trial (None: whole trials). With ``out``, each episode's run
-    file is written to ``out/runs/<run>_trial<id>.npz``. ``make_controller(bundle,
+    file is written to ``out/runs/<run>_trial<id>.npz`` (and, with ``mcap``, the same run as
+    ``.mcap`` beside it: :func:`sim.run_mcap.write_run_mcap`). ``make_controller(bundle,
     strategy=..., use_mpc=..., beta=...)`` builds a controller (default:
     :meth:`SharedController.from_bundle`). ``mode_names``: the names of the data's mode labels;
     with them (and labels in the data) each run also gets the task figures of
@@ -189,6 +191,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             if runs_dir is not None:
                 path = runs_dir / f"{run.name}_trial{int(tid)}.npz"
                 episode.save(path)
+                if mcap:
+                    fork = fork_poses(by_id[int(tid)], demos.obs_names)
+                    write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork)
                 files[run.name].append(str(path.relative_to(Path(out))))
             if log is not None:
                 log(f"  {run.name:12s} trial {int(tid)}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "

@@ -5,8 +5,8 @@ held-out trials (of ``--data``, default: the data set the bundle was trained on,
 as recorded by ``mpcshare train``), simulates each strategy (``voluntary``,
 ``reactive``, ``gate``, ``blend``, and the gate without MPC) on each trial in MuJoCo
 beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
-``comparison.png``, the run files (``runs/*.npz``) and, with ``--video``, a video of
-the gate on the first trial.
+``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
+for Foxglove) and, with ``--video``, a video of the gate on the first trial.
 """
 
 from __future__ import annotations
@@ -55,6 +55,7 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
                    help="use the data's CHANNEL as the bundle's channel NAME (e.g. fork_x=obs_3)")
     p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--mcap", action="store_true", help="also write each run as runs/*.mcap (opens in Foxglove)")
     add_sim_arguments(p)
 
 
@@ -105,7 +106,8 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'})")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
-                              seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES)
+                              seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
+                              mcap=getattr(args, "mcap", False))
     if args.video:
         shown = next((r for r in runs if r.name == "gate"), runs[0])
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",

@@ -1,0 +1,240 @@
+"""A closed-loop run as an MCAP file, with JSON schemas a viewer understands (Foxglove).
+
+:func:`write_run_mcap` writes an :class:`~sim.closed_loop.Episode` (a fresh one, or a
+run file read back with :meth:`Episode.load`) with the ``mcap`` package; nothing of
+mpcshare is needed to open the file. Messages are JSON (``message_encoding``
+``json``) with JSON-Schema schemas; log and publish times are ``start_ns`` + the
+episode's time [ns], and every message carries the same time in its
+``timestamp`` ({sec, nsec}). Topics, as topic (schema, rate): content:
+
+- ``/knife/tip`` (``foxglove.PoseInFrame``, control rate): the knife tip in the plate
+  frame (orientation identity: only the position is tracked);
+- ``/knife/reference`` (``foxglove.PoseInFrame``, control): the controller's tip
+  reference (steps without one are left out);
+- ``/wearer/intent`` (``foxglove.PoseInFrame``, control): the wearer's intended tip;
+- ``/fork/pose`` (``foxglove.PoseInFrame``, control): the fork tip, roll/pitch/yaw as a
+  quaternion; only when ``fork`` is given;
+- ``/tf`` (``foxglove.FrameTransform``, control): ``plate`` → ``torso``, the base pose
+  (torso sway);
+- ``/arm/joint_states`` (``mpcshare.JointState``, physics rate): q [rad], v [rad/s],
+  applied τ [N·m], laid out as sensor_msgs/JointState;
+- ``/wearer/shoulder`` (``mpcshare.JointState``, control): the shoulder angles [rad];
+- ``/control/arbitration`` (``mpcshare.Arbitration``, control): α, β, the mode (argmax
+  of the mode probabilities, −1 none), novelty;
+- ``/control/status`` (``mpcshare.ControllerStatus``, control): the status, ``ok`` flag;
+- ``/control/timing`` (``mpcshare.Timing``, control): the controller step's wall time
+  [ms] (filter, models, MPC and QP solves);
+- ``/control/log`` (``foxglove.Log``): one line each time the status changes.
+
+Values that are not finite (α before a first command, a missing novelty) are JSON
+``null``. The run's ``info`` scalars go into an MCAP metadata record ``mpcshare.run``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from learning.atomic import atomic_open
+from learning.data import Trial
+
+from .closed_loop import FORK_CHANNELS, Episode
+
+__all__ = ["JOINT_NAMES", "SCHEMAS", "TOPICS", "fork_poses", "write_run_mcap"]
+
+JOINT_NAMES: tuple[str, ...] = ("joint_1", "joint_2", "joint_3")
+SHOULDER_NAMES: tuple[str, ...] = ("shoulder_elevation", "shoulder_protraction", "shoulder_abduction")
+PLATE_FRAME = "plate"
+
+
+def _obj(title: str, props: dict[str, Any], description: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {"title": title, "type": "object", "properties": props}
+    if description:
+        out["description"] = description
+    return out
+
+
+_NUM = {"type": "number"}
+_NUM_OR_NULL = {"type": ["number", "null"]}
+_TIME = _obj("time", {"sec": {"type": "integer", "minimum": 0},
+                      "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}})
+_VEC3 = _obj("foxglove.Vector3", {k: _NUM for k in "xyz"})
+_QUAT = _obj("foxglove.Quaternion", {k: _NUM for k in "xyzw"})
+_POSE = _obj("foxglove.Pose", {"position": _VEC3, "orientation": _QUAT})
+_NUMS = {"type": "array", "items": _NUM}
+
+#: schema name → JSON schema (Foxglove's for the standard types; ours are plain objects of numbers)
+SCHEMAS: dict[str, dict[str, Any]] = {
+    "foxglove.PoseInFrame": _obj("foxglove.PoseInFrame", {
+        "timestamp": _TIME, "frame_id": {"type": "string"}, "pose": _POSE},
+        "A timestamped pose for an object or reference frame in 3D space"),
+    "foxglove.FrameTransform": _obj("foxglove.FrameTransform", {
+        "timestamp": _TIME, "parent_frame_id": {"type": "string"}, "child_frame_id": {"type": "string"},
+        "translation": _VEC3, "rotation": _QUAT},
+        "A transform between two reference frames in 3D space"),
+    "foxglove.Log": _obj("foxglove.Log", {
+        "timestamp": _TIME, "level": {"type": "integer", "enum": [0, 1, 2, 3, 4, 5]},
+        "message": {"type": "string"}, "name": {"type": "string"}, "file": {"type": "string"},
+        "line": {"type": "integer", "minimum": 0}}, "A log message"),
+    "mpcshare.JointState": _obj("mpcshare.JointState", {
+        "timestamp": _TIME, "name": {"type": "array", "items": {"type": "string"}},
+        "position": _NUMS, "velocity": _NUMS, "effort": _NUMS},
+        "Joint positions [rad], velocities [rad/s] and efforts [N·m], as sensor_msgs/JointState"),
+    "mpcshare.Arbitration": _obj("mpcshare.Arbitration", {
+        "timestamp": _TIME, "alpha": _NUM_OR_NULL, "beta": _NUM_OR_NULL, "mode": {"type": "integer"},
+        "novelty": _NUM_OR_NULL}, "Who leads: u = alpha * u_reactive + beta * u_voluntary; the task mode"),
+    "mpcshare.ControllerStatus": _obj("mpcshare.ControllerStatus", {
+        "timestamp": _TIME, "status": {"type": "string"}, "ok": {"type": "boolean"}},
+        "The shared controller's status after its step"),
+    "mpcshare.Timing": _obj("mpcshare.Timing", {"timestamp": _TIME, "step_time_ms": _NUM},
+                            "Wall time of one controller step [ms]"),
+}
+
+#: topic → schema name
+TOPICS: dict[str, str] = {
+    "/knife/tip": "foxglove.PoseInFrame",
+    "/knife/reference": "foxglove.PoseInFrame",
+    "/wearer/intent": "foxglove.PoseInFrame",
+    "/fork/pose": "foxglove.PoseInFrame",
+    "/tf": "foxglove.FrameTransform",
+    "/arm/joint_states": "mpcshare.JointState",
+    "/wearer/shoulder": "mpcshare.JointState",
+    "/control/arbitration": "mpcshare.Arbitration",
+    "/control/status": "mpcshare.ControllerStatus",
+    "/control/timing": "mpcshare.Timing",
+    "/control/log": "foxglove.Log",
+}
+
+
+def _stamp(ns: int) -> dict[str, int]:
+    sec, nsec = divmod(int(ns), 1_000_000_000)
+    return {"sec": sec, "nsec": nsec}
+
+
+def _num(x: Any) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _pose(ns: int, p: np.ndarray, q: Sequence[float] = (0.0, 0.0, 0.0, 1.0)) -> dict[str, Any]:
+    return {"timestamp": _stamp(ns), "frame_id": PLATE_FRAME,
+            "pose": {"position": {"x": float(p[0]), "y": float(p[1]), "z": float(p[2])},
+                     "orientation": {"x": float(q[0]), "y": float(q[1]), "z": float(q[2]), "w": float(q[3])}}}
+
+
+def _nanoseconds(t: np.ndarray, start_ns: int) -> list[int]:
+    return [start_ns + int(round(float(x) * 1e9)) for x in np.asarray(t, dtype=float)]
+
+
+def _status_ok(status: str) -> bool:
+    return status == "ok"
+
+
+def fork_poses(trial: Trial, obs_names: Sequence[str]) -> np.ndarray | None:
+    """The fork poses the loop gives the scene: ``trial``'s :data:`~sim.closed_loop.FORK_CHANNELS`
+    columns, (T, 6); None when ``obs_names`` lacks one of them."""
+    names = list(obs_names)
+    if any(c not in names for c in FORK_CHANNELS):
+        return None
+    return np.asarray(trial.obs, dtype=float)[:, [names.index(c) for c in FORK_CHANNELS]]
+
+
+def write_run_mcap(episode: Episode, path: str | Path, *, fork: np.ndarray | None = None, start_ns: int = 0,
+                   joint_stride: int = 1) -> Path:
+    """Write ``episode`` as an MCAP file at ``path`` (atomic; module docstring for the topics).
+
+    Args:
+        episode: a run, fresh or from :meth:`Episode.load`.
+        path: the file (``.mcap``).
+        fork: optional (≥ Nc, 6) fork pose per control step (x, y, z [m], roll, pitch, yaw [rad],
+            plate frame): the trial's fork channels (:data:`sim.closed_loop.FORK_CHANNELS`), as
+            the loop placed it (:func:`fork_poses`); the first Nc rows are used. Rows with a
+            non-finite entry are left out (the loop left the fork where it was).
+        start_ns: time of the episode's t = 0 [ns] (0: times count from the epoch, as a
+            viewer then shows them).
+        joint_stride: keep every ``joint_stride``-th physics-rate joint state (1: all).
+    """
+    from mcap.writer import CompressionType, Writer
+
+    path = Path(path)
+    if path.suffix != ".mcap":
+        raise ValueError(f"an MCAP file must end in .mcap, got {path.name!r}")
+    if joint_stride < 1:
+        raise ValueError(f"joint_stride must be >= 1, got {joint_stride}")
+    nc = len(episode.t)
+    if fork is not None:
+        fork = np.asarray(fork, dtype=float)
+        if fork.ndim != 2 or fork.shape[0] < nc or fork.shape[1] != len(FORK_CHANNELS):
+            raise ValueError(f"fork must be ({nc}, {len(FORK_CHANNELS)}) or longer (one pose per control step, "
+                             f"{', '.join(FORK_CHANNELS)}), got {fork.shape}")
+        fork = fork[:nc]
+    ns_c = _nanoseconds(episode.t, start_ns)
+    events: list[tuple[int, int, str, dict[str, Any]]] = []  # (time, order, topic, message)
+
+    def add(ns: int, topic: str, msg: dict[str, Any]) -> None:
+        events.append((ns, len(events), topic, msg))
+
+    base = np.asarray(episode.base_pose, dtype=float)
+    base_q = Rotation.from_matrix(base[:, :3, :3]).as_quat() if nc else np.zeros((0, 4))
+    fork_q = None
+    if fork is not None:
+        ok_rows = np.isfinite(fork).all(axis=1)
+        fork_q = np.zeros((nc, 4))
+        if ok_rows.any():
+            fork_q[ok_rows] = Rotation.from_euler("ZYX", fork[ok_rows][:, [5, 4, 3]]).as_quat()
+    previous = None
+    for k, ns in enumerate(ns_c):
+        add(ns, "/knife/tip", _pose(ns, episode.tip[k]))
+        if np.isfinite(episode.tip_reference[k]).all():
+            add(ns, "/knife/reference", _pose(ns, episode.tip_reference[k]))
+        add(ns, "/wearer/intent", _pose(ns, episode.tip_intent[k]))
+        if fork is not None and fork_q is not None and np.isfinite(fork[k]).all():
+            add(ns, "/fork/pose", _pose(ns, fork[k, :3], fork_q[k]))
+        p = base[k, :3, 3]
+        add(ns, "/tf", {"timestamp": _stamp(ns), "parent_frame_id": PLATE_FRAME, "child_frame_id": "torso",
+                        "translation": {"x": float(p[0]), "y": float(p[1]), "z": float(p[2])},
+                        "rotation": dict(zip("xyzw", (float(c) for c in base_q[k])))})
+        add(ns, "/wearer/shoulder", {"timestamp": _stamp(ns), "name": list(SHOULDER_NAMES),
+                                     "position": [_num(x) for x in episode.voluntary[k]], "velocity": [],
+                                     "effort": []})
+        add(ns, "/control/arbitration", {"timestamp": _stamp(ns), "alpha": _num(episode.alpha[k]),
+                                         "beta": _num(episode.beta[k]), "mode": int(episode.mode[k]),
+                                         "novelty": _num(episode.novelty[k])})
+        status = str(episode.status[k])
+        add(ns, "/control/status", {"timestamp": _stamp(ns), "status": status, "ok": _status_ok(status)})
+        add(ns, "/control/timing", {"timestamp": _stamp(ns), "step_time_ms": float(episode.step_time[k]) * 1e3})
+        if status != previous:
+            add(ns, "/control/log", {"timestamp": _stamp(ns), "level": 2 if _status_ok(status) else 3,
+                                     "message": f"status: {status}", "name": "controller", "file": "", "line": 0})
+            previous = status
+    keep = slice(0, None, joint_stride)
+    t_phys = np.asarray(episode.t_physics, dtype=float)[keep]
+    for t, q, v, tau in zip(t_phys.tolist(), np.asarray(episode.q, dtype=float)[keep].tolist(),
+                            np.asarray(episode.v, dtype=float)[keep].tolist(),
+                            np.asarray(episode.tau, dtype=float)[keep].tolist()):
+        ns = start_ns + int(round(t * 1e9))
+        add(ns, "/arm/joint_states", {"timestamp": _stamp(ns), "name": list(JOINT_NAMES), "position": q,
+                                      "velocity": v, "effort": tau})
+    events.sort(key=lambda e: (e[0], e[1]))
+
+    with atomic_open(path, "wb") as fh:
+        writer = Writer(fh, compression=CompressionType.ZSTD)
+        writer.start(profile="", library="mpcshare")
+        schema_ids = {name: writer.register_schema(name=name, encoding="jsonschema",
+                                                   data=json.dumps(schema).encode())
+                      for name, schema in SCHEMAS.items()}
+        used = dict.fromkeys(e[2] for e in events)
+        channel_ids = {topic: writer.register_channel(topic=topic, message_encoding="json",
+                                                      schema_id=schema_ids[TOPICS[topic]])
+                       for topic in TOPICS if topic in used}
+        encode = json.JSONEncoder(allow_nan=False, separators=(",", ":")).encode
+        for ns, _, topic, msg in events:
+            writer.add_message(channel_ids[topic], log_time=ns, data=encode(msg).encode(), publish_time=ns)
+        writer.add_metadata("mpcshare.run", {str(k): "" if v is None else str(v) for k, v in episode.info.items()})
+        writer.finish()
+    return path

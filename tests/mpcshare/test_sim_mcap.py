@@ -1,0 +1,66 @@
+"""Runs as MCAP from ``mpcshare sim --mcap`` and ``compare_strategies(..., mcap=True)``.
+
+The controller is a test double (tests/sim/controllers.py) and the bundle a stand-in
+with what ``sim`` reads of it, so that these tests take seconds, not a training run.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+from mcap.reader import make_reader
+
+import mpcshare.bundle
+import mpcshare.experiments
+from learning.data import save
+from mpcshare.cli import main
+from mpcshare.experiments import StrategyRun, compare_strategies
+from sim.closed_loop import Episode
+from sim.demonstrator import generate_demonstrations
+from tests.sim.controllers import IdleController
+
+
+@pytest.fixture(scope="module")
+def demos():
+    return generate_demonstrations(n_subjects=1, minutes=0.1, seed=5)
+
+
+def _idle(bundle, **options):
+    return IdleController()
+
+
+def _counts(path):
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    return {ch.topic: summary.statistics.channel_message_counts[i] for i, ch in summary.channels.items()}
+
+
+def test_compare_strategies_writes_mcap_beside_the_run_files(demos, tmp_path):
+    comp = compare_strategies(None, demos, [0], runs=[StrategyRun("voluntary", "voluntary")], duration_s=0.4,
+                              out=tmp_path, make_controller=_idle, log=None, mcap=True)
+    npz = tmp_path / comp.run_files["voluntary"][0]
+    mcap = npz.with_suffix(".mcap")
+    assert npz.exists() and mcap.exists()
+    counts = _counts(mcap)
+    assert counts["/knife/tip"] == len(Episode.load(npz).t) == 40 and counts["/fork/pose"] == 40
+    assert counts["/arm/joint_states"] == 400
+
+
+def test_no_mcap_by_default(demos, tmp_path):
+    compare_strategies(None, demos, [0], runs=[StrategyRun("voluntary", "voluntary")], duration_s=0.2,
+                       out=tmp_path, make_controller=_idle, log=None)
+    assert sorted(p.suffix for p in (tmp_path / "runs").iterdir()) == [".npz"]
+
+
+def test_sim_command_mcap_option(demos, tmp_path, monkeypatch):
+    data = tmp_path / "demos.npz"
+    save(demos, data)
+    bundle = SimpleNamespace(obs_names=list(demos.obs_names), rate_hz=demos.rate_hz, heldout_trials=[0],
+                             config={"data_path": str(data)})
+    monkeypatch.setattr(mpcshare.bundle, "load_bundle", lambda path: bundle)
+    monkeypatch.setattr(mpcshare.experiments, "_from_bundle", _idle)
+    out = tmp_path / "sim"
+    assert main(["sim", "--model", "stand-in", "--out", str(out), "--duration", "0.3", "--runs", "voluntary",
+                 "--mcap"]) == 0
+    assert _counts(out / "runs" / "voluntary_trial0.mcap")["/control/status"] == 30
