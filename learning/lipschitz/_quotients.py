@@ -36,6 +36,8 @@ from typing import Literal, NamedTuple
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from learning.torch_threads import torch_threads
+
 from ._bounds import F32_UNIT_ROUNDOFF, build_features
 from ._exact import dense_exact, pair_ratios, update_best
 from ._kernel import NumpyKernel
@@ -190,25 +192,6 @@ def _blas_single_thread():
     return threadpool_limits(limits=1, user_api="blas")
 
 
-class _torch_single_thread:
-    """Context: torch intra-op threads = 1 while our own threads run (restored on exit)."""
-
-    def __enter__(self):
-        try:
-            import torch
-        except ImportError:  # pragma: no cover
-            self._torch = None
-            return self
-        self._torch, self._n = torch, torch.get_num_threads()
-        torch.set_num_threads(1)
-        return self
-
-    def __exit__(self, *exc):
-        if self._torch is not None:
-            self._torch.set_num_threads(self._n)
-        return False
-
-
 def _time_neighbour_init(X, Y, idx, q, partner, lags: int) -> None:
     """Exact quotients of rows k and k+s (s = 1..lags) of a group: cheap, strong initial bounds.
 
@@ -319,7 +302,7 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
     pool = ThreadPoolExecutor(max_workers=n_jobs) if n_jobs > 1 else None
     limit = _blas_single_thread() if backend == "numpy" else nullcontext()
     # torch on the CPU runs inside our threads: one intra-op thread each.
-    tlimit = _torch_single_thread() if backend == "torch" and str(dev) == "cpu" else nullcontext()
+    tlimit = torch_threads(1) if backend == "torch" and str(dev) == "cpu" else nullcontext()
     try:
         with limit, tlimit:
             for idx in group_idx:

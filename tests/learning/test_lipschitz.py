@@ -191,7 +191,6 @@ def test_threads_and_blocks_do_not_change_result():
 
 
 def test_torch_backend_cpu_matches():
-    pytest.importorskip("torch")
     rng = np.random.default_rng(8)
     X = rng.normal(size=(900, 30))
     X = np.concatenate([X, X[:100] + 1e-9])
@@ -310,8 +309,6 @@ def test_symmetric_pass_equals_one_sided(tile, chunk):
 @pytest.mark.parametrize("backend", ["numpy", "torch"])
 def test_symmetric_full_d_mode_iid(backend):
     """i.i.d. data switches the symmetric pass to the full-d two-sided screen; still exact."""
-    if backend == "torch":
-        pytest.importorskip("torch")
     rng = np.random.default_rng(12)
     X = rng.normal(size=(1400, 40))
     X = np.concatenate([X, X[:100] + 1e-9 * rng.normal(size=(100, 40))])
