@@ -1,7 +1,8 @@
 """Closed-loop comparison of arbitration strategies on held-out demonstrations.
 
 Each *run* is a strategy of :class:`mpcshare.control.controller.SharedController` (``voluntary``,
-``reactive``, ``gate``, ``blend``, and the gate without MPC); each is simulated on the
+``reactive``, ``gate``, ``blend``, the gate with the MPC ``gate_mpc``, and the upper bound
+``oracle_preview``: ``reactive`` given the wearer's true intent as its preview); each is simulated on the
 same held-out trials, with the same wearer and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
 :func:`sim.metrics.episode_metrics` are pooled over trials (:func:`pool_metrics`) and
@@ -38,11 +39,14 @@ METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_
 
 @dataclass(frozen=True)
 class StrategyRun:
-    """One simulated configuration: a name for the tables, the arbitration strategy, MPC on/off."""
+    """One simulated configuration: a name for the tables, the arbitration strategy, MPC on/off,
+    and ``oracle``: the controller is given the wearer's true intent as its preview instead of
+    the predictor's forecast (an upper bound, not realisable)."""
 
     name: str
     strategy: str
-    use_mpc: bool = True
+    use_mpc: bool = False
+    oracle: bool = False
 
 
 DEFAULT_RUNS: tuple[StrategyRun, ...] = (
@@ -50,7 +54,8 @@ DEFAULT_RUNS: tuple[StrategyRun, ...] = (
     StrategyRun("reactive", "reactive"),
     StrategyRun("gate", "gate"),
     StrategyRun("blend", "blend"),
-    StrategyRun("gate_no_mpc", "gate", use_mpc=False),
+    StrategyRun("gate_mpc", "gate", use_mpc=True),
+    StrategyRun("oracle_preview", "reactive", oracle=True),
 )
 
 
@@ -76,6 +81,23 @@ def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
     from mpcshare.control.controller import SharedController
 
     return SharedController.from_bundle(bundle, **options)
+
+
+def intent_preview(trial: Any, act_names: Sequence[str], cutoff_hz: float | None = None) -> Any:
+    """The wearer's true intent as a known tip trajectory (the ``oracle_preview`` run's preview):
+    the trial's knife tip smoothed as :class:`sim.wearer.SimulatedWearer` smooths its intent."""
+    from mpcshare.control.forecast import KnownTrajectory
+    from sim.closed_loop import TIP_CHANNELS
+    from sim.wearer import WearerConfig, smooth_intent
+
+    names = list(act_names)
+    missing = [c for c in TIP_CHANNELS if c not in names]
+    if missing:
+        raise ValueError(f"oracle_preview needs the knife tip channels {missing} in the act names {names}")
+    rate = 1.0 / float(np.median(np.diff(trial.t)))
+    cutoff = WearerConfig().intent_cutoff_hz if cutoff_hz is None else cutoff_hz
+    positions, _ = smooth_intent(trial.act[:, [names.index(c) for c in TIP_CHANNELS]], rate, cutoff)
+    return KnownTrajectory(positions, 1.0 / rate)
 
 
 def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.ndarray],
@@ -176,7 +198,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
         per_trial[run.name], files[run.name] = {}, []
         for tid in trial_ids:
             t0 = time.perf_counter()
-            controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta)
+            options = {"preview": intent_preview(by_id[int(tid)], demos.act_names)} if run.oracle else {}
+            controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
             episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed,
                                   obs_names=list(demos.obs_names), act_names=list(demos.act_names))
             m = episode_metrics(episode)
@@ -205,7 +228,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
 
 
 def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
-                strategy: str = "gate", use_mpc: bool = True, seed: int = 0, beta: float = 0.5,
+                strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = 0.5,
                 make_controller: Callable[..., Any] | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
 

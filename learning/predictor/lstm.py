@@ -17,6 +17,13 @@ the masked MSE of the validation trials (run whole, from the zero state, as
 :meth:`ReactivePredictor.predict` does) decides early stopping; the best epoch's
 weights are kept.
 
+Forecast (``horizons = H > 0``): the read-out gives the action now and at the next H
+model steps, ``[û_{t}, û_{t+1}, …, û_{t+H}]`` (d_u·(H+1) outputs, one head). The targets
+are the trial's own actions shifted by h steps (the last sample repeated past the trial's
+end); the loss weight of step t (the mask) applies to all its horizons. The forecast lets
+the controller aim where the knife will be after the pipeline's latency, interpolate
+between model ticks and preview the MPC's horizon (:meth:`ReactivePredictor.forecast`).
+
 Online, :meth:`ReactivePredictor.make_stream` gives a
 :class:`learning.predictor.stream.PredictorStream` that applies the equations above in
 NumPy (float64) one step at a time, carrying (h, c); it equals
@@ -44,7 +51,7 @@ from sklearn.utils.validation import check_is_fitted
 from torch import nn
 from tqdm.auto import tqdm
 
-from learning.predictor.sequences import check_sequence_set, chunk_sequences, pad_sequences
+from learning.predictor.sequences import check_sequence_set, chunk_sequences, pad_sequences, shifted_targets
 from learning.predictor.stream import PredictorStream
 from learning.torch_threads import torch_threads
 
@@ -113,6 +120,8 @@ class ReactivePredictor(BaseEstimator):
             the network is small and on a loaded 2-core machine two threads made training
             17× slower (427 s against 24.5 s, 18k steps, 150 epochs).
         seed: weight initialisation, validation split and chunk order.
+        horizons: H, the number of future model steps forecast beyond the current one
+            (0: the current action only, as Song & Asada's predictor).
         device: ``"cpu"`` (default), ``"cuda"`` or ``"auto"`` (CUDA when present).
 
     Fitted attributes: ``input_dim_``, ``output_dim_``, ``net_`` (the torch module, on
@@ -125,7 +134,7 @@ class ReactivePredictor(BaseEstimator):
                  burn_in: int = 20, learning_rate: float = 1e-2, weight_decay: float = 0.0,
                  grad_clip: float = 1.0, max_epochs: int = 200, patience: int = 20, lr_patience: int = 5,
                  val_fraction: float = 0.2, num_threads: int | None = 1, seed: int = 0,
-                 device: str = "cpu") -> None:
+                 device: str = "cpu", horizons: int = 0) -> None:
         self.hidden_size = hidden_size
         self.batch_size = batch_size
         self.chunk_len = chunk_len
@@ -140,12 +149,14 @@ class ReactivePredictor(BaseEstimator):
         self.num_threads = num_threads
         self.seed = seed
         self.device = device
+        self.horizons = horizons
 
     # ------------------------------------------------------------------ checks
 
     def _check_params(self) -> None:
         for name, lo in (("hidden_size", 1), ("batch_size", 1), ("chunk_len", 1), ("burn_in", 0),
-                         ("max_epochs", 1), ("patience", 1), ("lr_patience", 0)):
+                         ("max_epochs", 1), ("patience", 1), ("lr_patience", 0),
+                         ("horizons", 0)):
             v = getattr(self, name)
             if not (isinstance(v, numbers.Integral) and v >= lo):
                 raise ValueError(f"{name} must be an integer ≥ {lo}, got {v!r}")
@@ -207,13 +218,17 @@ class ReactivePredictor(BaseEstimator):
             warnings.warn("the validation trials have no step with mask True: no early stopping",
                           UserWarning, stacklevel=2)
             vx = vy = vm = None
+        H = int(self.horizons)
+        d_u = int(ys[0].shape[1])
+        ys = [shifted_targets(y, H) for y in ys]
+        vy = None if vy is None else [shifted_targets(y, H) for y in vy]
         device = _resolve_device(self.device)
         t0 = time.perf_counter()
         with torch_threads(self.num_threads), torch.random.fork_rng(devices=[]):
             torch.manual_seed(int(self.seed))
             net, history, best_epoch = self._train(xs, ys, ms, vx, vy, vm, device, progress)
         # fitted attributes only once training has succeeded (nothing half-written)
-        self.input_dim_, self.output_dim_ = int(xs[0].shape[1]), int(ys[0].shape[1])
+        self.input_dim_, self.output_dim_ = int(xs[0].shape[1]), d_u
         self.device_, self.net_, self.history_ = device, net, history
         self.best_epoch_, self.n_epochs_ = best_epoch, len(history["train_loss"])
         self.val_trials_ = val_trials
@@ -281,7 +296,8 @@ class ReactivePredictor(BaseEstimator):
     def _cache_numpy(self) -> None:
         """float64 copies of the weights for :meth:`predict` and the stream."""
         sd = {k: v.detach().cpu().double() for k, v in self.net_.state_dict().items()}
-        self._cpu64 = _Net(self.input_dim_, int(self.hidden_size), self.output_dim_).double()
+        n_out = self.output_dim_ * (int(self.horizons) + 1)
+        self._cpu64 = _Net(self.input_dim_, int(self.hidden_size), n_out).double()
         self._cpu64.load_state_dict(sd)
         self._cpu64.eval()
         self._np = {k: v.numpy().copy() for k, v in sd.items()}
@@ -293,14 +309,23 @@ class ReactivePredictor(BaseEstimator):
         check_is_fitted(self, "net_")
         (x,), _, _ = check_sequence_set([sequence], what="sequence", d_in=self.input_dim_)
         with torch.no_grad():
-            return self._cpu64(torch.from_numpy(x)[None])[0].numpy()
+            return self._cpu64(torch.from_numpy(x)[None])[0].numpy()[:, :self.output_dim_]
+
+    def forecast(self, sequence: np.ndarray) -> np.ndarray:
+        """(T, H+1, d_u) standardised actions: row t, horizon h forecasts û_{t+h} (module docstring)."""
+        check_is_fitted(self, "net_")
+        (x,), _, _ = check_sequence_set([sequence], what="sequence", d_in=self.input_dim_)
+        with torch.no_grad():
+            out = self._cpu64(torch.from_numpy(x)[None])[0].numpy()
+        return out.reshape(x.shape[0], int(self.horizons) + 1, self.output_dim_)
 
     def make_stream(self) -> PredictorStream:
         """A new :class:`PredictorStream` (zero state) with this model's weights."""
         check_is_fitted(self, "net_")
         p = self._np
         return PredictorStream(p["lstm.weight_ih_l0"], p["lstm.weight_hh_l0"],
-                               p["lstm.bias_ih_l0"] + p["lstm.bias_hh_l0"], p["head.weight"], p["head.bias"])
+                               p["lstm.bias_ih_l0"] + p["lstm.bias_hh_l0"], p["head.weight"], p["head.bias"],
+                               horizons=int(self.horizons))
 
     # ------------------------------------------------------------- persistence
 
@@ -347,7 +372,11 @@ class ReactivePredictor(BaseEstimator):
         if missing or extra:
             raise ValueError(f"predictor state_dict: missing keys {missing}, unexpected keys {extra}")
         H = int(self.hidden_size)
-        d_in, d_out = state_dict["lstm.weight_ih_l0"].shape[1], state_dict["head.weight"].shape[0]
+        d_in, n_out = state_dict["lstm.weight_ih_l0"].shape[1], state_dict["head.weight"].shape[0]
+        n_h = int(self.horizons) + 1
+        if n_out % n_h:
+            raise ValueError(f"predictor state_dict has {n_out} outputs, not a multiple of horizons + 1 = {n_h}")
+        d_out = n_out // n_h
         if tuple(state_dict["lstm.weight_hh_l0"].shape) != (4 * H, H):
             raise ValueError(f"predictor state_dict has lstm.weight_hh_l0 of shape "
                              f"{tuple(state_dict['lstm.weight_hh_l0'].shape)}, hidden_size={H} needs {(4 * H, H)}")
@@ -355,7 +384,7 @@ class ReactivePredictor(BaseEstimator):
         if (cfg_in is not None and cfg_in != d_in) or (cfg_out is not None and cfg_out != d_out):
             raise ValueError(f"predictor state_dict is for {d_in} inputs → {d_out} outputs, the config says "
                              f"{cfg_in} → {cfg_out}")
-        net = _Net(int(d_in), H, int(d_out))
+        net = _Net(int(d_in), H, int(n_out))
         try:
             net.load_state_dict({k: torch.as_tensor(v, dtype=torch.float32) for k, v in state_dict.items()})
         except RuntimeError as e:

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["check_sequence_set", "chunk_sequences", "pad_sequences"]
+__all__ = ["check_sequence_set", "chunk_sequences", "pad_sequences", "shifted_targets"]
 
 
 def check_sequence_set(sequences: Any, targets: Any = None, masks: Any = None, *, what: str = "sequences",
@@ -100,3 +100,10 @@ def pad_sequences(xs: list[np.ndarray], ys: list[np.ndarray], ms: list[np.ndarra
     for k, (x, y, m) in enumerate(zip(xs, ys, ms)):
         X[k, : x.shape[0]], Y[k, : x.shape[0]], W[k, : x.shape[0]] = x, y, m
     return X, Y, W
+
+
+def shifted_targets(y: np.ndarray, horizons: int) -> np.ndarray:
+    """(T, d_u) → (T, d_u·(H+1)): row t is ``[y_t, y_{t+1}, …, y_{t+H}]`` (y_{T−1} repeated past the end)."""
+    T = y.shape[0]
+    idx = np.minimum(np.arange(T)[:, None] + np.arange(horizons + 1)[None, :], T - 1)
+    return y[idx].reshape(T, -1)

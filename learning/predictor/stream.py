@@ -17,7 +17,9 @@ __all__ = ["PredictorStream"]
 class PredictorStream:
     """Step-by-step LSTM inference in NumPy (float64) carrying (h, c) between calls.
 
-    ``step(x (d_in,)) -> (d_u,)`` standardised action; ``reset()`` returns to the zero
+    ``step(x (d_in,)) -> (d_u,)`` standardised action now; with ``horizons = H > 0`` the
+    read-out holds H + 1 stacked actions and :attr:`forecast` (H+1, d_u) keeps the last
+    step's whole forecast (row h: h model steps ahead). ``reset()`` returns to the zero
     state (the state :meth:`ReactivePredictor.predict` starts from). A wrong shape or a
     non-finite input raises ValueError and leaves the state unchanged.
 
@@ -27,7 +29,7 @@ class PredictorStream:
     """
 
     def __init__(self, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray, w_out: np.ndarray,
-                 b_out: np.ndarray) -> None:
+                 b_out: np.ndarray, horizons: int = 0) -> None:
         H, d = int(w_hh.shape[1]), int(w_ih.shape[1])
         W = np.hstack([w_ih, w_hh]).astype(float)   # rows in torch order i, f, g, o
         b = np.asarray(bias, dtype=float)
@@ -38,13 +40,18 @@ class PredictorStream:
         self._w_out = np.ascontiguousarray(w_out, dtype=float)
         self._b_out = np.asarray(b_out, dtype=float).copy()
         self._v = np.zeros(d + H)
-        self.hidden_size, self.input_dim, self.output_dim = H, d, int(w_out.shape[0])
+        n_h = int(horizons) + 1
+        if w_out.shape[0] % n_h:
+            raise ValueError(f"read-out has {w_out.shape[0]} rows, not a multiple of horizons + 1 = {n_h}")
+        self.hidden_size, self.input_dim, self.output_dim = H, d, int(w_out.shape[0]) // n_h
+        self.horizons = n_h - 1
         self.reset()
 
     def reset(self) -> None:
         """Zero hidden and cell state."""
         self.h = np.zeros(self.hidden_size)
         self.c = np.zeros(self.hidden_size)
+        self.forecast = np.full((self.horizons + 1, self.output_dim), np.nan)
 
     def step(self, x: np.ndarray) -> np.ndarray:
         """One LSTM cell update and the read-out (class docstring)."""
@@ -66,4 +73,6 @@ class PredictorStream:
         c += gates[:H] * z[3 * H:]
         self.c = c
         self.h = gates[2 * H:3 * H] * np.tanh(c)
-        return self._w_out @ self.h + self._b_out
+        y = self._w_out @ self.h + self._b_out
+        self.forecast = y.reshape(self.horizons + 1, self.output_dim)
+        return y[:self.output_dim]

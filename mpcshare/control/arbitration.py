@@ -2,10 +2,11 @@
 
 Fusion in knife-tip velocity [m/s] (docs/design.md, "Online control"):
 
-    û = α·û_r + β·û_v,    û_r = sat_{v_r}(k_r · (p̂ − p_ref)),    û_v = ShoulderMap.tip_velocity(θ)
+    û = α·û_r + β·û_v,    û_r = sat_{v_r}(ṗ̂ + k_r · (p̂ − p_ref)),    û_v = ShoulderMap.tip_velocity(θ)
 
-``p̂`` is the tip position the reactive predictor π̂ predicts, ``p_ref`` the current
-tip reference, ``k_r`` [1/s] a P-gain and ``sat_v(x) = x · min(1, v/‖x‖)`` a speed cap.
+``p̂``, ``ṗ̂`` are the tip position and velocity the reactive predictor π̂ forecasts for the
+aimed time (the controller's ``forecast_lead_s`` ahead), ``p_ref`` the current tip
+reference, ``k_r`` [1/s] a P-gain and ``sat_v(x) = x · min(1, v/‖x‖)`` a speed cap.
 
 α, β per strategy (:data:`STRATEGIES`):
 
@@ -159,9 +160,13 @@ class Arbiter:
         return Decision(alpha, beta, reason)
 
 
-def reactive_velocity(p_pred: np.ndarray, p_ref: np.ndarray, gain: float, max_speed: float) -> np.ndarray:
-    """û_r = sat(k·(p̂ − p_ref)) [m/s]: a P-gain ``gain`` [1/s] toward p̂, norm capped at ``max_speed``."""
+def reactive_velocity(p_pred: np.ndarray, p_ref: np.ndarray, gain: float, max_speed: float,
+                      feedforward: np.ndarray | None = None) -> np.ndarray:
+    """û_r = sat(ṗ̂ + k·(p̂ − p_ref)) [m/s]: the predicted velocity ``feedforward`` ṗ̂ (None: 0)
+    plus a P-gain ``gain`` [1/s] toward p̂, norm capped at ``max_speed``."""
     u = gain * (np.asarray(p_pred, dtype=float) - p_ref)
+    if feedforward is not None:
+        u = u + np.asarray(feedforward, dtype=float)
     n = math.sqrt(float(u @ u))
     return u * (max_speed / n) if n > max_speed else u
 

@@ -5,14 +5,19 @@ Per :meth:`SharedController.step`:
 1. front end (:mod:`mpcshare.control.frontend`): Kalman filter over the fork, anti-aliased
    10 Hz window, mode filter and novelty; on the 10 Hz ticks the gate of the most
    probable mode (``gates.proba_one``) and the streaming reactive predictor
-   (``predictor.make_stream().step(concat(o_t, p_t))``), held between ticks;
-2. arbitration (:mod:`mpcshare.control.arbitration`): α, β; û = α·û_r + β·û_v [m/s], integrated
-   into the tip reference p_ref (plate frame), clamped to the workspace box and the
-   reach shell (:mod:`mpcshare.control.workspace`), then moved into the arm's model frame with
-   the base pose;
-3. ``robot.smoothing.ReferenceSmoother`` (ruckig, jerk-limited);
-4. optional MPC (``robot.mpc.tip_mpc.TipMPC``) on the smoothed reference extrapolated over its
-   horizon; its planned tip at t + dt (position, central-difference velocity and
+   (``predictor.make_stream().step(concat(o_t, p_t))``), whose forecast of the tip over
+   its horizon becomes a continuous trajectory p̂(·) (:class:`~mpcshare.control.forecast.ForecastTrack`:
+   a spline, cross-faded between ticks; held when the predictor has no forecast);
+2. arbitration (:mod:`mpcshare.control.arbitration`): α, β; û = α·û_r + β·û_v [m/s] with the
+   reactive term aimed ``forecast_lead_s`` ahead to cancel the latency after the
+   reference, û_r = sat(ṗ̂(t + τ) + k·(p̂(t + τ) − p_ref)); û integrated into the tip reference
+   p_ref (plate frame), clamped to the workspace box and the reach shell
+   (:mod:`mpcshare.control.workspace`), then moved into the arm's model frame with the base pose;
+3. ``robot.smoothing.ReferenceSmoother`` (ruckig, jerk-limited) toward (p_ref, û, α·p̈̂(t + τ));
+4. optional MPC (``robot.mpc.tip_mpc.TipMPC``) over its horizon on the preview
+   r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (the robot's share from the forecast,
+   the wearer's extrapolated; ``mpc_preview=False``: the smoothed reference p_s extrapolated at
+   its velocity); its planned tip at t + dt (position, central-difference velocity and
    acceleration) is the reference of
 5. ``robot.qp.QPController``, which enforces joint position, velocity, acceleration and
    torque limits at the control rate. When the MPC fails or runs out of time, the QP
@@ -52,6 +57,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
+from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
 from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc
 from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
@@ -85,10 +91,10 @@ class SharedController:
     default_base_pose = DEFAULT_BASE_POSE
 
     def __init__(self, bundle: ModelBundle, *, robot: SuperLimbParams | None = None, strategy: str = "gate",
-                 beta: float = 0.5, use_mpc: bool = True, shoulder: ShoulderMap | None = None,
+                 beta: float = 0.5, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
-                 config: ControllerConfig | None = None) -> None:
+                 config: ControllerConfig | None = None, preview: TipTrajectory | None = None) -> None:
         check_strategy(strategy)
         self.beta_user = check_beta(beta)
         self.config = cfg = config or ControllerConfig()
@@ -113,18 +119,24 @@ class SharedController:
                                on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
                                min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range)
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
+        if preview is not None and not callable(getattr(preview, "sample", None)):
+            raise TypeError(f"preview must be a TipTrajectory (sample(times) -> p, v, a), got {type(preview).__name__}")
+        self.oracle = preview is not None
+        self.forecast: TipTrajectory = preview if preview is not None else \
+            ForecastTrack(1.0 / float(bundle.model_hz), cfg.forecast_fade_s)
         self.reset()
 
     @classmethod
     def from_bundle(cls, folder_or_bundle: str | Path | ModelBundle, robot: SuperLimbParams | None = None,
-                    strategy: str = "gate", beta: float = 0.5, use_mpc: bool = True,
+                    strategy: str = "gate", beta: float = 0.5, use_mpc: bool = False,
                     shoulder: ShoulderMap | None = None,
                     **options) -> SharedController:
         """Controller from a bundle folder (``mpcshare.bundle.load_bundle``) or a loaded bundle.
 
         ``options``: ``tip_channels``, ``fork_channels`` (act/obs names of the knife and fork
         tip positions when they are not knife_x/y/z, fork_x/y/z), ``mpc`` (an MPC object),
-        ``config`` (:class:`ControllerConfig`).
+        ``config`` (:class:`ControllerConfig`), ``preview`` (a known tip trajectory that replaces
+        the predictor's forecast: the ``oracle_preview`` upper bound, not realisable).
         """
         check_strategy(strategy)
         check_beta(beta)
@@ -151,6 +163,9 @@ class SharedController:
         self.smoother = ReferenceSmoother(3, self.dt, self.config.max_velocity, self.config.max_acceleration,
                                           self.config.max_jerk)
         self._stream = self.bundle.predictor.make_stream()
+        self.forecast.reset()
+        self._acc_ff = np.zeros(3)  # α·p̈̂ (plate frame), the smoother's target acceleration
+        self._preview = (0.0, 0.0, np.zeros(3), math.nan)  # α, β, û_v (plate), the aimed time t + τ
         K = self.layout.n_modes
         self._mode_proba = np.full(K, 1.0 / K)
         self._novelty = float("nan")
@@ -247,7 +262,7 @@ class SharedController:
         timings["frontend"] = time.perf_counter() - ta
         ta = time.perf_counter()  # 2. learned parts at the model rate
         if fe.tick is not None:
-            self._models_tick(fe.tick, faults)
+            self._models_tick(t, fe.tick, faults)
         timings["models"] = time.perf_counter() - ta
         ta = time.perf_counter()  # 3. arbitration and the tip reference (plate frame)
         alpha, beta, u, p_model = self._arbitrate(t, dt, q, voluntary, fe, faults)
@@ -284,7 +299,10 @@ class SharedController:
         if self._p_ref is None:
             self._p_ref = self._to_plate(self.tip.position(q))
         p_ref = self._p_ref
-        pred_ok = _finite(self._p_pred)
+        t_aim = t + cfg.forecast_lead_s
+        p_hat, v_hat, a_hat = self.forecast.at(t_aim) if self.forecast.ready else (np.full(3, np.nan),) * 3
+        self._p_pred = p_hat
+        pred_ok = _finite(p_hat) and _finite(v_hat) and _finite(a_hat)
         if fe.predicting_for_s > cfg.stale_after_s:
             why = f"no fork measurement for {fe.predicting_for_s:.2f} s: control handed to the wearer"
             faults.append(("stale_fork_sensor", why))
@@ -293,14 +311,20 @@ class SharedController:
         else:
             d = self.arbiter.decide(t, self._gate_proba, self._novelty, pred_ok, self._window_ready)
             alpha, beta = d.alpha, d.beta
-        u_r = reactive_velocity(self._p_pred, p_ref, cfg.reactive_gain, cfg.reactive_max_speed) if pred_ok \
+        ff = v_hat if cfg.reactive_feedforward else None
+        u_r = reactive_velocity(p_hat, p_ref, cfg.reactive_gain, cfg.reactive_max_speed, ff) if pred_ok \
             else np.zeros(3)
+        self._acc_ff = alpha * a_hat if pred_ok and cfg.reactive_feedforward else np.zeros(3)
         th = np.asarray(voluntary, dtype=float) if voluntary is not None else np.full(3, np.nan)
+        u_v = np.zeros(3)
         if th.shape == (3,) and _finite(th):
-            u = fuse(alpha, u_r, beta, self.shoulder.tip_velocity(th))
+            u_v = self.shoulder.tip_velocity(th)
+            u = fuse(alpha, u_r, beta, u_v)
         else:
             faults.append(("invalid_shoulder", "shoulder signal NaN, missing or not (3,): reference held"))
             u = np.zeros(3)
+            self._acc_ff = np.zeros(3)
+        self._preview = (alpha if pred_ok else 0.0, beta, u_v, t_aim)
         p_new, clamped = cfg.workspace.clamp(p_ref + u * dt)
         if clamped:
             faults.append(("reference_unreachable", "tip reference clamped to the workspace box"))
@@ -318,7 +342,10 @@ class SharedController:
         if not self.smoother.initialized:
             self.smoother.reset(self.tip.position(q))
         u_model = self._pose[:3, :3].T @ u
-        sm = self.smoother.update(p_model, u_model)
+        if self.config.smoother_target == "position":
+            sm = self.smoother.update(p_model)
+        else:
+            sm = self.smoother.update(p_model, u_model, self._pose[:3, :3].T @ self._acc_ff)
         timings["smoothing"] = time.perf_counter() - ta
         p_qp, v_qp, a_qp = sm.position, sm.velocity, sm.acceleration
         if self.mpc is not None:
@@ -334,18 +361,23 @@ class SharedController:
             faults.append(("qp_failed", res.reason))
         return res
 
-    def _models_tick(self, tick, faults: list[tuple[str, str]]) -> None:
-        """Gate and predictor on a 10 Hz tick (results held until the next tick)."""
+    def _models_tick(self, t: float, tick, faults: list[tuple[str, str]]) -> None:
+        """Gate and predictor on a 10 Hz tick at time t [s] (the gate held until the next tick,
+        the predictor's forecast made a trajectory)."""
         lay = self.layout
         self._mode_proba, self._novelty = tick.mode_proba, tick.novelty
         self._window_ready = tick.window is not None
         try:
             x = np.concatenate([tick.sample, tick.mode_proba])
             u_std = np.asarray(self._stream.step(x), dtype=float)
-            u = u_std * lay.act_scale + lay.act_mean
-            self._p_pred = u[lay.tip_index]
+            f_std = getattr(self._stream, "forecast", None)
+            f_std = u_std[None, :] if f_std is None else np.asarray(f_std, dtype=float)
+            F = f_std * lay.act_scale + lay.act_mean
+            if not self.oracle:
+                self.forecast.update(t, F[:, lay.tip_index])
         except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
-            self._p_pred = np.full(3, np.nan)
+            if not self.oracle:
+                self.forecast.reset()
             faults.append(("internal_error", f"reactive predictor failed: {exc}"))
         if tick.window is None:
             self._gate_proba = None
@@ -369,8 +401,7 @@ class SharedController:
             self._plan_age += 1
             return self._plan_reference(self._plan, j)
         self._plan, self._plan_age = None, 0
-        k = np.arange(H + 1)[:, None] * self.dt
-        p_ref = sm.position[None, :] + k * sm.velocity[None, :]
+        p_ref = self._mpc_preview(sm, H)
         try:
             r = self.mpc.solve(q, v, p_ref, deadline_s=self.config.mpc_deadline_s)
         except Exception as exc:  # noqa: BLE001 — the QP takes over
@@ -387,6 +418,18 @@ class SharedController:
             return None
         self._plan, self._plan_age = np.asarray(r.tip_plan, dtype=float), 1
         return self._plan_reference(self._plan, 0)
+
+    def _mpc_preview(self, sm, H: int) -> np.ndarray:
+        """The MPC's reference (H+1, 3), model frame (module docstring, item 4)."""
+        k = np.arange(H + 1)[:, None] * self.dt
+        alpha, beta, u_v, t_aim = self._preview
+        if not (self.config.mpc_preview and self.forecast.ready and math.isfinite(t_aim)):
+            return sm.position[None, :] + k * sm.velocity[None, :]
+        p, _, _ = self.forecast.sample(t_aim + k[:, 0])
+        if not _finite(p):
+            return sm.position[None, :] + k * sm.velocity[None, :]
+        offset = alpha * (p - p[0]) + beta * k * u_v[None, :]  # plate frame
+        return sm.position[None, :] + offset @ self._pose[:3, :3]
 
     def _plan_reference(self, tp: np.ndarray, j: int):
         """Tip position, velocity, acceleration of plan ``tp`` at step j + 1 (central differences)."""

@@ -54,20 +54,27 @@ class ControllerConfig:
     mpc_deadline_s [s]; mpc_every: solve the MPC every n-th step and follow the last
     plan in between (shifted by the steps since its solve); detect_stale: a fork sample equal
     to the previous one counts as missing (a frozen sensor); gate hysteresis/dwell and blend ramp (see ``Arbiter``);
-    workspace (plate frame), reach_margin [m]; qp: ``robot.qp.QPConfig``.
+    workspace (plate frame), reach_margin [m]; qp: ``robot.qp.QPConfig``;
+    forecast_lead_s [s]: the reactive term aims at the forecast this far ahead (the latency
+    after the reference: smoother, QP, servo; docs/design.md, "Latency budget");
+    reactive_feedforward: add the forecast's velocity (and acceleration, to the smoother)
+    to the reactive term; mpc_preview: the MPC's reference over its horizon is the fused
+    forecast (else the smoothed reference extrapolated at constant velocity).
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
-    # 2 held-out trials x 30 s, no MPC): 4 /s, 0.25 m/s, (0.3 m/s, 2 m/s², 30 m/s³) tracked at
-    # 28.5 mm RMS under `reactive`; these at 25.7 mm (the demonstrations' knife moves at up to
-    # ~0.5 m/s between pieces), with no limit violation.
-    reactive_gain: float = 8.0
-    reactive_max_speed: float = 0.5
+    # 2 held-out trials x 30 s, `reactive`, no MPC). Before the forecast: 8 /s, 0.5 m/s and
+    # (0.6 m/s, 4 m/s², 60 m/s³) with the smoother aiming at (p_ref, û): 18.9 / 31.1 mm RMS, the
+    # tip 400-410 ms late, 190 ms of it in the smoother (ruckig chasing a noisy target
+    # velocity). These, with the smoother aiming at the position only: 12.9 / 19.0 mm, 140 /
+    # 180 ms late; with the true intent as the preview (oracle_preview) 2.0 / 1.9 mm and 0-10 ms.
+    reactive_gain: float = 20.0
+    reactive_max_speed: float = 1.0
     stale_after_s: float = 0.5
     max_dt: float = 0.05
-    max_velocity: float = 0.6
-    max_acceleration: float = 4.0
-    max_jerk: float = 60.0
+    max_velocity: float = 1.2
+    max_acceleration: float = 10.0
+    max_jerk: float = 200.0
     mpc_deadline_s: float = 0.003
     # every 2nd step: in the closed loop (default data, 30 s, gate) the tracking error is the same
     # as every step (20.2 mm) and the real-time factor 4.1-4.3x instead of 3.4x (same process).
@@ -80,3 +87,8 @@ class ControllerConfig:
     workspace: WorkspaceBox = DEFAULT_WORKSPACE
     reach_margin: float = 0.01
     qp: QPConfig = field(default_factory=QPConfig)
+    forecast_lead_s: float = 0.05
+    reactive_feedforward: bool = True
+    mpc_preview: bool = True
+    smoother_target: str = "position"
+    forecast_fade_s: float | None = 0.0

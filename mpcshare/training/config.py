@@ -46,6 +46,10 @@ class TrainConfig:
             downsampled with a zero-phase filter, the observations causally (see
             :func:`learning.preprocessing.resample.causal_downsample`): the model learns the knife at
             t, not the knife a filter delay earlier. False: both causal.
+        forecast_s: the reactive predictor forecasts the action over this horizon [s]
+            (``round(forecast_s·model_hz)`` model steps beyond the current one; 0: the
+            current action only): the controller cancels its latency with it and gives it
+            to the MPC as its preview (docs/design.md, "Online control").
         seed: seed of everything random.
     """
 
@@ -69,6 +73,7 @@ class TrainConfig:
     lstm_baseline: bool = False
     device: str = "cpu"
     zero_phase_targets: bool = True
+    forecast_s: float = 0.5
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -94,8 +99,15 @@ class TrainConfig:
             raise ValueError(f"gate_max_samples must be None or an integer >= 40, got {self.gate_max_samples!r}")
         if self.device not in ("cpu", "cuda", "auto"):
             raise ValueError(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
+        if not (math.isfinite(self.forecast_s) and 0.0 <= self.forecast_s <= 5.0):
+            raise ValueError(f"forecast_s must be in [0, 5] s, got {self.forecast_s!r}")
         if not self.learning_rate > 0:
             raise ValueError(f"learning_rate must be > 0, got {self.learning_rate!r}")
+
+    @property
+    def forecast_steps(self) -> int:
+        """H: model steps forecast beyond the current one."""
+        return int(round(self.forecast_s * self.model_hz))
 
     def to_dict(self) -> dict[str, Any]:
         """The settings as a JSON-able dict (field name → value)."""

@@ -45,7 +45,8 @@ if TYPE_CHECKING:  # annotations only
     from learning.gates import ModeGates
     from learning.predictor import ReactivePredictor
 
-__all__ = ["command_magnitude", "voluntary_effort", "rmse", "evaluate", "fit_ridge", "predict_side",
+__all__ = ["command_magnitude", "voluntary_effort", "rmse", "evaluate", "fit_ridge", "forecast_errors",
+           "predict_side",
            "RMSE_UNITS"]
 
 RMSE_UNITS = "standardised action units (per-sensor unit RMS), RMS over channels and steps"
@@ -119,6 +120,31 @@ def _errors(data: TrainingData, pred: np.ndarray, R: np.ndarray,
     return out
 
 
+def forecast_errors(data: TrainingData, predictor: ReactivePredictor, R: np.ndarray) -> dict[str, Any] | None:
+    """RMSE per horizon of the predictor's forecast on the held-out reactive steps, against
+    holding and extrapolating its current estimate (:func:`learning.predictor.forecast.forecast_rmse`);
+    in metres on the knife tip channels (``knife_x/y/z``) when the data has them, else in
+    standardised action units. None for a predictor without a forecast."""
+    from learning.predictor.forecast import forecast_rmse
+
+    if not int(getattr(predictor, "horizons", 0)):
+        return None
+    side, act = data.heldout, data.preprocessor.act
+    masks = side.masks(R)
+    names = list(data.act_names)
+    tip = [names.index(n) for n in ("knife_x", "knife_y", "knife_z")] if all(
+        n in names for n in ("knife_x", "knife_y", "knife_z")) else None
+    forecasts, targets = [], []
+    for seq, tr in zip(side.sequences(), side.std.trials):
+        F = predictor.forecast(seq)
+        T, n_h, d = F.shape
+        forecasts.append(act.inverse_transform(F.reshape(T * n_h, d)).reshape(T, n_h, d) if tip else F)
+        targets.append(act.inverse_transform(tr.act) if tip else tr.act)
+    out = forecast_rmse(forecasts, targets, masks, 1.0 / data.config.model_hz, columns=tip)
+    out["units"] = "m (knife tip, RMS over x, y, z)" if tip else RMSE_UNITS
+    return out
+
+
 def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor, K: float,
              baselines: Mapping[str, Any] | None = None,
              baseline_predictions: Mapping[str, np.ndarray] | None = None) -> dict[str, Any]:
@@ -144,6 +170,7 @@ def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor,
         "n_heldout_steps": int(len(Z)),
         "heldout_reactive_share": float(R.mean()),
         "predictor": _errors(data, predict_side(predictor, side), R, h.astype(bool)),
+        "forecast": forecast_errors(data, predictor, R),
         "baselines": {name: _errors(data, p, R, None) for name, p in preds.items()},
         "gate": gate_metrics(gates, side.windows.X, modes, Z),
         "voluntary_share": float(np.mean(1 - h)),

@@ -81,7 +81,8 @@ def fit_predictor(data: TrainingData, window_mask: np.ndarray, progress: bool = 
         raise TrainingError("no reactive point in the fit trials at this K; raise the percentile")
     model = ReactivePredictor(hidden_size=c.hidden_size, batch_size=c.batch_size, max_epochs=c.max_epochs,
                               patience=c.patience, learning_rate=c.learning_rate, chunk_len=c.chunk_len,
-                              burn_in=c.burn_in, num_threads=c.torch_threads, seed=c.seed, device=c.device)
+                              burn_in=c.burn_in, num_threads=c.torch_threads, seed=c.seed, device=c.device,
+                              horizons=c.forecast_steps)
     return model.fit([seqs[i] for i in fit_pos], [tgts[i] for i in fit_pos], [masks[i] for i in fit_pos],
                      val_sequences=[seqs[i] for i in val_pos], val_targets=[tgts[i] for i in val_pos],
                      val_masks=[masks[i] for i in val_pos], progress=progress)

@@ -68,7 +68,7 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert analysis["modes"]["n_modes"] == 3 and analysis["window_s"] == 0.8
     assert (out / "model" / "bundle.json").exists()
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
-    assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_no_mpc"}
+    assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview"}
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
     gate = comparison["strategies"]["gate"]  # the task figures: lag, sawing while cutting, RMS per mode
     assert -1.0 <= gate["lag_s"] <= 1.0 and gate["rms_at_lag_m"] <= gate["tracking_rmse_m"] + 1e-12

@@ -30,17 +30,17 @@ def test_sim_runs_held_out_trials_and_writes_the_comparison(trained, tmp_path):
     data, model = trained
     out = tmp_path / "sim"
     assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "2",
-                 "--runs", "voluntary", "gate_no_mpc"]) == 0
+                 "--runs", "voluntary", "gate"]) == 0
     comp = json.loads((out / "comparison.json").read_text())
     bundle_info = json.loads((model / "bundle.json").read_text())
-    assert set(comp["strategies"]) == {"voluntary", "gate_no_mpc"}
+    assert set(comp["strategies"]) == {"voluntary", "gate"}
     assert comp["trials"] == bundle_info["heldout_trials"][:1]  # held-out trials by default
     for metrics in comp["strategies"].values():
         assert set(METRIC_KEYS) <= set(metrics)
         assert metrics["limit_violations"] == 0
         assert metrics["reactive_share"] is not None
     assert comp["strategies"]["voluntary"]["reactive_share"] == 0.0
-    run = Episode.load(out / comp["run_files"]["gate_no_mpc"][0])
+    run = Episode.load(out / comp["run_files"]["gate"][0])
     assert run.t.size == 200 and run.q.shape[1] == 3
     assert (out / "comparison.md").read_text().count("|") > 20 and (out / "trial.png").exists()
 
@@ -53,14 +53,14 @@ def test_sim_maps_renamed_channels_and_names_what_is_missing(trained, tmp_path, 
     other = tmp_path / "renamed.npz"
     save(renamed, other)
     code = main(["sim", "--model", str(model), "--data", str(other), "--out", str(tmp_path / "a"),
-                 "--trials", "1", "--duration", "1", "--runs", "gate_no_mpc"])
+                 "--trials", "1", "--duration", "1", "--runs", "gate"])
     assert code == 1
     assert "fork_x" in capsys.readouterr().err
     mapping = [f"{name}=sensor{i}" for i, name in enumerate(demos.obs_names)]
     code = main(["sim", "--model", str(model), "--data", str(other), "--out", str(tmp_path / "b"),
-                 "--trials", "1", "--duration", "1", "--runs", "gate_no_mpc", "--map", *mapping])
+                 "--trials", "1", "--duration", "1", "--runs", "gate", "--map", *mapping])
     assert code == 0
-    assert json.loads((tmp_path / "b" / "comparison.json").read_text())["strategies"]["gate_no_mpc"]
+    assert json.loads((tmp_path / "b" / "comparison.json").read_text())["strategies"]["gate"]
 
 
 def test_sim_refuses_a_missing_bundle(tmp_path, capsys):

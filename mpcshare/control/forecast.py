@@ -1,0 +1,158 @@
+"""The knife tip's future as a continuous trajectory: the predictor's forecast, or a known plan.
+
+The reactive predictor forecasts the tip at the model ticks, ``p̂(t_j + h·Δ_m)`` for
+h = 0 … H (Δ_m = 1/model_hz, :class:`learning.predictor.ReactivePredictor` with
+``horizons = H``). :class:`ForecastTrack` turns the latest forecast into a trajectory
+the 100 Hz loop samples anywhere in time:
+
+* a cubic spline through the H + 1 points (scipy's ``CubicSpline``, "natural" ends); past the
+  last point the spline's end velocity is extrapolated (constant velocity), before the
+  first the first point is held; with H = 0 (no forecast) the point is held: the
+  controller before forecasting;
+* at each new tick the track cross-fades from the previous forecast to the new one over
+  one model period (w = smoothstep((t − t_j)/Δ_m)): p = (1 − w)·p_old + w·p_new, with the
+  matching velocity and acceleration, so the reference does not jump 10 times a second.
+
+:class:`KnownTrajectory` has the same interface over a trajectory known in advance (the
+wearer's true intent, for the ``oracle_preview`` upper bound; it is not realisable).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+__all__ = ["ForecastTrack", "KnownTrajectory", "TipTrajectory"]
+
+
+class _Spline:
+    """p, ṗ, p̈ of points (n, 3) at times (n,): a cubic spline inside, held before, constant velocity after."""
+
+    def __init__(self, times: np.ndarray, points: np.ndarray) -> None:
+        self.t0, self.t1 = float(times[0]), float(times[-1])
+        self.first, self.last = points[0].copy(), points[-1].copy()
+        if len(times) >= 2:
+            self.cs: CubicSpline | None = CubicSpline(times, points, axis=0, bc_type="natural")
+            self.end_velocity = np.asarray(self.cs(self.t1, 1))
+        else:
+            self.cs, self.end_velocity = None, np.zeros(points.shape[1])
+
+    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        t = np.asarray(t, dtype=float)
+        n, d = t.shape[0], self.first.shape[0]
+        p, v, a = np.empty((n, d)), np.zeros((n, d)), np.zeros((n, d))
+        before, after = t <= self.t0, t >= self.t1
+        inside = ~(before | after)
+        p[before] = self.first
+        if self.cs is None:
+            p[after] = self.last
+            return p, v, a
+        p[after] = self.last + (t[after] - self.t1)[:, None] * self.end_velocity
+        v[after] = self.end_velocity
+        if inside.any():
+            ti = t[inside]
+            p[inside], v[inside], a[inside] = self.cs(ti), self.cs(ti, 1), self.cs(ti, 2)
+        return p, v, a
+
+
+class TipTrajectory:
+    """Interface: ``ready``, ``sample(times) -> (p, ṗ, p̈)`` each (n, 3) [m, m/s, m/s²], plate frame."""
+
+    ready: bool = False
+
+    def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(p, ṗ, p̈) each (3,) at one time t [s]."""
+        p, v, a = self.sample(np.array([t]))
+        return p[0], v[0], a[0]
+
+    def reset(self) -> None:
+        """Start a new episode (nothing to forget for a known trajectory)."""
+
+
+class ForecastTrack(TipTrajectory):
+    """The predictor's latest forecast as a trajectory, cross-faded between ticks (module docstring).
+
+    Args:
+        step_s: Δ_m, the time between the forecast's points [s] (1/model_hz).
+        fade_s: cross-fade time from the previous forecast [s] (default Δ_m; 0: jump).
+    """
+
+    def __init__(self, step_s: float, fade_s: float | None = None) -> None:
+        if not (math.isfinite(step_s) and step_s > 0):
+            raise ValueError(f"step_s must be finite and > 0, got {step_s!r}")
+        fade = step_s if fade_s is None else float(fade_s)
+        if not (math.isfinite(fade) and fade >= 0):
+            raise ValueError(f"fade_s must be finite and >= 0, got {fade_s!r}")
+        self.step_s, self.fade_s = float(step_s), fade
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every forecast (``ready`` is False until the next :meth:`update`)."""
+        self._new: _Spline | None = None
+        self._old: _Spline | None = None
+        self._t_tick = -math.inf
+
+    @property
+    def ready(self) -> bool:  # type: ignore[override]
+        return self._new is not None
+
+    def update(self, t_tick: float, points: np.ndarray) -> None:
+        """A new forecast made at ``t_tick`` [s]: ``points`` (H+1, 3), row h at t_tick + h·Δ_m.
+
+        Non-finite points raise ValueError and leave the track unchanged.
+        """
+        pts = np.asarray(points, dtype=float)
+        if pts.ndim != 2 or pts.shape[0] < 1:
+            raise ValueError(f"forecast points must be (H+1, d), got shape {pts.shape}")
+        if not np.isfinite(pts).all():
+            raise ValueError("forecast points are not finite; track left unchanged")
+        times = float(t_tick) + self.step_s * np.arange(pts.shape[0])
+        self._old = self._new
+        self._new = _Spline(times, pts)
+        self._t_tick = float(t_tick)
+
+    def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(p, ṗ, p̈) at ``times`` [s] (n,), each (n, d); NaN before the first forecast."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        if self._new is None:
+            nan = np.full((times.shape[0], 3), np.nan)
+            return nan, nan.copy(), nan.copy()
+        p, v, a = self._new(times)
+        if self._old is None or self.fade_s <= 0:
+            return p, v, a
+        s = np.clip((times - self._t_tick) / self.fade_s, 0.0, 1.0)
+        if np.all(s >= 1.0):
+            return p, v, a
+        po, vo, ao = self._old(times)
+        w = (s * s * (3.0 - 2.0 * s))[:, None]  # smoothstep: w' = 0 at both ends
+        dw = np.where((s > 0) & (s < 1), 6.0 * s * (1.0 - s) / self.fade_s, 0.0)[:, None]
+        ddw = np.where((s > 0) & (s < 1), (6.0 - 12.0 * s) / self.fade_s ** 2, 0.0)[:, None]
+        dp, dv = p - po, v - vo
+        return (po + w * dp, vo + w * dv + dw * dp, ao + w * (a - ao) + 2.0 * dw * dv + ddw * dp)
+
+
+class KnownTrajectory(TipTrajectory):
+    """A tip trajectory known in advance: positions (T, 3) [m] every ``step_s`` [s] from t = 0.
+
+    For upper bounds only (``oracle_preview``: the wearer's true intent with perfect
+    preview). Raises ValueError for a wrong shape or non-finite positions.
+    """
+
+    def __init__(self, positions: np.ndarray, step_s: float) -> None:
+        p = np.asarray(positions, dtype=float)
+        if p.ndim != 2 or p.shape[0] < 2 or p.shape[1] != 3:
+            raise ValueError(f"positions must be (T >= 2, 3), got shape {p.shape}")
+        if not np.isfinite(p).all():
+            raise ValueError("positions are not finite")
+        if not (math.isfinite(step_s) and step_s > 0):
+            raise ValueError(f"step_s must be finite and > 0, got {step_s!r}")
+        self._spline = _Spline(float(step_s) * np.arange(p.shape[0]), p)
+        self.ready = True
+
+    def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self._spline(np.atleast_1d(np.asarray(times, dtype=float)))
