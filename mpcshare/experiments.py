@@ -2,11 +2,13 @@
 
 Each *run* is a strategy of :class:`mpcshare.control.controller.SharedController` (``voluntary``,
 ``reactive``, ``gate``, ``blend``, and the gate without MPC); each is simulated on the
-same held-out trials, with the same wearer and the same seed, by
+same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
+default the preset ``hemiparetic_mild``) and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
 :func:`sim.metrics.episode_metrics` are pooled over trials (:func:`pool_metrics`) and
 written to ``comparison.json`` (top-level ``strategies``: name → metrics; ``trials``;
-``duration_s``; ``run_files``), ``comparison.md`` and ``comparison.png``.
+``duration_s``; ``run_files``; ``wearer``: the preset's name, or None, and the
+settings), ``comparison.md`` and ``comparison.png``.
 """
 
 from __future__ import annotations
@@ -24,12 +26,14 @@ from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
 from sim.task_metrics import TASK_KEYS, episode_task_metrics
+from sim.wearer import WearerConfig
+from sim.wearer_presets import wearer_preset_name
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "pool_metrics",
-           "render_clip"]
+__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
+           "pool_metrics", "render_clip"]
 
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
@@ -65,10 +69,12 @@ class Comparison:
     runs: list[dict[str, Any]]
     run_files: dict[str, list[str]] = field(default_factory=dict)
     video: str | None = None
+    wearer: dict[str, Any] | None = None  # {"preset": name or None, "settings": WearerConfig.to_dict()}
 
     def to_dict(self) -> dict[str, Any]:
         return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
-                "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video}
+                "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video,
+                "wearer": self.wearer}
 
 
 def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
@@ -143,7 +149,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
                        make_controller: Callable[..., Any] | None = None,
                        log: Callable[[str], None] | None = print,
-                       mode_names: Sequence[str] | None = None, mcap: bool = False) -> Comparison:
+                       mode_names: Sequence[str] | None = None, mcap: bool = False,
+                       wearer: WearerConfig | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -154,7 +161,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     strategy=..., use_mpc=..., beta=...)`` builds a controller (default:
     :meth:`SharedController.from_bundle`). ``mode_names``: the names of the data's mode labels;
     with them (and labels in the data) each run also gets the task figures of
-    :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode).
+    :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
+    simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
+    the comparison records them and the preset's name.
     """
     make_controller = make_controller or _from_bundle
     known = set(demos.trial_ids)
@@ -177,7 +186,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
         for tid in trial_ids:
             t0 = time.perf_counter()
             controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta)
-            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed,
+            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed, wearer=wearer,
                                   obs_names=list(demos.obs_names), act_names=list(demos.act_names))
             m = episode_metrics(episode)
             trial = by_id[int(tid)]
@@ -201,12 +210,20 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                     f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
         pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
-                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files)
+                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
+                      wearer=describe_wearer(wearer))
+
+
+def describe_wearer(wearer: WearerConfig | None) -> dict[str, Any]:
+    """``{"preset": name or None, "settings": {...}}`` of the wearer (None: ``WearerConfig()``)."""
+    wc = wearer or WearerConfig()
+    return {"preset": wearer_preset_name(wc), "settings": wc.to_dict()}
 
 
 def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
                 strategy: str = "gate", use_mpc: bool = True, seed: int = 0, beta: float = 0.5,
-                make_controller: Callable[..., Any] | None = None) -> tuple[str | None, str | None]:
+                make_controller: Callable[..., Any] | None = None,
+                wearer: WearerConfig | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
 
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
@@ -217,6 +234,6 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
     if trial is None:
         raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
     controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta)
-    episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False,
+    episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False, wearer=wearer,
                           obs_names=list(demos.obs_names), act_names=list(demos.act_names))
     return episode.info.get("video"), episode.info.get("render_message")
