@@ -55,6 +55,7 @@ def test_sim_wearer_preset_reaches_the_episodes(trained, tmp_path, capsys):
     comp = json.loads((out / "comparison.json").read_text())
     assert comp["wearer"]["preset"] == "hemiparetic_severe"
     assert comp["wearer"]["settings"]["rhythmic_bandwidth_hz"] == 1.5
+    assert "Simulated wearer: hemiparetic_severe." in (out / "comparison.md").read_text()
     run = Episode.load(out / comp["run_files"]["voluntary"][0])
     assert run.info["wearer_preset"] == "hemiparetic_severe"
     with pytest.raises(SystemExit) as exc:
