@@ -3,11 +3,13 @@
 Each *run* is a strategy of :class:`mpcshare.control.controller.SharedController` (``voluntary``,
 ``reactive``, ``gate``, ``blend``, the gate with the MPC ``gate_mpc``, and the upper bound
 ``oracle_preview``: ``reactive`` given the wearer's true intent as its preview); each is simulated on the
-same held-out trials, with the same wearer and the same seed, by
+same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
+default the preset ``hemiparetic_mild``) and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
 :func:`sim.metrics.episode_metrics` are pooled over trials (:func:`pool_metrics`) and
 written to ``comparison.json`` (top-level ``strategies``: name → metrics; ``trials``;
-``duration_s``; ``run_files``), ``comparison.md`` and ``comparison.png``.
+``duration_s``; ``run_files``; ``wearer``: the preset's name, or None, and the
+settings), ``comparison.md`` and ``comparison.png``.
 """
 
 from __future__ import annotations
@@ -25,12 +27,14 @@ from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
 from sim.task_metrics import TASK_KEYS, episode_task_metrics
+from sim.wearer import WearerConfig
+from sim.wearer_presets import wearer_preset_name
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "pool_metrics",
-           "render_clip"]
+__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
+           "pool_metrics", "render_clip"]
 
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
@@ -70,10 +74,12 @@ class Comparison:
     runs: list[dict[str, Any]]
     run_files: dict[str, list[str]] = field(default_factory=dict)
     video: str | None = None
+    wearer: dict[str, Any] | None = None  # {"preset": name or None, "settings": WearerConfig.to_dict()}
 
     def to_dict(self) -> dict[str, Any]:
         return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
-                "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video}
+                "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video,
+                "wearer": self.wearer}
 
 
 def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
@@ -83,19 +89,19 @@ def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
     return SharedController.from_bundle(bundle, **options)
 
 
-def intent_preview(trial: Any, act_names: Sequence[str], cutoff_hz: float | None = None) -> Any:
+def intent_preview(trial: Any, act_names: Sequence[str], wearer: WearerConfig | None = None) -> Any:
     """The wearer's true intent as a known tip trajectory (the ``oracle_preview`` run's preview):
     the trial's knife tip smoothed as :class:`sim.wearer.SimulatedWearer` smooths its intent."""
     from mpcshare.control.forecast import KnownTrajectory
     from sim.closed_loop import TIP_CHANNELS
-    from sim.wearer import WearerConfig, smooth_intent
+    from sim.wearer import smooth_intent
 
     names = list(act_names)
     missing = [c for c in TIP_CHANNELS if c not in names]
     if missing:
         raise ValueError(f"oracle_preview needs the knife tip channels {missing} in the act names {names}")
     rate = 1.0 / float(np.median(np.diff(trial.t)))
-    cutoff = WearerConfig().intent_cutoff_hz if cutoff_hz is None else cutoff_hz
+    cutoff = (wearer or WearerConfig()).intent_cutoff_hz
     positions, _ = smooth_intent(trial.act[:, [names.index(c) for c in TIP_CHANNELS]], rate, cutoff)
     return KnownTrajectory(positions, 1.0 / rate)
 
@@ -165,7 +171,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
                        make_controller: Callable[..., Any] | None = None,
                        log: Callable[[str], None] | None = print,
-                       mode_names: Sequence[str] | None = None, mcap: bool = False) -> Comparison:
+                       mode_names: Sequence[str] | None = None, mcap: bool = False,
+                       wearer: WearerConfig | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -176,7 +183,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     strategy=..., use_mpc=..., beta=...)`` builds a controller (default:
     :meth:`SharedController.from_bundle`). ``mode_names``: the names of the data's mode labels;
     with them (and labels in the data) each run also gets the task figures of
-    :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode).
+    :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
+    simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
+    the comparison records them and the preset's name.
     """
     make_controller = make_controller or _from_bundle
     known = set(demos.trial_ids)
@@ -198,9 +207,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
         per_trial[run.name], files[run.name] = {}, []
         for tid in trial_ids:
             t0 = time.perf_counter()
-            options = {"preview": intent_preview(by_id[int(tid)], demos.act_names)} if run.oracle else {}
+            options = {"preview": intent_preview(by_id[int(tid)], demos.act_names, wearer)} if run.oracle else {}
             controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
-            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed,
+            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed, wearer=wearer,
                                   obs_names=list(demos.obs_names), act_names=list(demos.act_names))
             m = episode_metrics(episode)
             trial = by_id[int(tid)]
@@ -224,12 +233,20 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                     f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
         pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
-                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files)
+                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
+                      wearer=describe_wearer(wearer))
+
+
+def describe_wearer(wearer: WearerConfig | None) -> dict[str, Any]:
+    """``{"preset": name or None, "settings": {...}}`` of the wearer (None: ``WearerConfig()``)."""
+    wc = wearer or WearerConfig()
+    return {"preset": wearer_preset_name(wc), "settings": wc.to_dict()}
 
 
 def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
                 strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = 0.5,
-                make_controller: Callable[..., Any] | None = None) -> tuple[str | None, str | None]:
+                make_controller: Callable[..., Any] | None = None,
+                wearer: WearerConfig | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
 
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
@@ -240,6 +257,6 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
     if trial is None:
         raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
     controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta)
-    episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False,
+    episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False, wearer=wearer,
                           obs_names=list(demos.obs_names), act_names=list(demos.act_names))
     return episode.info.get("video"), episode.info.get("render_message")

@@ -5,7 +5,9 @@ Per control step k (t_k = k·T, T = 10 ms):
 1. the torso is put at its sway pose, ``mj_step1`` gives the kinematics of the
    state (q, v); the knife tip p(t_k) and the base pose ``T_plate_torso`` are read;
 2. the fork (mocap) is put at the demonstration's fork pose of sample k;
-3. the wearer turns the delayed tip error against the intent into shoulder angles;
+3. the wearer (:mod:`sim.wearer`) turns their plan and the delayed tip error against the
+   intent into shoulder angles; the α of the previous step's command is their cue of who
+   leads (NaN before the first command or after a step without one);
 4. ``controller.step(t_k, obs_k, voluntary, q, v, base_pose)`` (timed);
    a command that is not finite or not of shape (3,) makes the servo hold (status
    ``invalid_command``), an exception inside ``step`` likewise (``controller_error``):
@@ -42,6 +44,7 @@ from sim.episode import Episode
 from sim.scene import EatingScene, SceneConfig
 from sim.servo import JointServo, ServoConfig
 from sim.wearer import SimulatedWearer, WearerConfig
+from sim.wearer_presets import wearer_preset_name
 
 __all__ = ["FORK_CHANNELS", "LIMIT_TOL", "TIP_CHANNELS", "TORQUE_TOL", "Controller", "Episode", "run_episode"]
 
@@ -128,7 +131,8 @@ class _Loop:
         mujoco.mj_step1(world.model, d)
         tip = world.tip_in_plate().copy()
         base = world.base_pose(t_k)
-        theta = self.person.step(k, tip)
+        cue = self.alpha[k - 1] if k > 0 else None  # what the controller showed at the previous step
+        theta = self.person.step(k, tip, alpha_cue=cue)
         q, v = d.qpos[:3].copy(), d.qvel[:3].copy()
         t0 = time.perf_counter()
         try:
@@ -199,7 +203,8 @@ class _Loop:
             "max_tau_excess_nm": w["tau"], "servo_qp_steps": srv.qp_steps,
             "servo_fallback_steps": srv.fallback_steps, "brake_infeasible_steps": srv.brake_infeasible,
             "shoulder_gain": wc.shoulder.gain, "shoulder_deadband_rad": wc.shoulder.deadband_rad,
-            "wearer_deadband_m": wc.deadband_m, "video": None, "render_message": None,
+            "wearer_deadband_m": wc.deadband_m, "wearer_preset": wearer_preset_name(wc),
+            "video": None, "render_message": None,
         }
 
     def episode(self, info: dict[str, Any]) -> Episode:
@@ -251,7 +256,8 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         trial: raw 100 Hz demonstration; ``trial.obs`` rows are given to the controller as
             they are; the knife channels (``knife_x/y/z`` in ``act_names``, default the
             generator's) are the intent, the fork pose channels drive the fork.
-        scene, wearer, servo: settings (defaults if None).
+        scene, wearer, servo: settings (defaults if None; the wearer's default is the preset
+            ``sim.wearer_presets.DEFAULT_WEARER_PRESET``, ``WearerConfig()``).
         duration_s: simulated time [s] (default: the whole trial).
         seed: torso sway phases and the wearer's noise.
         record: keep the physics-rate arrays (False: empty arrays, metrics still work).

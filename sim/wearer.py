@@ -1,67 +1,100 @@
-"""The simulated wearer: corrects the knife toward their intent through the shoulder channel.
+"""The simulated wearer: drives their own plan or corrects the robot, through the shoulder channel.
 
 The intent is the knife-tip motion of a held-out demonstration, p*(t) [m] in the
-plate frame (zero-phase low-passed at ``intent_cutoff_hz``: the plan, without
-the recording's sensor noise).  Every control step k (period Δ) the wearer
+plate frame (zero-phase low-passed at ``intent_cutoff_hz``: the plan, without the
+recording's sensor noise; it holds the rhythmic sawing strokes while cutting).
+The wearer's shoulder command has two parts (as in models of human manual control
+with a feed-forward path beside a delayed feedback path: McRuer & Jex 1967, IEEE
+Trans. HFE 8:231; pursuit and preview tracking,
+IEEE Trans. Human-Machine Syst. 50:68, 2020):
 
-1. perceives the tip error with a reaction delay d:  e = p*(t_k − d) − p(t_k − d);
+**Self-generated motion (feed-forward).**  The person knows their own plan and
+anticipates their own dynamics, so this part has *no reaction delay*.  It is limited
+by the bandwidth of self-paced rhythmic movement f_r (``rhythmic_bandwidth_hz``):
+the plan is low-passed once, at construction, by a zero-phase filter whose gain is
+
+    |G(f)| = 1 / (1 + (√2 − 1)·(f/f_r)⁴)        (−3 dB at f_r, phase 0)
+
+(a 2nd-order Butterworth run forward and backward), giving p_r(t) and ṗ_r(t).
+Strokes faster than f_r come out smaller, never later.
+
+**Corrections (feedback).**  Every control step k (period Δ) the wearer
+
+1. perceives the tip error with the reaction delay d:  e = p*(t_k − d) − p(t_k − d);
 2. engages in proportion to how far it exceeds a tolerated band (deadband δ):
-   w = clip((‖e‖ − δ)/δ, 0, 1)  — small errors are tolerated, and where the
-   robot serves the intent the wearer stays still;
-3. wants the tip velocity  u = w·(ṗ*(t_k) + K·e), capped at ``max_speed_mps``
-   (feed-forward of their own plan plus delayed error feedback);
-4. turns it into shoulder angles θ_des = ShoulderMap.angles_for(u) (the
-   controller maps them back);
-5. moves the shoulder through a critically damped second-order low-pass at
-   ``bandwidth_hz`` (limited bandwidth) and adds noise, constant plus
-   signal-dependent:  θ = θ_f + σ₀·n₁ + c·|θ_f|⊙n₂,  n ~ N(0, I).
+   w = clip((‖e‖ − δ)/δ, 0, 1)  (intermittent control: small errors are tolerated);
+3. wants the corrective tip velocity u_c = w·K·e.
 
-Default values and their sources:
+**Who leads.**  The controller shows its arbitration weight α (a real system through
+haptic, visual or sound feedback): ``step(k, tip, alpha_cue)`` is given the α of the
+previous control step.  The wearer perceives it after the same reaction delay d (a
+delay line); a perceived α ≥ 0.5 means *the robot leads*, α < 0.5 *the wearer leads*.
+A missing cue (None or NaN, e.g. before the first command) changes nothing: the wearer
+keeps the leader last perceived, and before any cue was perceived *the wearer leads*
+(so callers that give no cue at all get a voluntary user).  With λ = 1 when the wearer
+leads (and ``feedforward``), 0 otherwise, the wanted tip velocity is
 
-* ``reaction_delay_s`` = 0.2 s: visual reaction and visuomotor feedback delays of
-  150–250 ms (Luce 1986, *Response Times*; McRuer & Jex 1967, IEEE Trans. HFE 8:231,
-  effective delay of the human operator in tracking ≈ 0.1–0.2 s plus neuromuscular lag).
-* ``bandwidth_hz`` = 2 Hz: voluntary tracking bandwidth ≈ 1–2 Hz, intermittent
-  corrections at ≈ 2 Hz (Neilson, Neilson & O'Dwyer 1988, Biol Cybern 58:63;
-  crossover at a few rad/s in McRuer & Jex 1967).
-* ``deadband_m`` = 0.01 m: errors of about a centimetre tolerated before a correction
-  starts (intermittent control with an error threshold: Loram, Gollee, Lakie &
-  Gawthrop 2011, J Physiol 589:307).
-* ``feedback_gain_per_s`` = 2 /s: error time constant 0.5 s, stable with the delay
-  (K·d = 0.4 < π/2).
-* ``noise_signal_dependent`` = 0.1: motor noise with a standard deviation
-  proportional to the command, coefficient of variation ≈ 5–15 % (Harris &
-  Wolpert 1998, Nature 394:780; Jones, Hamilton & Wolpert 2002, J Neurophysiol 88:1533).
-* ``noise_rad`` = 0.002 rad: physiological tremor and postural sway of the shoulder,
-  a few mrad (Elble & Koller 1990, *Tremor*), below ShoulderMap's 0.01 rad dead zone.
+    u = λ·ṗ_r(t_k) + u_c,      capped at ‖u‖ ≤ ``max_speed_mps`` (both parts scaled alike).
+
+**Shoulder.**  With the shoulder map's linear part z = P⁻¹u/g (robot.shoulder.ShoulderMap),
+the corrective part goes through a critically damped second-order low-pass at the
+corrective bandwidth f_c (``bandwidth_hz``), the feed-forward part does not (its
+bandwidth was applied to the plan):  z = LP_fc(z_c) + z_r.  The wearer pushes past the
+map's dead zone δ_θ:  θ₀ = z + δ_θ·clip(z/ε, −1, 1), ε = 0.1·δ_θ, so tip_velocity(θ₀) = g·P·z
+wherever |z_i| ≥ ε (and θ₀ → 0 as z → 0).  Motor noise, constant plus signal-dependent:
+θ = θ₀ + σ₀·n₁ + c·|θ₀|⊙n₂,  n ~ N(0, I) (Harris & Wolpert 1998, Nature 394:780).
+
+``desired_velocity`` holds the last u [m/s] (feed-forward plus correction),
+``engagement`` the last w, ``wearer_leads`` the leader perceived.  The settings and
+their sources per kind of wearer are in :mod:`sim.wearer_presets`; ``WearerConfig()``
+is the default preset, ``hemiparetic_mild`` (the paper's users: a hemiparetic wearer
+commanding through the affected shoulder).
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy import signal
 
 from robot.shoulder import ShoulderMap
 
-__all__ = ["SimulatedWearer", "WearerConfig", "smooth_intent"]
+__all__ = ["SimulatedWearer", "WearerConfig", "rhythmic_plan", "smooth_intent"]
+
+_DEADZONE_RAMP = 0.1  # ε / δ_θ: below ε the wearer relaxes toward rest instead of holding δ_θ
 
 
 @dataclass(frozen=True)
 class WearerConfig:
-    """Settings of :class:`SimulatedWearer` (module docstring for meanings and sources)."""
+    """Settings of :class:`SimulatedWearer`; the defaults are the ``hemiparetic_mild`` preset.
 
-    reaction_delay_s: float = 0.2
-    bandwidth_hz: float = 2.0
+    Attributes (sources in :mod:`sim.wearer_presets`):
+        reaction_delay_s: d [s], of the corrections and of perceiving the α cue.
+        bandwidth_hz: f_c [Hz], the corrective path's critically damped low-pass.
+        rhythmic_bandwidth_hz: f_r [Hz], −3 dB point of the zero-phase filter of the plan.
+        deadband_m: δ [m], tip errors tolerated before a correction starts.
+        feedback_gain_per_s: K [1/s], corrective velocity per metre of error.
+        feedforward: drive the plan when leading (False: a purely corrective wearer).
+        max_speed_mps: cap on ‖u‖ [m/s] (weakness: how fast the shoulder can command).
+        noise_rad: σ₀ [rad], tremor and postural sway of the shoulder.
+        noise_signal_dependent: c [-], standard deviation per unit of |θ|.
+        intent_cutoff_hz: [Hz] zero-phase low-pass of the recorded intent (sensor noise).
+        shoulder: the shoulder map the controller uses (gain, dead zone).
+    """
+
+    reaction_delay_s: float = 0.3
+    bandwidth_hz: float = 1.5
+    rhythmic_bandwidth_hz: float = 2.5
     deadband_m: float = 0.01
-    feedback_gain_per_s: float = 2.0
+    feedback_gain_per_s: float = 1.5
     feedforward: bool = True
     max_speed_mps: float = 0.3
-    noise_rad: float = 0.002
-    noise_signal_dependent: float = 0.1
+    noise_rad: float = 0.003
+    noise_signal_dependent: float = 0.15
     intent_cutoff_hz: float = 5.0
     shoulder: ShoulderMap = field(default_factory=ShoulderMap)
 
@@ -71,10 +104,16 @@ class WearerConfig:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"WearerConfig.{name} must be finite and >= 0, got {v!r}")
-        for name in ("bandwidth_hz", "max_speed_mps", "intent_cutoff_hz"):
+        for name in ("bandwidth_hz", "rhythmic_bandwidth_hz", "max_speed_mps", "intent_cutoff_hz"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"WearerConfig.{name} must be finite and > 0, got {v!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able settings (the shoulder map as its gain and dead zone); compare configs with this."""
+        d = asdict(self)
+        d["shoulder"] = {"gain": float(self.shoulder.gain), "deadband_rad": float(self.shoulder.deadband_rad)}
+        return d
 
 
 def smooth_intent(positions: np.ndarray, rate_hz: float, cutoff_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -92,12 +131,24 @@ def smooth_intent(positions: np.ndarray, rate_hz: float, cutoff_hz: float) -> tu
     return p, vel
 
 
+def rhythmic_plan(positions: np.ndarray, rate_hz: float, bandwidth_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """The self-generated motion: (positions [m], velocities [m/s]) of the plan at the rhythmic bandwidth.
+
+    Zero-phase filter with |G(f)| = 1/(1 + (√2 − 1)(f/f_r)⁴): a 2nd-order Butterworth at
+    f_r/(√2 − 1)^¼ ≈ 1.25·f_r run forward and backward, so the gain is 1/√2 at f_r and
+    the phase 0 everywhere.  Unfiltered where that cutoff reaches Nyquist or the plan is
+    too short for the filter's padding.
+    """
+    per_pass_hz = bandwidth_hz / (math.sqrt(2.0) - 1.0) ** 0.25
+    return smooth_intent(positions, rate_hz, per_pass_hz)
+
+
 class SimulatedWearer:
     """One wearer following one intent trajectory (T, 3) [m] sampled at ``rate_hz`` (the control rate).
 
-    :meth:`step` is called once per control step with the perceived knife tip and
-    returns the shoulder angles (3,) [rad].  ``desired_velocity`` holds the last
-    wanted tip velocity u [m/s] (for the conflict metric and tests).
+    :meth:`step` is called once per control step with the perceived knife tip (and the
+    controller's α of the previous step as the cue) and returns the shoulder angles (3,)
+    [rad] (module docstring).
     """
 
     def __init__(self, intent: np.ndarray, rate_hz: float, config: WearerConfig | None = None,
@@ -112,48 +163,68 @@ class SimulatedWearer:
             raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
         self.rate_hz = float(rate_hz)
         self.intent, self.intent_velocity = smooth_intent(intent, rate_hz, c.intent_cutoff_hz)
+        self.plan, self.plan_velocity = rhythmic_plan(self.intent, rate_hz, c.rhythmic_bandwidth_hz)
         self.delay_steps = round(c.reaction_delay_s * rate_hz)
         # critically damped 2nd-order low-pass, discretised per step: x'' = ω²(u − x) − 2ω x'
         self._a = math.exp(-2.0 * math.pi * c.bandwidth_hz / rate_hz)
+        self._to_z = np.linalg.inv(c.shoulder.matrix) / c.shoulder.gain  # u [m/s] → z [rad]
         self._seed = seed
         self.reset()
 
     def reset(self) -> None:
-        """Forget the perceived history and the shoulder state; restart the noise stream."""
+        """Forget the perceived history, the leader and the shoulder state; restart the noise stream."""
         self._errors: deque[np.ndarray] = deque(maxlen=self.delay_steps + 1)
+        self._cues: deque[float] = deque(maxlen=self.delay_steps + 1)
         self._s1 = np.zeros(3)
         self._s2 = np.zeros(3)
         self._rng = np.random.default_rng(self._seed)
         self.desired_velocity = np.zeros(3)
         self.engagement = 0.0
+        self.wearer_leads = True
+        self.perceived_alpha = float("nan")
 
-    def step(self, k: int, tip: np.ndarray) -> np.ndarray:
-        """Shoulder angles (3,) [rad] at control step k for the perceived tip (3,) [m] (module steps 1–5)."""
+    def _perceive_cue(self, alpha_cue: float | None) -> None:
+        """Push the cue into the delay line; the one given d steps ago decides who leads (if finite)."""
+        try:
+            cue = float("nan") if alpha_cue is None else float(alpha_cue)
+        except (TypeError, ValueError):
+            cue = float("nan")
+        self._cues.append(cue)
+        if len(self._cues) > self.delay_steps:
+            seen = self._cues[0]
+            if math.isfinite(seen):
+                self.perceived_alpha = seen
+                self.wearer_leads = seen < 0.5
+
+    def step(self, k: int, tip: np.ndarray, alpha_cue: float | None = None) -> np.ndarray:
+        """Shoulder angles (3,) [rad] at control step k for the perceived tip (3,) [m].
+
+        ``alpha_cue``: the controller's α of the previous step (None or NaN: no cue now).
+        """
         c = self.config
         k = min(max(int(k), 0), self.intent.shape[0] - 1)
+        self._perceive_cue(alpha_cue)
         tip = np.asarray(tip, dtype=float)
-        err_now = self.intent[k] - tip if np.isfinite(tip).all() else np.zeros(3)
+        err_now = self.intent[k] - tip if tip.shape == (3,) and np.isfinite(tip).all() else np.zeros(3)
         self._errors.append(err_now)
-        if len(self._errors) > self.delay_steps:
-            e = self._errors[0]  # perceived d = delay_steps steps ago
-        else:
-            e = np.zeros(3)  # nothing perceived yet
+        e = self._errors[0] if len(self._errors) > self.delay_steps else np.zeros(3)  # perceived d ago
         norm = float(np.sqrt(e @ e))
         w = min(max((norm - c.deadband_m) / c.deadband_m, 0.0), 1.0) if c.deadband_m > 0 else float(norm > 0)
-        u = c.feedback_gain_per_s * e
-        if c.feedforward:
-            u = u + self.intent_velocity[k]
-        u = w * u
+        u_c = w * c.feedback_gain_per_s * e
+        u_r = self.plan_velocity[k] if (c.feedforward and self.wearer_leads) else np.zeros(3)
+        u = u_r + u_c
         speed = float(np.sqrt(u @ u))
         if speed > c.max_speed_mps:
-            u = u * (c.max_speed_mps / speed)
+            scale = c.max_speed_mps / speed
+            u, u_r, u_c = u * scale, u_r * scale, u_c * scale
         self.desired_velocity, self.engagement = u, w
-        theta_des = c.shoulder.angles_for(u) if w > 0 else np.zeros(3)
-        # two cascaded first-order stages with the same pole = critically damped second order
+        # the corrective part through the corrective bandwidth (two equal first-order stages)
         a = self._a
-        self._s1 = a * self._s1 + (1.0 - a) * theta_des
+        self._s1 = a * self._s1 + (1.0 - a) * (self._to_z @ u_c)
         self._s2 = a * self._s2 + (1.0 - a) * self._s1
-        theta = self._s2.copy()
+        z = self._s2 + self._to_z @ u_r
+        eps = _DEADZONE_RAMP * c.shoulder.deadband_rad
+        theta = z + (c.shoulder.deadband_rad * np.clip(z / eps, -1.0, 1.0) if eps > 0 else 0.0)
         if c.noise_rad > 0 or c.noise_signal_dependent > 0:
             n = self._rng.standard_normal(6)
             theta = theta + c.noise_rad * n[:3] + c.noise_signal_dependent * np.abs(theta) * n[3:]

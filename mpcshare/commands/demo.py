@@ -29,6 +29,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.data import format_summary
+from mpcshare.commands.sim import add_wearer_argument
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
 
@@ -49,6 +50,7 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sim-duration", type=positive_float, default=30.0,
                    help="seconds simulated per trial and strategy (default 30)")
     p.add_argument("--no-video", action="store_true", help="do not render the video of the gate")
+    add_wearer_argument(p)
     add_analysis_arguments(p)
 
 
@@ -69,6 +71,7 @@ def _demo(args: argparse.Namespace) -> int:
     from mpcshare.reports.comparison import write_comparison
     from mpcshare.reports.demo import write_demo_report
     from mpcshare.training import TrainingError, train_bundle
+    from sim.wearer_presets import wearer_preset
 
     out = prepare_output_folder(args.out)
     t_start = time.perf_counter()
@@ -131,11 +134,12 @@ def _demo(args: argparse.Namespace) -> int:
     ids = bundle.heldout_trials[:args.sim_trials]
     _stage(6, f"closed loop in MuJoCo: 5 strategies x {len(ids)} held-out trial(s) x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")
+    wearer = wearer_preset(args.wearer)
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
-                              mode_names=MODE_NAMES)
+                              mode_names=MODE_NAMES, wearer=wearer)
     if not args.no_video:
         video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
-                                     seed=args.seed)
+                                     seed=args.seed, wearer=wearer)
         comp.video = None if video is None else str(Path(video).relative_to(sim_out))
         print(f"video: {video}" if video else f"no video: {message}")
     comparison = write_comparison(comp, sim_out)

@@ -3,7 +3,8 @@
 ``mpcshare sim --model MODEL_DIR [--data DATA] --out DIR`` loads a bundle, takes the
 held-out trials (of ``--data``, default: the data set the bundle was trained on,
 as recorded by ``mpcshare train``), simulates each strategy (``voluntary``,
-``reactive``, ``gate``, ``blend``, the gate with the MPC, and the ``oracle_preview`` upper bound) on each trial in MuJoCo
+``reactive``, ``gate``, ``blend``, the gate with the MPC, and the ``oracle_preview`` upper bound) on each
+trial in MuJoCo
 beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
 ``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
 for Foxglove) and, with ``--video``, a video of the gate on the first trial.
@@ -26,13 +27,21 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
+from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "run_comparison"]
+__all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "run_comparison"]
 
 _RUN_NAMES = ("voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview")
+
+
+def add_wearer_argument(p: argparse.ArgumentParser) -> None:
+    """``--wearer PRESET``: the simulated wearer (``sim.wearer_presets``), shared by ``sim`` and ``demo``."""
+    p.add_argument("--wearer", choices=list(WEARER_PRESETS), default=DEFAULT_WEARER_PRESET,
+                   help=f"the simulated wearer's preset (default {DEFAULT_WEARER_PRESET}: a hemiparetic wearer "
+                        f"commanding through the affected shoulder)")
 
 
 def add_sim_arguments(p: argparse.ArgumentParser) -> None:
@@ -46,6 +55,7 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--beta", type=float, default=0.5, help="β while the robot acts (default 0.5)")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
     p.add_argument("--video", action="store_true", help="render the gate on the first trial (offscreen OpenGL)")
+    add_wearer_argument(p)
 
 
 def _add_arguments(p: argparse.ArgumentParser) -> None:
@@ -99,20 +109,23 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
     from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
     from mpcshare.reports.comparison import write_comparison
+    from sim.wearer_presets import wearer_preset
 
     if abs(demos.rate_hz - bundle.rate_hz) > 1e-9 * bundle.rate_hz:
         raise CommandError(f"the data is at {demos.rate_hz:g} Hz, the bundle was trained at {bundle.rate_hz:g} Hz")
     runs = [r for r in DEFAULT_RUNS if r.name in args.runs]
+    wearer_name = getattr(args, "wearer", DEFAULT_WEARER_PRESET)
+    wearer = wearer_preset(wearer_name)
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
-          f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'})")
+          f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
-                              mcap=getattr(args, "mcap", False))
+                              mcap=getattr(args, "mcap", False), wearer=wearer)
     if args.video:
         shown = next((r for r in runs if r.name == "gate"), runs[0])
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
                                      strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
-                                     beta=args.beta)
+                                     beta=args.beta, wearer=wearer)
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
     return write_comparison(comp, out)

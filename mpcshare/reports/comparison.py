@@ -111,7 +111,10 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
                         trial_plot: str | None = None) -> str:
     """The Markdown section: table, findings, plot."""
     span = "whole trials" if comp.duration_s is None else f"the first {comp.duration_s:g} s of each"
-    lines = [f"Held-out trials {comp.trials}, {span}; pooled over trials.", "", *_table(comp.strategies, _COLUMNS), ""]
+    who = (comp.wearer or {}).get("preset") or ("custom settings" if comp.wearer else None)
+    wearer = f" Simulated wearer: {who}." if who else ""
+    lines = [f"Held-out trials {comp.trials}, {span}; pooled over trials.{wearer}", "",
+             *_table(comp.strategies, _COLUMNS), ""]
     if any(m.get("lag_s") is not None for m in comp.strategies.values()):
         lines += ["The task: the knife's lag behind the wearer's intent (the time shift that minimises the RMS) "
                   "and, while cutting, its motion in the stroke band (0.8–3 Hz) against the intended stroke:", "",

@@ -54,7 +54,7 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     out = tmp_path / "demo"
     code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "4", "--n-random", "2",
                  "--no-search", "--no-sweep", "--sim-trials", "1", "--sim-duration", "3", "--no-video",
-                 "--modes", "3", "--window", "0.8"])
+                 "--modes", "3", "--window", "0.8", "--wearer", "unimpaired"])
     assert code == 0
     # the analysis options reach the training too (they were once read by the analysis only)
     bundle = json.loads((out / "model" / "bundle.json").read_text())
@@ -70,6 +70,7 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
     assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview"}
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
+    assert comparison["wearer"]["preset"] == "unimpaired"  # --wearer reaches the closed loop
     gate = comparison["strategies"]["gate"]  # the task figures: lag, sawing while cutting, RMS per mode
     assert -1.0 <= gate["lag_s"] <= 1.0 and gate["rms_at_lag_m"] <= gate["tracking_rmse_m"] + 1e-12
     assert set(gate["rms_by_mode_m"]) <= {"cutting", "repositioning", "collecting", "removing"}

@@ -43,6 +43,24 @@ def test_sim_runs_held_out_trials_and_writes_the_comparison(trained, tmp_path):
     run = Episode.load(out / comp["run_files"]["gate"][0])
     assert run.t.size == 200 and run.q.shape[1] == 3
     assert (out / "comparison.md").read_text().count("|") > 20 and (out / "trial.png").exists()
+    assert comp["wearer"]["preset"] == "hemiparetic_mild"  # the default wearer, recorded
+    assert comp["wearer"]["settings"]["reaction_delay_s"] == 0.3
+
+
+def test_sim_wearer_preset_reaches_the_episodes(trained, tmp_path, capsys):
+    data, model = trained
+    out = tmp_path / "severe"
+    assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "1",
+                 "--runs", "voluntary", "--wearer", "hemiparetic_severe"]) == 0
+    comp = json.loads((out / "comparison.json").read_text())
+    assert comp["wearer"]["preset"] == "hemiparetic_severe"
+    assert comp["wearer"]["settings"]["rhythmic_bandwidth_hz"] == 1.5
+    assert "Simulated wearer: hemiparetic_severe." in (out / "comparison.md").read_text()
+    run = Episode.load(out / comp["run_files"]["voluntary"][0])
+    assert run.info["wearer_preset"] == "hemiparetic_severe"
+    with pytest.raises(SystemExit) as exc:
+        main(["sim", "--model", str(model), "--out", str(tmp_path / "x"), "--wearer", "nobody"])
+    assert exc.value.code == 2 and "hemiparetic_mild" in capsys.readouterr().err
 
 
 def test_sim_maps_renamed_channels_and_names_what_is_missing(trained, tmp_path, capsys):

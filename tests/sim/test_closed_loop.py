@@ -8,6 +8,7 @@ from sim.closed_loop import run_episode
 from sim.demonstrator import generate_demonstrations
 from sim.episode import CONTROL_KEYS, PHYSICS_KEYS, Episode
 from sim.metrics import METRIC_KEYS, episode_metrics
+from sim.wearer import WearerConfig
 from tests.sim.controllers import (
     AggressiveController,
     IdleController,
@@ -51,7 +52,10 @@ def test_oracle_tracks_the_intent_within_the_limits(oracle_episode):
     assert m["limit_violations"] == 0
     assert m["tracking_rmse_m"] < 0.005 and m["tracking_p95_m"] < 0.01
     assert m["reactive_share"] == 1.0 and m["handovers"] == 0
-    assert m["voluntary_effort"] < 0.01  # the robot serves the intent: the wearer stays still
+    # the robot serves the intent: once the wearer has seen α = 1 (after their reaction time) they stay still
+    seen = round(WearerConfig().reaction_delay_s / 0.01) + 1
+    assert np.linalg.norm(ep.voluntary[seen:], axis=1).mean() < 0.01
+    assert m["voluntary_effort"] < 0.02
     assert set(ep.status) == {"ok"}
 
 
@@ -165,3 +169,21 @@ def test_without_opengl_the_loop_says_so_and_goes_on(trial, tmp_path, monkeypatc
     assert ep.info["video"] is None and "MUJOCO_GL=egl" in ep.info["render_message"]
     assert not (tmp_path / "clip.mp4").exists() and not (tmp_path / "clip.gif").exists()
     assert ep.t.size == 30 and ep.info["limit_violations"] == 0
+
+
+def test_a_leading_wearer_saws_in_the_closed_loop(trial):
+    """Under a controller that follows the shoulder (α = 0), the wearer's own strokes reach the knife on time."""
+    from sim.demonstrator import MODE_NAMES
+    from sim.task_metrics import episode_task_metrics
+    from sim.wearer_presets import wearer_preset
+
+    def figures(wearer):
+        ep = run_episode(VoluntaryController(), trial, duration_s=5.0, seed=1, wearer=wearer)  # cutting: 0–2.75 s
+        assert ep.info["limit_violations"] == 0
+        return ep, episode_task_metrics(ep.tip, ep.tip_intent, 0.01, trial.mode[:ep.t.size], MODE_NAMES)
+
+    ep, saws = figures(wearer_preset("unimpaired"))
+    assert ep.info["wearer_preset"] == "unimpaired"
+    assert saws["saw_correlation"] > 0.8 and saws["saw_amplitude_ratio"] > 0.7 and abs(saws["lag_s"]) <= 0.05
+    _, corrects_only = figures(WearerConfig(feedforward=False))  # corrections alone: no stroke
+    assert corrects_only["saw_correlation"] < 0.5 and corrects_only["saw_amplitude_ratio"] < 0.5
