@@ -74,12 +74,13 @@ class Comparison:
     runs: list[dict[str, Any]]
     run_files: dict[str, list[str]] = field(default_factory=dict)
     video: str | None = None
+    offline_wearer_share_by_mode: dict[str, float] | None = None  # the bundle's held-out voluntary share per mode
     wearer: dict[str, Any] | None = None  # {"preset": name or None, "settings": WearerConfig.to_dict()}
 
     def to_dict(self) -> dict[str, Any]:
         return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
                 "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video,
-                "wearer": self.wearer}
+                "wearer": self.wearer, "offline_wearer_share_by_mode": self.offline_wearer_share_by_mode}
 
 
 def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
@@ -163,7 +164,20 @@ def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np
             "saw_amplitude_ratio": weighted("saw_amplitude_ratio", cut),
             "saw_correlation": weighted("saw_correlation", cut), "strokes_intended": intended,
             "strokes_executed": executed, "stroke_share": executed / intended if intended else None,
-            "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode}
+            "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode, **_pool_wearer_share(metrics)}
+
+
+def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The wearer's share per mode pooled over episodes, weighted by each episode's steps in that mode."""
+    shares: dict[str, float] = {}
+    counts: dict[str, int] = {}
+    for m in metrics:
+        for name, n in (m.get("mode_steps") or {}).items():
+            share = (m.get("wearer_share_by_mode") or {}).get(name)
+            if share is not None and n:
+                shares[name] = shares.get(name, 0.0) + share * n
+                counts[name] = counts.get(name, 0) + int(n)
+    return {"wearer_share_by_mode": {k: shares[k] / counts[k] for k in sorted(counts)}, "mode_steps": counts}
 
 
 def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Sequence[int], *,
@@ -215,7 +229,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             trial = by_id[int(tid)]
             true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
             m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
-                                          true_mode, tuple(mode_names) if mode_names else None))
+                                          true_mode, tuple(mode_names) if mode_names else None,
+                                          alpha=episode.alpha))
             metrics.append(m)
             steps.append(np.asarray(episode.step_time, dtype=float))
             seconds.append(float(episode.t[-1] - episode.t[0]) + float(np.median(np.diff(episode.t))))
@@ -234,7 +249,17 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
         pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
-                      wearer=describe_wearer(wearer))
+                      wearer=describe_wearer(wearer),
+                      offline_wearer_share_by_mode=_offline_share(bundle, mode_names))
+
+
+def _offline_share(bundle: Any, mode_names: Sequence[str] | None) -> dict[str, float] | None:
+    """The bundle's held-out voluntary share per true mode label, by mode name (None if not recorded)."""
+    by_label = (getattr(bundle, "metrics", None) or {}).get("voluntary_share_by_label")
+    if not by_label:
+        return None
+    names = list(mode_names or [])
+    return {names[int(k)] if int(k) < len(names) else k: float(v) for k, v in by_label.items()}
 
 
 def describe_wearer(wearer: WearerConfig | None) -> dict[str, Any]:

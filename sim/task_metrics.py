@@ -29,7 +29,7 @@ import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
 __all__ = ["STROKE_BAND_HZ", "TASK_KEYS", "SawingFidelity", "episode_task_metrics", "rms_by_mode", "sawing_fidelity",
-           "time_lag"]
+           "time_lag", "wearer_share_by_mode"]
 
 STROKE_BAND_HZ = (0.8, 3.0)  # [Hz] the band of the sawing strokes (2 Hz strokes in the demonstrations)
 
@@ -147,24 +147,44 @@ def rms_by_mode(tip: np.ndarray, intent: np.ndarray, modes: np.ndarray,
 
 #: keys of :func:`episode_task_metrics` (``comparison.json`` per strategy)
 TASK_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "strokes_intended",
-             "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m")
+             "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps")
+
+
+def wearer_share_by_mode(alpha: np.ndarray, true_mode: np.ndarray, mode_names: tuple[str, ...] | None = None
+                         ) -> tuple[dict[str, float], dict[str, int]]:
+    """Per true mode: the share of control steps where the wearer leads (α < 0.5), and the step count."""
+    alpha, true_mode = np.asarray(alpha, dtype=float), np.asarray(true_mode)
+    if alpha.shape != true_mode.shape:
+        raise ValueError(f"alpha {alpha.shape} and true_mode {true_mode.shape} must have one shape")
+    shares, counts = {}, {}
+    for j in np.unique(true_mode[true_mode >= 0]):
+        sel = true_mode == j
+        name = mode_names[j] if mode_names is not None and 0 <= j < len(mode_names) else str(int(j))
+        shares[name], counts[name] = float(np.mean(~(alpha[sel] >= 0.5))), int(sel.sum())
+    return shares, counts
 
 
 def episode_task_metrics(tip: np.ndarray, intent: np.ndarray, dt: float, true_mode: np.ndarray | None,
-                         mode_names: tuple[str, ...] | None = None, cutting: str = "cutting") -> dict:
+                         mode_names: tuple[str, ...] | None = None, cutting: str = "cutting",
+                         alpha: np.ndarray | None = None) -> dict:
     """The task figures of one episode (keys :data:`TASK_KEYS`, JSON-able; None where undefined).
 
     ``true_mode`` (N,): the demonstration's mode labels at the control steps (None: unknown, no
     sawing or per-mode figures); the cutting mode is the label named ``cutting`` in ``mode_names``.
+    ``alpha`` (N,): the controller's α per step, for the wearer's share per mode (a NaN α counts
+    as the wearer leading).
     """
     lag, rms_lag = time_lag(tip, intent, dt)
     out: dict = {"lag_s": None if not np.isfinite(lag) else lag,
                  "rms_at_lag_m": None if not np.isfinite(rms_lag) else rms_lag,
                  "saw_amplitude_ratio": None, "saw_correlation": None, "strokes_intended": 0,
-                 "strokes_executed": 0, "stroke_share": None, "cutting_s": 0.0, "rms_by_mode_m": {}}
+                 "strokes_executed": 0, "stroke_share": None, "cutting_s": 0.0, "rms_by_mode_m": {},
+                 "wearer_share_by_mode": {}, "mode_steps": {}}
     if true_mode is None or not np.any(np.asarray(true_mode) >= 0):
         return out
     out["rms_by_mode_m"] = rms_by_mode(tip, intent, true_mode, mode_names)
+    if alpha is not None:
+        out["wearer_share_by_mode"], out["mode_steps"] = wearer_share_by_mode(alpha, true_mode, mode_names)
     if mode_names is not None and cutting in mode_names:
         f = sawing_fidelity(tip, intent, np.asarray(true_mode) == mode_names.index(cutting), dt)
         out.update(saw_amplitude_ratio=f.amplitude_ratio, saw_correlation=f.correlation,

@@ -343,7 +343,7 @@ class SharedController:
             self.smoother.reset(self.tip.position(q))
         u_model = self._pose[:3, :3].T @ u
         if self.config.smoother_target == "position":
-            sm = self.smoother.update(p_model)
+            sm = self.smoother.update(p_model + self.config.smoother_lead_s * u_model)
         else:
             sm = self.smoother.update(p_model, u_model, self._pose[:3, :3].T @ self._acc_ff)
         timings["smoothing"] = time.perf_counter() - ta

@@ -80,7 +80,7 @@ class ControllerConfig:
     # as every step (20.2 mm) and the real-time factor 4.1-4.3x instead of 3.4x (same process).
     mpc_every: int = 2
     on_threshold: float = 0.6
-    off_threshold: float = 0.4
+    off_threshold: float = 0.5
     min_dwell_s: float = 0.5
     blend_range: tuple[float, float] = (0.5, 0.9)
     detect_stale: bool = True
@@ -92,3 +92,4 @@ class ControllerConfig:
     mpc_preview: bool = True
     smoother_target: str = "position"
     forecast_fade_s: float | None = 0.0
+    smoother_lead_s: float = 0.05

@@ -107,6 +107,23 @@ def _table(strategies: dict[str, dict[str, Any]], columns: tuple) -> list[str]:
     return [head, rule, *rows]
 
 
+def _who_leads_table(comp: Comparison) -> list[str]:
+    """Per mode: the share of steps the wearer leads in the closed loop (gate, blend) beside the
+    bundle's held-out voluntary share of that mode (what the gate said offline)."""
+    runs = [r for r in ("gate", "blend") if (comp.strategies.get(r) or {}).get("wearer_share_by_mode")]
+    if not runs:
+        return []
+    offline = comp.offline_wearer_share_by_mode or {}
+    modes = sorted({k for r in runs for k in comp.strategies[r]["wearer_share_by_mode"]})
+    head = "| mode | " + " | ".join(f"wearer leads, `{r}`" for r in runs) + " | offline voluntary share |"
+    rows = [head, "|---|" + "---|" * (len(runs) + 1)]
+    for mode in modes:
+        cells = [comp.strategies[r]["wearer_share_by_mode"].get(mode) for r in runs] + [offline.get(mode)]
+        rows.append(f"| {mode} | " + " | ".join("–" if c is None else f"{c:.0%}" for c in cells) + " |")
+    return ["Who leads, per mode of the data: the closed loop's share of steps with α < 0.5, beside the share "
+            "the gate hands to the wearer on the bundle's held-out trials:", "", *rows, ""]
+
+
 def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.png",
                         trial_plot: str | None = None) -> str:
     """The Markdown section: table, findings, plot."""
@@ -119,6 +136,7 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
         lines += ["The task: the knife's lag behind the wearer's intent (the time shift that minimises the RMS) "
                   "and, while cutting, its motion in the stroke band (0.8–3 Hz) against the intended stroke:", "",
                   *_table(comp.strategies, _TASK_COLUMNS), ""]
+    lines += _who_leads_table(comp)
     lines += [*[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
     if plot_name:
         lines += [f"![strategies]({plot_name})", ""]

@@ -145,6 +145,14 @@ def forecast_errors(data: TrainingData, predictor: ReactivePredictor, R: np.ndar
     return out
 
 
+def _share_by_label(side: SplitData, wearer: np.ndarray) -> dict[str, float] | None:
+    """Mean of ``wearer`` (n_windows,) per true mode label of the data (None without labels)."""
+    if any(tr.mode is None for tr in side.std.trials):
+        return None
+    labels = np.concatenate([tr.mode for tr in side.std.trials])[side.windows.source_index]
+    return {str(int(j)): float(np.mean(wearer[labels == j])) for j in np.unique(labels) if j >= 0}
+
+
 def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor, K: float,
              baselines: Mapping[str, Any] | None = None,
              baseline_predictions: Mapping[str, np.ndarray] | None = None) -> dict[str, Any]:
@@ -174,6 +182,7 @@ def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor,
         "baselines": {name: _errors(data, p, R, None) for name, p in preds.items()},
         "gate": gate_metrics(gates, side.windows.X, modes, Z),
         "voluntary_share": float(np.mean(1 - h)),
+        "voluntary_share_by_label": _share_by_label(side, 1 - h),
         "voluntary_effort": voluntary_effort(h, magnitude),
         "effort_if_all_voluntary": float(np.mean(magnitude)),
         "effort_source": source,
