@@ -66,6 +66,8 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
                    help="also train the LSTM on all points as a baseline (the sweep always does)")
     g.add_argument("--device", choices=["cpu", "cuda", "auto"], default=d.device,
                    help=f"torch device of the LSTM (default {d.device}; auto = CUDA when present)")
+    g.add_argument("--forecast", type=nonnegative_float, default=d.forecast_s,
+                   help=f"forecast horizon of the predictor [s] (default {d.forecast_s:g}; 0: the present only)")
     g.add_argument("--seed", type=int, default=d.seed, help=f"seed of everything random (default {d.seed})")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
 
@@ -74,7 +76,7 @@ def _config(args: argparse.Namespace) -> TrainConfig:
     return TrainConfig(percentile=args.percentile, model_hz=args.rate, window_s=args.window,
                        n_modes=args.modes, hmm_restarts=args.hmm_restarts, heldout_fraction=args.heldout,
                        max_epochs=args.epochs, lstm_baseline=args.baselines, device=args.device,
-                       seed=args.seed)
+                       forecast_s=args.forecast, seed=args.seed)
 
 
 def _fmt(x) -> str:

@@ -87,7 +87,7 @@ class ControllerConfig:
     workspace: WorkspaceBox = DEFAULT_WORKSPACE
     reach_margin: float = 0.01
     qp: QPConfig = field(default_factory=QPConfig)
-    forecast_lead_s: float = 0.05
+    forecast_lead_s: float = 0.01
     reactive_feedforward: bool = True
     mpc_preview: bool = True
     smoother_target: str = "position"

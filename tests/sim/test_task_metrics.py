@@ -91,3 +91,15 @@ def test_rms_by_mode_matches_a_direct_computation():
         e = tip[modes == m] - intent[modes == m]
         assert got[name] == pytest.approx(np.sqrt(np.mean(np.sum(e**2, axis=1))))
     assert set(got) == {"cutting", "repositioning", "collecting"}
+
+
+def test_wearer_share_by_mode_counts_alpha_below_half_and_nan():
+    from sim.task_metrics import wearer_share_by_mode
+
+    alpha = np.array([1.0, 0.0, np.nan, 0.6, 0.4, 1.0])
+    modes = np.array([0, 0, 0, 1, 1, -1])
+    shares, counts = wearer_share_by_mode(alpha, modes, ("cutting", "collecting"))
+    assert shares == {"cutting": pytest.approx(2 / 3), "collecting": pytest.approx(0.5)}
+    assert counts == {"cutting": 3, "collecting": 2}
+    with pytest.raises(ValueError, match="one shape"):
+        wearer_share_by_mode(alpha[:3], modes, None)
