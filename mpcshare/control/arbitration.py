@@ -86,11 +86,13 @@ class Arbiter:
         on_threshold, off_threshold: hysteresis on the gate probability (gate strategy).
         min_dwell_s: minimum time [s] between two gate-driven switches of α.
         blend_range: (p₀, p₁) of the blend ramp.
+        handover_s: the gate's α moves between 0 and 1 over this time [s] instead of at once
+            (0: at once); β follows as 1 − α·(1 − β_user). The overrides still act at once.
     """
 
     def __init__(self, strategy: str = "gate", beta: float = 0.5, *, novelty_threshold: float = math.inf,
                  on_threshold: float = 0.6, off_threshold: float = 0.4, min_dwell_s: float = 0.5,
-                 blend_range: tuple[float, float] = (0.5, 0.9)) -> None:
+                 blend_range: tuple[float, float] = (0.5, 0.9), handover_s: float = 0.0) -> None:
         self.strategy = check_strategy(strategy)
         self.beta = check_beta(beta)
         if not (0.0 <= off_threshold <= on_threshold <= 1.0):
@@ -106,6 +108,9 @@ class Arbiter:
         self.on_threshold, self.off_threshold = float(on_threshold), float(off_threshold)
         self.min_dwell_s = float(min_dwell_s)
         self.blend_range = (p0, p1)
+        if not (math.isfinite(handover_s) and handover_s >= 0):
+            raise ValueError(f"handover_s must be finite and ≥ 0, got {handover_s!r}")
+        self.handover_s = float(handover_s)
         self.reset()
 
     def reset(self) -> None:
@@ -114,6 +119,7 @@ class Arbiter:
         self.alpha = 1.0 if self.strategy == "reactive" else 0.0
         self._gate_on = False
         self._last_switch_t = -math.inf
+        self._last_t = -math.inf
 
     def _override(self, gate_proba: float | None, novelty: float, prediction_finite: bool,
                   available: bool) -> str | None:
@@ -150,13 +156,19 @@ class Arbiter:
         elif self._gate_on and p < self.off_threshold and dwell_ok:
             self._gate_on = False
         reason = f"gate probability {p:.2f} " + ("says predictable" if self._gate_on else "says not predictable")
-        return self._set(t, 1.0, self.beta, reason) if self._gate_on else self._set(t, 0.0, 1.0, reason)
+        a = 1.0 if self._gate_on else 0.0
+        if self.handover_s > 0:  # α moves at most 1/handover_s per second (from its reset value at first)
+            step = max(t - self._last_t, 0.0) / self.handover_s if math.isfinite(self._last_t) else 0.0
+            a = min(max(a, self.alpha - step), self.alpha + step)
+        beta = self.beta if a == 1.0 else (1.0 if a == 0.0 else 1.0 - a * (1.0 - self.beta))
+        return self._set(t, a, beta, reason)
 
     def _set(self, t: float, alpha: float, beta: float, reason: str) -> Decision:
         if (alpha >= 0.5) != (self.alpha >= 0.5):
             self.handovers.append(Handover(float(t), self.alpha, alpha, reason))
             self._last_switch_t = float(t)
         self.alpha = alpha
+        self._last_t = float(t)
         return Decision(alpha, beta, reason)
 
 

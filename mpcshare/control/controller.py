@@ -117,7 +117,8 @@ class SharedController:
                                           detect_stale=cfg.detect_stale)
         self.arbiter = Arbiter(strategy, beta, novelty_threshold=float(bundle.novelty_threshold),
                                on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
-                               min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range)
+                               min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range,
+                               handover_s=cfg.handover_s)
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
         if preview is not None and not callable(getattr(preview, "sample", None)):
             raise TypeError(f"preview must be a TipTrajectory (sample(times) -> p, v, a), got {type(preview).__name__}")

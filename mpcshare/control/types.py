@@ -93,3 +93,4 @@ class ControllerConfig:
     smoother_target: str = "position"
     forecast_fade_s: float | None = 0.0
     smoother_lead_s: float = 0.05
+    handover_s: float = 0.5

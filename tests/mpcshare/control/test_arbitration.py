@@ -92,3 +92,16 @@ def test_reactive_velocity_and_fusion():
     u = reactive_velocity(p_ref + [0.3, 0.4, 0.0], p_ref, gain=5.0, max_speed=0.2)
     assert math.isclose(np.linalg.norm(u), 0.2) and np.allclose(u / 0.2, [0.6, 0.8, 0.0])
     np.testing.assert_allclose(fuse(0.5, np.ones(3), 0.25, np.full(3, 2.0)), np.ones(3))
+
+
+def test_gate_hands_over_along_a_ramp_and_overrides_act_at_once():
+    arb = Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.5)
+    alphas = [arb.decide(0.01 * k, 0.95).alpha for k in range(60)]
+    assert alphas[0] == 0.0 and alphas[10] == pytest.approx(0.2) and alphas[50] == 1.0
+    d = arb.decide(0.6, 0.95)
+    assert (d.alpha, d.beta) == (1.0, 0.5)
+    d = arb.decide(0.61, 0.1)
+    assert d.alpha == pytest.approx(0.98) and d.beta == pytest.approx(1 - 0.98 * 0.5)
+    assert arb.decide(0.62, 0.1, prediction_finite=False).alpha == 0.0  # no prediction: at once
+    with pytest.raises(ValueError, match="handover_s"):
+        Arbiter("gate", handover_s=-1.0)
