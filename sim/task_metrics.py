@@ -28,8 +28,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-__all__ = ["STROKE_BAND_HZ", "TASK_KEYS", "SawingFidelity", "episode_task_metrics", "rms_by_mode", "sawing_fidelity",
-           "time_lag", "wearer_share_by_mode"]
+__all__ = ["STROKE_BAND_HZ", "TASK_KEYS", "SawingFidelity", "bandpass", "episode_task_metrics", "rms_by_mode",
+           "sawing_fidelity", "time_lag", "wearer_share_by_mode"]
 
 STROKE_BAND_HZ = (0.8, 3.0)  # [Hz] the band of the sawing strokes (2 Hz strokes in the demonstrations)
 
@@ -77,7 +77,8 @@ class SawingFidelity:
         return asdict(self)
 
 
-def _bandpass(x: np.ndarray, dt: float, band: tuple[float, float]) -> np.ndarray:
+def bandpass(x: np.ndarray, dt: float, band: tuple[float, float]) -> np.ndarray:
+    """Zero-phase Butterworth band-pass (order 2, forward-backward) of (N, d) samples every dt [s]."""
     nyquist = 0.5 / dt
     if not 0 < band[0] < band[1] < nyquist:
         raise ValueError(f"stroke band {band} Hz must lie in (0, {nyquist:g}) Hz")
@@ -99,7 +100,7 @@ def sawing_fidelity(tip: np.ndarray, intent: np.ndarray, cutting_mask: np.ndarra
     cutting_s = float(mask.sum() * dt)
     if mask.sum() < 2:
         return SawingFidelity(None, None, 0, 0, None, cutting_s)
-    b, b_star = _bandpass(tip, dt, band)[mask], _bandpass(intent, dt, band)[mask]
+    b, b_star = bandpass(tip, dt, band)[mask], bandpass(intent, dt, band)[mask]
     e_tip, e_int = float(np.sum(b**2)), float(np.sum(b_star**2))
     amplitude = float(np.sqrt(e_tip / e_int)) if e_int > 0 else None
     corr = float(np.sum(b * b_star) / np.sqrt(e_tip * e_int)) if e_tip > 0 and e_int > 0 else None

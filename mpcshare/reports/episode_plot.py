@@ -1,4 +1,6 @@
-"""Plot of one closed-loop episode: the knife tip against the wearer's intent, α and β, the shoulder.
+"""Plot of one closed-loop episode: the knife tip against the wearer's intent, α and β, the shoulder,
+and a close-up of the sawing: the stroke band (0.8–3 Hz) of the tip and of the intent over the
+4 s where the intent saws hardest (the band's energy, so no mode labels are needed).
 
 Works on an :class:`sim.closed_loop.Episode` or on a run file loaded with
 ``Episode.load``. Drawn with :class:`matplotlib.figure.Figure` (no pyplot state).
@@ -15,11 +17,36 @@ from matplotlib.figure import Figure
 __all__ = ["plot_episode"]
 
 
+def _sawing_window(t: np.ndarray, intent_band: np.ndarray, seconds: float = 4.0) -> tuple[slice, int] | None:
+    """(window, axis): the ``seconds`` where the intent saws hardest along one axis, scored by the
+    stroke-band energy times the number of sign changes (a rhythm, not one fast move); None: too short."""
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    n = int(round(seconds / dt)) if dt > 0 else 0
+    if n < 2 or t.size < n:
+        return None
+    box = np.ones(n)
+    best = (-1.0, 0, 0)
+    for axis in range(intent_band.shape[1]):
+        x = intent_band[:, axis]
+        crossings = np.r_[0.0, (np.sign(x[1:]) != np.sign(x[:-1])).astype(float)]
+        score = np.convolve(x ** 2, box, mode="valid") * np.convolve(crossings, box, mode="valid")
+        k = int(np.argmax(score))
+        if score[k] > best[0]:
+            best = (float(score[k]), k, axis)
+    return slice(best[1], best[1] + n), best[2]
+
+
 def plot_episode(episode: Any, path: str | Path, title: str = "") -> Path:
-    """Four panels over time: tip x/y/z with intent and reference [m], α and β, shoulder angles [rad]."""
+    """Panels over time: tip x/y/z with intent and reference [m], α and β, shoulder angles [rad];
+    then the sawing close-up (module docstring)."""
+    from sim.task_metrics import STROKE_BAND_HZ, bandpass
+
     t = np.asarray(episode.t, dtype=float)
-    fig = Figure(figsize=(10, 8), constrained_layout=True)
-    axes = fig.subplots(5, 1, sharex=True)
+    fig = Figure(figsize=(10, 10), constrained_layout=True)
+    grid = fig.add_gridspec(6, 1, height_ratios=[1, 1, 1, 0.8, 0.8, 1.1])
+    axes = [fig.add_subplot(grid[0])]
+    axes += [fig.add_subplot(grid[i], sharex=axes[0]) for i in range(1, 5)]
+    saw_ax = fig.add_subplot(grid[5])
     for i, axis in enumerate("xyz"):
         ax = axes[i]
         ax.plot(t, episode.tip_intent[:, i], color="0.3", lw=1.2, label="intent (demonstration)")
@@ -35,8 +62,23 @@ def plot_episode(episode: Any, path: str | Path, title: str = "") -> Path:
     for i, name in enumerate(("elevation", "protraction", "abduction")):
         axes[4].plot(t, episode.voluntary[:, i], lw=0.8, label=name)
     axes[4].set_ylabel("shoulder [rad]")
-    axes[4].set_xlabel("time [s]")
     axes[4].legend(loc="upper right", fontsize=7, ncol=3)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    ok = np.isfinite(episode.tip).all(axis=1) & np.isfinite(episode.tip_intent).all(axis=1)
+    found = None
+    if dt > 0 and ok.all() and t.size > 60:
+        tip_b, intent_b = bandpass(episode.tip, dt, STROKE_BAND_HZ), bandpass(episode.tip_intent, dt, STROKE_BAND_HZ)
+        found = _sawing_window(t, intent_b)
+    if found is not None:
+        window, axis = found
+        saw_ax.plot(t[window], 1e3 * intent_b[window, axis], color="0.3", lw=1.2, label="intended stroke")
+        saw_ax.plot(t[window], 1e3 * tip_b[window, axis], color="#4C72B0", lw=1.0, label="knife tip")
+        saw_ax.set_ylabel(f"{'xyz'[axis]}, {STROKE_BAND_HZ[0]:g}–{STROKE_BAND_HZ[1]:g} Hz [mm]")
+        saw_ax.set_title("sawing: the stroke band where the intent saws hardest", fontsize=8)
+        saw_ax.legend(loc="upper right", fontsize=7, ncol=2)
+    else:
+        saw_ax.text(0.5, 0.5, "too short for the stroke band", ha="center", va="center", transform=saw_ax.transAxes)
+    saw_ax.set_xlabel("time [s]")
     if title:
         fig.suptitle(title, fontsize=10)
     path = Path(path)
