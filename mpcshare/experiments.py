@@ -1,8 +1,11 @@
 """Closed-loop comparison of arbitration strategies on held-out demonstrations.
 
 Each *run* is a strategy of :class:`mpcshare.control.controller.SharedController` (``voluntary``,
-``reactive``, ``gate``, ``blend``, the gate with the MPC ``gate_mpc``, and the upper bound
-``oracle_preview``: ``reactive`` given the wearer's true intent as its preview); each is simulated on the
+``reactive``, ``gate``, ``blend``, the gate with the MPC ``gate_mpc``, the upper bound
+``oracle_preview``: ``reactive`` given the wearer's true intent as its preview, and the replayed
+hand-over schedules ``random_handover`` (the placebo: the gate's share and hand-overs at random
+times, several draws) and ``oracle_handover`` (the error-minimising schedule, an upper bound));
+each is simulated on the
 same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
 default the preset ``hemiparetic_mild``) and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
@@ -23,6 +26,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
+from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedule, random_handover_schedules
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
@@ -45,12 +49,16 @@ METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_
 class StrategyRun:
     """One simulated configuration: a name for the tables, the arbitration strategy, MPC on/off,
     and ``oracle``: the controller is given the wearer's true intent as its preview instead of
-    the predictor's forecast (an upper bound, not realisable)."""
+    the predictor's forecast (an upper bound, not realisable). ``schedule``: ``"random"`` or
+    ``"oracle"``: the run replays a hand-over schedule computed from the gate's, or the pure
+    runs', episodes on the same trial (:mod:`mpcshare.handover_runs`), ``draws`` times."""
 
     name: str
     strategy: str
     use_mpc: bool = False
     oracle: bool = False
+    schedule: str | None = None
+    draws: int = 1
 
 
 DEFAULT_RUNS: tuple[StrategyRun, ...] = (
@@ -60,6 +68,8 @@ DEFAULT_RUNS: tuple[StrategyRun, ...] = (
     StrategyRun("blend", "blend"),
     StrategyRun("gate_mpc", "gate", use_mpc=True),
     StrategyRun("oracle_preview", "reactive", oracle=True),
+    StrategyRun("random_handover", "schedule", schedule="random", draws=3),
+    StrategyRun("oracle_handover", "schedule", schedule="oracle"),
 )
 
 
@@ -216,34 +226,55 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     pooled: dict[str, dict[str, float]] = {}
     per_trial: dict[str, dict[str, dict[str, float]]] = {}
     files: dict[str, list[str]] = {}
+    cache: dict[tuple[str, int], Any] = {}  # episodes the scheduled runs are computed from
+
+    def simulate(run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+        trial = by_id[tid]
+        if run.oracle:
+            options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
+        controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
+        episode = run_episode(controller, trial, duration_s=duration_s, seed=seed, wearer=wearer,
+                              obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+        if run.name in _SOURCES:
+            cache[(run.name, tid)] = episode
+        m = episode_metrics(episode)
+        true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
+        m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
+                                      true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
+        return episode, m
+
+    def source(name: str, tid: int) -> Any:
+        if (name, tid) not in cache:
+            simulate(next(r for r in DEFAULT_RUNS if r.name == name), tid, {})
+        return cache[(name, tid)]
+
     for run in runs:
         metrics, steps, seconds = [], [], []
         per_trial[run.name], files[run.name] = {}, []
-        for tid in trial_ids:
+        for tid in (int(t) for t in trial_ids):
             t0 = time.perf_counter()
-            options = {"preview": intent_preview(by_id[int(tid)], demos.act_names, wearer)} if run.oracle else {}
-            controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
-            episode = run_episode(controller, by_id[int(tid)], duration_s=duration_s, seed=seed, wearer=wearer,
-                                  obs_names=list(demos.obs_names), act_names=list(demos.act_names))
-            m = episode_metrics(episode)
-            trial = by_id[int(tid)]
-            true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
-            m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
-                                          true_mode, tuple(mode_names) if mode_names else None,
-                                          alpha=episode.alpha))
-            metrics.append(m)
-            steps.append(np.asarray(episode.step_time, dtype=float))
-            seconds.append(float(episode.t[-1] - episode.t[0]) + float(np.median(np.diff(episode.t))))
-            per_trial[run.name][str(int(tid))] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS}
-            if runs_dir is not None:
-                path = runs_dir / f"{run.name}_trial{int(tid)}.npz"
-                episode.save(path)
-                if mcap:
-                    fork = fork_poses(by_id[int(tid)], demos.obs_names)
-                    write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork)
-                files[run.name].append(str(path.relative_to(Path(out))))
+            draws = _draw_options(run, tid, seed, source)
+            trial_metrics, trial_steps = [], []
+            for j, options in enumerate(draws):
+                episode, m = simulate(run, tid, options)
+                trial_metrics.append(m)
+                trial_steps.append(np.asarray(episode.step_time, dtype=float))
+                seconds.append(float(episode.t[-1] - episode.t[0]) + float(np.median(np.diff(episode.t))))
+                if runs_dir is not None:
+                    suffix = f"_draw{j}" if len(draws) > 1 else ""
+                    path = runs_dir / f"{run.name}_trial{tid}{suffix}.npz"
+                    episode.save(path)
+                    if mcap:
+                        write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork_poses(by_id[tid], demos.obs_names))
+                    files[run.name].append(str(path.relative_to(Path(out))))
+            metrics += trial_metrics
+            steps += trial_steps
+            m = trial_metrics[0] if len(trial_metrics) == 1 else \
+                {**pool_metrics(trial_metrics, trial_steps, seconds[-len(trial_metrics):]),
+                 **pool_task_metrics(trial_metrics, trial_steps)}
+            per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS}
             if log is not None:
-                log(f"  {run.name:12s} trial {int(tid)}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
+                log(f"  {run.name:12s} trial {tid}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
                     f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
         pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
@@ -251,6 +282,24 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
                       wearer=describe_wearer(wearer),
                       offline_wearer_share_by_mode=_offline_share(bundle, mode_names))
+
+
+_SOURCES = {name for names in SCHEDULE_SOURCES.values() for name in names}
+
+
+def _draw_options(run: StrategyRun, tid: int, seed: int, source: Callable[[str, int], Any]) -> list[dict[str, Any]]:
+    """The controller options of each episode of ``run`` on trial ``tid``: one empty dict, or one
+    ``{"schedule": ...}`` per draw of a scheduled run (:mod:`mpcshare.handover_runs`)."""
+    if run.schedule is None:
+        return [{}]
+    if run.schedule == "random":
+        schedules = random_handover_schedules(source("gate", tid), run.draws, [seed, tid])
+    elif run.schedule == "oracle":
+        schedules = [oracle_handover_schedule(source("voluntary", tid), source("reactive", tid))]
+    else:
+        raise ValueError(f"unknown schedule {run.schedule!r} of run {run.name!r}; valid choices: "
+                         f"{', '.join(SCHEDULE_SOURCES)}")
+    return [{"schedule": s} for s in schedules]
 
 
 def _offline_share(bundle: Any, mode_names: Sequence[str] | None) -> dict[str, float] | None:

@@ -3,7 +3,8 @@
 ``mpcshare sim --model MODEL_DIR [--data DATA] --out DIR`` loads a bundle, takes the
 held-out trials (of ``--data``, default: the data set the bundle was trained on,
 as recorded by ``mpcshare train``), simulates each strategy (``voluntary``,
-``reactive``, ``gate``, ``blend``, the gate with the MPC, and the ``oracle_preview`` upper bound) on each
+``reactive``, ``gate``, ``blend``, the gate with the MPC, the ``oracle_preview`` upper bound, the placebo
+``random_handover`` and the upper bound ``oracle_handover``) on each
 trial in MuJoCo
 beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
 ``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
@@ -34,7 +35,8 @@ if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torc
 
 __all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "run_comparison"]
 
-_RUN_NAMES = ("voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview")
+_RUN_NAMES = ("voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview", "random_handover",
+              "oracle_handover")
 
 
 def add_wearer_argument(p: argparse.ArgumentParser) -> None:
@@ -51,7 +53,8 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--duration", type=positive_float, default=None,
                    help="simulate only the first DURATION seconds of each trial (default: whole trials)")
     p.add_argument("--runs", nargs="+", choices=_RUN_NAMES, default=list(_RUN_NAMES),
-                   help="strategies to simulate (default: all six)")
+                   help="strategies to simulate (default: all eight; random_handover replays the gate's share and "
+                        "hand-overs at random times, oracle_handover the error-minimising schedule)")
     p.add_argument("--beta", type=float, default=0.5, help="β while the robot acts (default 0.5)")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
     p.add_argument("--video", action="store_true", help="render the gate on the first trial (offscreen OpenGL)")

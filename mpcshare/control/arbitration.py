@@ -25,6 +25,10 @@ reference, ``k_r`` [1/s] a P-gain and ``sat_v(x) = x · min(1, v/‖x‖)`` a sp
   (p₀, p₁) = ``blend_range`` (default (0.5, 0.9): no robot share below even odds, the
   whole share from 90 % confidence up); β = 1 − α·(1 − β_user), which is the paper's β at
   α ∈ {0, 1}. The same overrides apply.
+* ``schedule`` (:data:`SCHEDULE`, not a controller: the replay of a given hand-over schedule,
+  for the placebo ``random_handover`` and the upper bound ``oracle_handover``): α follows
+  ``schedule(t)`` ∈ {0, 1} through the same ramp ``handover_s`` and β as the gate; no gate
+  overrides (as ``reactive``, û_r = 0 while π̂ has no finite output).
 
 Every change of who leads (α crossing 0.5) is logged as a :class:`Handover` with its
 time and reason.
@@ -34,12 +38,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
-__all__ = ["STRATEGIES", "Arbiter", "Decision", "Handover", "fuse", "reactive_velocity"]
+__all__ = ["SCHEDULE", "STRATEGIES", "Arbiter", "Decision", "Handover", "fuse", "reactive_velocity"]
 
 STRATEGIES: tuple[str, ...] = ("voluntary", "reactive", "gate", "blend")
+#: The strategy that replays a given schedule (Arbiter(..., schedule=f)); not a user choice.
+SCHEDULE = "schedule"
 
 
 @dataclass(frozen=True)
@@ -61,8 +68,13 @@ class Decision:
     reason: str
 
 
-def check_strategy(strategy: str) -> str:
-    """Return ``strategy`` or raise ValueError naming the valid choices."""
+def check_strategy(strategy: str, scheduled: bool = False) -> str:
+    """Return ``strategy`` or raise ValueError naming the valid choices (with ``scheduled``:
+    :data:`SCHEDULE` is valid too, and the only valid one)."""
+    if scheduled:
+        if strategy != SCHEDULE:
+            raise ValueError(f"a schedule is replayed by strategy {SCHEDULE!r}, got {strategy!r}")
+        return strategy
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r}; valid choices: {', '.join(STRATEGIES)}")
     return strategy
@@ -86,14 +98,20 @@ class Arbiter:
         on_threshold, off_threshold: hysteresis on the gate probability (gate strategy).
         min_dwell_s: minimum time [s] between two gate-driven switches of α.
         blend_range: (p₀, p₁) of the blend ramp.
+        schedule: for strategy ``schedule`` only: t [s] → α target ∈ {0, 1}.
         handover_s: the gate's α moves between 0 and 1 over this time [s] instead of at once
             (0: at once); β follows as 1 − α·(1 − β_user). The overrides still act at once.
     """
 
     def __init__(self, strategy: str = "gate", beta: float = 0.5, *, novelty_threshold: float = math.inf,
                  on_threshold: float = 0.6, off_threshold: float = 0.4, min_dwell_s: float = 0.5,
-                 blend_range: tuple[float, float] = (0.5, 0.9), handover_s: float = 0.0) -> None:
-        self.strategy = check_strategy(strategy)
+                 blend_range: tuple[float, float] = (0.5, 0.9), handover_s: float = 0.0,
+                 schedule: Callable[[float], float] | None = None) -> None:
+        if (strategy == SCHEDULE) != (schedule is not None):
+            raise ValueError(f"strategy {SCHEDULE!r} needs a schedule and only it takes one, got strategy "
+                             f"{strategy!r} with schedule={schedule!r}")
+        self.strategy = check_strategy(strategy, scheduled=schedule is not None)
+        self.schedule = schedule
         self.beta = check_beta(beta)
         if not (0.0 <= off_threshold <= on_threshold <= 1.0):
             raise ValueError(f"need 0 ≤ off_threshold ≤ on_threshold ≤ 1, got {off_threshold!r}, {on_threshold!r}")
@@ -141,6 +159,8 @@ class Arbiter:
             return self._set(t, 0.0, 1.0, "voluntary baseline")
         if s == "reactive":
             return self._set(t, 1.0, 0.0, "reactive baseline")
+        if s == SCHEDULE:
+            return self._ramped(t, 1.0 if self.schedule(t) >= 0.5 else 0.0, "given schedule")  # type: ignore[misc]
         why = self._override(gate_proba, novelty, prediction_finite, available)
         if why is not None:
             self._gate_on = False
@@ -156,7 +176,10 @@ class Arbiter:
         elif self._gate_on and p < self.off_threshold and dwell_ok:
             self._gate_on = False
         reason = f"gate probability {p:.2f} " + ("says predictable" if self._gate_on else "says not predictable")
-        a = 1.0 if self._gate_on else 0.0
+        return self._ramped(t, 1.0 if self._gate_on else 0.0, reason)
+
+    def _ramped(self, t: float, a: float, reason: str) -> Decision:
+        """α toward the target ``a`` ∈ {0, 1} at most 1/handover_s per second; β = 1 − α·(1 − β_user)."""
         if self.handover_s > 0:  # α moves at most 1/handover_s per second (from its reset value at first)
             step = max(t - self._last_t, 0.0) / self.handover_s if math.isfinite(self._last_t) else 0.0
             a = min(max(a, self.alpha - step), self.alpha + step)

@@ -52,7 +52,7 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -94,8 +94,9 @@ class SharedController:
                  beta: float = 0.5, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
-                 config: ControllerConfig | None = None, preview: TipTrajectory | None = None) -> None:
-        check_strategy(strategy)
+                 config: ControllerConfig | None = None, preview: TipTrajectory | None = None,
+                 schedule: Callable[[float], float] | None = None) -> None:
+        check_strategy(strategy, scheduled=schedule is not None)
         self.beta_user = check_beta(beta)
         self.config = cfg = config or ControllerConfig()
         self.layout: BundleLayout = check_bundle(bundle, tip_channels, fork_channels)
@@ -118,7 +119,7 @@ class SharedController:
         self.arbiter = Arbiter(strategy, beta, novelty_threshold=float(bundle.novelty_threshold),
                                on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
                                min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range,
-                               handover_s=cfg.handover_s)
+                               handover_s=cfg.handover_s, schedule=schedule)
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
         if preview is not None and not callable(getattr(preview, "sample", None)):
             raise TypeError(f"preview must be a TipTrajectory (sample(times) -> p, v, a), got {type(preview).__name__}")
@@ -137,9 +138,10 @@ class SharedController:
         ``options``: ``tip_channels``, ``fork_channels`` (act/obs names of the knife and fork
         tip positions when they are not knife_x/y/z, fork_x/y/z), ``mpc`` (an MPC object),
         ``config`` (:class:`ControllerConfig`), ``preview`` (a known tip trajectory that replaces
-        the predictor's forecast: the ``oracle_preview`` upper bound, not realisable).
+        the predictor's forecast: the ``oracle_preview`` upper bound, not realisable), ``schedule``
+        (t → α ∈ {0, 1} with strategy ``schedule``: a replayed hand-over schedule).
         """
-        check_strategy(strategy)
+        check_strategy(strategy, scheduled=options.get("schedule") is not None)
         check_beta(beta)
         bundle = folder_or_bundle
         if isinstance(folder_or_bundle, (str, Path)):

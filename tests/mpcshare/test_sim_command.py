@@ -114,3 +114,19 @@ def test_html_report_embeds_local_images_and_lists_missing_ones(tmp_path):
                                      tmp_path)
     assert "<table>" in page and 'src="data:image/png;base64,' in page
     assert missing == ["q.png"] and "file not found" in page
+
+
+def test_sim_runs_the_placebo_and_the_oracle_hand_overs_beside_the_gate(trained, tmp_path):
+    data, model = trained
+    out = tmp_path / "handover"
+    assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "3",
+                 "--runs", "gate", "random_handover", "oracle_handover"]) == 0
+    comp = json.loads((out / "comparison.json").read_text())
+    assert set(comp["strategies"]) == {"gate", "random_handover", "oracle_handover"}
+    assert len(comp["run_files"]["random_handover"]) == 3  # three seeded draws
+    gate = Episode.load(out / comp["run_files"]["gate"][0])
+    draws = [Episode.load(out / f) for f in comp["run_files"]["random_handover"]]
+    for run in draws:  # the gate's share of robot control and hand-overs, at other times
+        assert abs(np.mean(run.alpha > 0.5) - np.mean(gate.alpha > 0.5)) <= 0.02
+        assert np.count_nonzero(np.diff(run.alpha > 0.5)) == np.count_nonzero(np.diff(gate.alpha > 0.5))
+    assert comp["strategies"]["oracle_handover"]["limit_violations"] == 0

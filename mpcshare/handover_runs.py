@@ -1,0 +1,67 @@
+"""The schedules of the replayed runs ``random_handover`` and ``oracle_handover`` from episodes.
+
+* ``random_handover`` (the placebo): from the gate's episode on the trial, the schedule
+  ``on[k] = α_k > 0.5``; each draw is :func:`mpcshare.control.schedule.random_schedule` with the
+  same steps on, hand-overs and first state, and interior segments ≥ the dwell
+  d = ⌈``min_dwell_s`` / Δ⌉ steps (or the gate's own shortest interior segment, if shorter:
+  the gate's overrides switch without dwell), seeded by (seed, trial, draw).
+* ``oracle_handover`` (the upper bound): :func:`mpcshare.control.schedule.oracle_schedule` on
+  the per-step tracking errors e_k = ‖p_k − p*_k‖ of the ``voluntary`` and ``reactive``
+  episodes on the trial, with dwell d.
+
+Both are replayed by the controller's ``schedule`` strategy, read ``handover_s``/2 ahead so
+that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.control.schedule.StepSchedule`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from mpcshare.control.schedule import StepSchedule, oracle_schedule, random_schedule, schedule_stats
+from mpcshare.control.types import ControllerConfig
+
+__all__ = ["SCHEDULE_SOURCES", "dwell_steps", "oracle_handover_schedule", "random_handover_schedules",
+           "tracking_error"]
+
+#: The runs each scheduled run is computed from.
+SCHEDULE_SOURCES: dict[str, tuple[str, ...]] = {"random": ("gate",), "oracle": ("voluntary", "reactive")}
+
+
+def _period(episode: Any) -> float:
+    return float(np.median(np.diff(episode.t))) if episode.t.size > 1 else 0.01
+
+
+def dwell_steps(min_dwell_s: float, dt: float) -> int:
+    """d = max(1, ⌈min_dwell_s / dt⌉) control steps."""
+    return max(1, math.ceil(min_dwell_s / dt - 1e-9))
+
+
+def tracking_error(episode: Any) -> np.ndarray:
+    """(N,) per-step ‖tip − intent‖ [m] of an episode."""
+    return np.linalg.norm(np.asarray(episode.tip) - np.asarray(episode.tip_intent), axis=1)
+
+
+def random_handover_schedules(gate_episode: Any, draws: int, seed: Sequence[int],
+                              config: ControllerConfig | None = None) -> list[StepSchedule]:
+    """``draws`` matched-random schedules of the gate's episode (module docstring)."""
+    cfg = config or ControllerConfig()
+    alpha = np.nan_to_num(np.asarray(gate_episode.alpha, dtype=float), nan=0.0)
+    stats = schedule_stats(alpha > 0.5)
+    d = dwell_steps(cfg.min_dwell_s, _period(gate_episode))
+    if stats.min_interior is not None:
+        d = min(d, stats.min_interior)
+    return [StepSchedule(gate_episode.t, random_schedule(stats, d, [*seed, j]), cfg.handover_s / 2)
+            for j in range(draws)]
+
+
+def oracle_handover_schedule(voluntary_episode: Any, reactive_episode: Any,
+                             config: ControllerConfig | None = None) -> StepSchedule:
+    """The error-minimising schedule with the dwell from the pure runs' episodes (module docstring)."""
+    cfg = config or ControllerConfig()
+    e0, e1 = tracking_error(voluntary_episode), tracking_error(reactive_episode)
+    n = min(e0.size, e1.size)
+    on = oracle_schedule(e0[:n], e1[:n], dwell_steps(cfg.min_dwell_s, _period(reactive_episode)))
+    return StepSchedule(reactive_episode.t[:n], on, cfg.handover_s / 2)
