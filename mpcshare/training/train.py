@@ -23,7 +23,8 @@ Steps (all at the model rate ``model_hz``, default 10 Hz):
    the training trials (``TaskModes.log_predictive``).
 
 Data preparation (1–4 without K, and 7) is :func:`prepare_training_data`; the sweep
-(:mod:`mpcshare.training.sweep`) reuses it for every K. The settings are a
+(:mod:`mpcshare.training.sweep`) and :func:`train_bundles` (one bundle per K, for ``mpcshare
+tune``) reuse it for every K. The settings are a
 :class:`~mpcshare.training.config.TrainConfig`.
 """
 
@@ -31,7 +32,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -55,7 +56,7 @@ if TYPE_CHECKING:  # annotations only (imported where they are used: torch loads
     from mpcshare.bundle import ModelBundle
 
 __all__ = ["TrainingError", "SplitData", "TrainingData", "prepare_training_data",
-           "reactive_labels", "fit_gates", "fit_predictor", "train_bundle", "Stages"]
+           "reactive_labels", "fit_gates", "fit_predictor", "train_bundle", "train_bundles", "Stages"]
 
 
 def fit_gates(data: TrainingData, labels: np.ndarray) -> ModeGates:
@@ -98,29 +99,52 @@ def train_bundle(demos: Demonstrations, config: TrainConfig | None = None, progr
         TrainingError: the data cannot be used (see :func:`prepare_training_data`), or no
             training point is reactive at this percentile.
     """
-    from mpcshare.bundle import ModelBundle
-
     config = config or TrainConfig()
+    return next(iter(train_bundles(demos, config, [config.percentile], progress).values()))
+
+
+def train_bundles(demos: Demonstrations, config: TrainConfig | None = None,
+                  percentiles: Sequence[float] | None = None, progress: bool = True) -> dict[float, ModelBundle]:
+    """One bundle per percentile (default: ``config.percentile``), percentile → bundle: the data
+    preparation (split, preprocessing, HMM modes, quotients, novelty threshold) is done once and
+    shared; gates, predictor and evaluation per K (as :func:`train_bundle`)."""
+    config = config or TrainConfig()
+    ps = [float(p) for p in (percentiles if percentiles is not None else [config.percentile])]
     check_training_data(demos, config)
-    names = ["preprocess", "modes", "quotients", "gates", "predictor", "baselines", "evaluation"]
+    tags = [f" p{p:g}" if len(ps) > 1 else "" for p in ps]  # one percentile: the stages of train_bundle
+    names = ["preprocess", "modes", "quotients"] + [stage + tag for tag in tags
+                                                    for stage in ("gates", "predictor", "baselines", "evaluation")]
     stages = Stages(names, progress)
     t0 = time.perf_counter()
     try:
         data = prepare_training_data(demos, config, stages, progress=progress)
-        K = threshold_from_percentile(data.train.q, config.percentile)
-        Z = reactive_labels(data.train.q, K)
-        gates = fit_gates(data, Z)
-        stages.done("gates")
-        predictor = fit_predictor(data, Z.astype(bool), progress=progress)
-        stages.done("predictor")
-        baselines = {"ridge": fit_ridge(data)}
-        if config.lstm_baseline:
-            baselines["lstm_all"] = fit_predictor(data, np.ones(len(Z), dtype=bool), progress=progress)
-        stages.done("baselines")
-        metrics = evaluate(data, gates, predictor, K, baselines=baselines)
-        stages.done("evaluation")
+        out = {}
+        for p, tag in zip(ps, tags):
+            cfg = TrainConfig(**{**config.to_dict(), "percentile": p})
+            out[p] = _bundle_at(data, cfg, stages, progress, t0, tag)
     finally:
         stages.close()
+    return out
+
+
+def _bundle_at(data: TrainingData, config: TrainConfig, stages: Stages, progress: bool, t0: float,
+               tag: str) -> ModelBundle:
+    """Gates, predictor, baselines and evaluation at ``config.percentile`` on prepared ``data``
+    (``tag``: the suffix of the stage names)."""
+    from mpcshare.bundle import ModelBundle
+
+    K = threshold_from_percentile(data.train.q, config.percentile)
+    Z = reactive_labels(data.train.q, K)
+    gates = fit_gates(data, Z)
+    stages.done("gates" + tag)
+    predictor = fit_predictor(data, Z.astype(bool), progress=progress)
+    stages.done("predictor" + tag)
+    baselines = {"ridge": fit_ridge(data)}
+    if config.lstm_baseline:
+        baselines["lstm_all"] = fit_predictor(data, np.ones(len(Z), dtype=bool), progress=progress)
+    stages.done("baselines" + tag)
+    metrics = evaluate(data, gates, predictor, K, baselines=baselines)
+    stages.done("evaluation" + tag)
     metrics["training"] = {
         "K": None if math.isinf(K) else float(K), "percentile": float(config.percentile),
         "reactive_share_train": float(Z.mean()), "n_train_windows": int(len(Z)),
