@@ -30,6 +30,7 @@ from mpcshare.commands.demo import DEMO_COMMAND
 from mpcshare.commands.ros_import import IMPORT_COMMAND
 from mpcshare.commands.sim import SIM_COMMAND
 from mpcshare.commands.train import TRAIN_COMMAND
+from mpcshare.commands.tune import TUNE_COMMAND
 
 __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "positive_int", "positive_float",
            "nonnegative_float", "prepare_output_folder", "load_or_fail"]
@@ -42,6 +43,7 @@ COMMANDS: tuple[Command, ...] = (
     ANALYZE_COMMAND,
     TRAIN_COMMAND,
     SIM_COMMAND,
+    TUNE_COMMAND,
     DEMO_COMMAND,
 )
 

@@ -38,7 +38,7 @@ if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torc
     from mpcshare.bundle import ModelBundle
 
 __all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
-           "pool_metrics", "render_clip"]
+           "pool_metrics", "render_clip", "simulate_episode"]
 
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
@@ -190,6 +190,25 @@ def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
     return {"wearer_share_by_mode": {k: shares[k] / counts[k] for k in sorted(counts)}, "mode_steps": counts}
 
 
+def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: StrategyRun, options: dict[str, Any],
+                     *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
+                     mode_names: Sequence[str] | None,
+                     make_controller: Callable[..., Any] | None = None) -> tuple[Any, dict[str, Any]]:
+    """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
+    its metrics: :func:`sim.metrics.episode_metrics` and the task figures of :mod:`sim.task_metrics`."""
+    make_controller = make_controller or _from_bundle
+    if run.oracle:
+        options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
+    controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
+    episode = run_episode(controller, trial, duration_s=duration_s, seed=seed, wearer=wearer,
+                          obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+    m = episode_metrics(episode)
+    true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
+    m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
+                                  true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
+    return episode, m
+
+
 def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Sequence[int], *,
                        runs: Sequence[StrategyRun] = DEFAULT_RUNS, duration_s: float | None = None,
                        out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
@@ -229,18 +248,11 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     cache: dict[tuple[str, int], Any] = {}  # episodes the scheduled runs are computed from
 
     def simulate(run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-        trial = by_id[tid]
-        if run.oracle:
-            options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
-        controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
-        episode = run_episode(controller, trial, duration_s=duration_s, seed=seed, wearer=wearer,
-                              obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+        episode, m = simulate_episode(bundle, demos, by_id[tid], run, options, beta=beta, duration_s=duration_s,
+                                      seed=seed, wearer=wearer, mode_names=mode_names,
+                                      make_controller=make_controller)
         if run.name in _SOURCES:
             cache[(run.name, tid)] = episode
-        m = episode_metrics(episode)
-        true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
-        m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
-                                      true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
         return episode, m
 
     def source(name: str, tid: int) -> Any:

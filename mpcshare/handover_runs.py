@@ -16,15 +16,16 @@ that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.control.sched
 from __future__ import annotations
 
 import math
+from dataclasses import asdict
 from typing import Any, Sequence
 
 import numpy as np
 
-from mpcshare.control.schedule import StepSchedule, oracle_schedule, random_schedule, schedule_stats
+from mpcshare.control.schedule import ScheduleStats, StepSchedule, oracle_schedule, random_schedule, schedule_stats
 from mpcshare.control.types import ControllerConfig
 
 __all__ = ["SCHEDULE_SOURCES", "dwell_steps", "oracle_handover_schedule", "random_handover_schedules",
-           "tracking_error"]
+           "random_schedules_from", "schedule_record", "tracking_error"]
 
 #: The runs each scheduled run is computed from.
 SCHEDULE_SOURCES: dict[str, tuple[str, ...]] = {"random": ("gate",), "oracle": ("voluntary", "reactive")}
@@ -44,17 +45,30 @@ def tracking_error(episode: Any) -> np.ndarray:
     return np.linalg.norm(np.asarray(episode.tip) - np.asarray(episode.tip_intent), axis=1)
 
 
+def schedule_record(episode: Any) -> dict[str, Any]:
+    """What a matched-random schedule needs of an episode (JSON-able): the
+    :class:`~mpcshare.control.schedule.ScheduleStats` of ``α > 0.5`` and the step times
+    ``t0_s + k·dt_s``."""
+    alpha = np.nan_to_num(np.asarray(episode.alpha, dtype=float), nan=0.0)
+    return {**asdict(schedule_stats(alpha > 0.5)), "t0_s": float(episode.t[0]), "dt_s": _period(episode)}
+
+
+def random_schedules_from(record: dict[str, Any], draws: int, seed: Sequence[int],
+                          config: ControllerConfig | None = None) -> list[StepSchedule]:
+    """``draws`` matched-random schedules of a :func:`schedule_record` (module docstring)."""
+    cfg = config or ControllerConfig()
+    stats = ScheduleStats(**{k: record[k] for k in ScheduleStats.__dataclass_fields__})
+    d = dwell_steps(cfg.min_dwell_s, record["dt_s"])
+    if stats.min_interior is not None:
+        d = min(d, stats.min_interior)
+    times = record["t0_s"] + record["dt_s"] * np.arange(stats.steps)
+    return [StepSchedule(times, random_schedule(stats, d, [*seed, j]), cfg.handover_s / 2) for j in range(draws)]
+
+
 def random_handover_schedules(gate_episode: Any, draws: int, seed: Sequence[int],
                               config: ControllerConfig | None = None) -> list[StepSchedule]:
     """``draws`` matched-random schedules of the gate's episode (module docstring)."""
-    cfg = config or ControllerConfig()
-    alpha = np.nan_to_num(np.asarray(gate_episode.alpha, dtype=float), nan=0.0)
-    stats = schedule_stats(alpha > 0.5)
-    d = dwell_steps(cfg.min_dwell_s, _period(gate_episode))
-    if stats.min_interior is not None:
-        d = min(d, stats.min_interior)
-    return [StepSchedule(gate_episode.t, random_schedule(stats, d, [*seed, j]), cfg.handover_s / 2)
-            for j in range(draws)]
+    return random_schedules_from(schedule_record(gate_episode), draws, seed, config)
 
 
 def oracle_handover_schedule(voluntary_episode: Any, reactive_episode: Any,

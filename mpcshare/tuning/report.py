@@ -1,0 +1,123 @@
+"""The files of ``mpcshare tune``: ``tune.json``, ``tune.md`` and ``pareto.png``.
+
+``tune.json``: ``rows`` (one per episode: ``percentile``, ``beta``, ``strategy``,
+``matched_to``, ``trial``, ``seed``, the metrics of ``comparison.json`` and the task metrics,
+and for gate/blend rows their ``schedule``), ``summary`` (setting → means with 95 %
+bootstrap CIs over trials × seeds), ``tests`` (gate/blend setting → ``vs_random_handover``:
+``p_value``, ``effect_m``, ``effect_ci95_m``, …), ``pareto`` (setting names),
+``recommended`` (the setting and its ``criterion``), ``trials``, ``seeds``, ``duration_s``,
+``wearer``, ``bundles``, ``timing_keys`` (the row keys that depend on wall time).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from learning.atomic import atomic_open
+from mpcshare.reports.comparison import strict_json
+from mpcshare.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
+
+__all__ = ["build_result", "chance_sentences", "tune_markdown", "write_tune"]
+
+
+def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
+    """``tune.json``'s object from the rows (module docstring); ``info``: the run's other fields."""
+    from mpcshare.tuning.episodes import TIMING_KEYS
+
+    summary = summarise(rows)
+    tests = gate_vs_random(rows)
+    return {"rows": rows, "summary": summary, "tests": tests, "pareto": pareto(summary),
+            "recommended": recommend(summary, tests), "timing_keys": list(TIMING_KEYS), **info}
+
+
+def _mm(x: Any) -> str:
+    return "–" if x is None else f"{1e3 * x:.1f}"
+
+
+def _num(x: Any, fmt: str = ".3f") -> str:
+    return "–" if x is None else format(x, fmt)
+
+
+def chance_sentences(result: dict[str, Any]) -> list[str]:
+    """One sentence per gate/blend setting on whether it beats its matched random_handover."""
+    out = []
+    for name, t in result["tests"].items():
+        v = t["vs_random_handover"]
+        ci = v["effect_ci95_m"]
+        ci_txt = f" (95 % CI {_mm(ci[0])} to {_mm(ci[1])} mm)" if ci else ""
+        if v["beats_random"]:
+            out.append(f"{name} beats random hand-overs at the same share and count: {_mm(v['effect_m'])} mm lower "
+                       f"tracking RMS{ci_txt}, p = {v['p_value']:.3g} over {v['n_pairs']} trial x seed pairs.")
+        else:
+            p = "no test (no pair differs)" if v["p_value"] is None else f"p = {v['p_value']:.3g}"
+            out.append(f"{name} does not beat chance: random hand-overs at the same share and count track "
+                       f"{_mm(v['effect_m'])} mm worse on average{ci_txt}, {p} over {v['n_pairs']} pairs "
+                       f"(threshold {ALPHA_LEVEL}); its hand-over times add nothing measurable here.")
+    return out
+
+
+def tune_markdown(result: dict[str, Any]) -> str:
+    """``tune.md``: the table, the Pareto set, the tests in words and the recommendation."""
+    lines = ["# Closed-loop sweep (`mpcshare tune`)", "",
+             f"Held-out trials {result.get('trials')}, seeds {result.get('seeds')}, "
+             f"{result.get('duration_s') or 'whole'} s each, wearer {result.get('wearer')}. "
+             "Means over trials x seeds with 95 % bootstrap CIs.", "",
+             "| setting | n | tracking RMS [mm] (CI) | effort [rad] (CI) | robot share | hand-overs "
+             "| vs random: effect [mm] | p |", "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for name, s in result["summary"].items():
+        r, e = s["tracking_rmse_m"], s["voluntary_effort"]
+        rci = f" ({_mm(r['ci95'][0])}–{_mm(r['ci95'][1])})" if r["ci95"] else ""
+        eci = f" ({_num(e['ci95'][0])}–{_num(e['ci95'][1])})" if e["ci95"] else ""
+        t = result["tests"].get(name, {}).get("vs_random_handover")
+        eff, p = (_mm(t["effect_m"]), _num(t["p_value"], ".3g")) if t else ("", "")
+        lines.append(f"| {name} | {s['n']} | {_mm(r['mean'])}{rci} | {_num(e['mean'])}{eci} "
+                     f"| {_num(s['reactive_share']['mean'], '.2f')} | {_num(s['handovers']['mean'], '.1f')} "
+                     f"| {eff} | {p} |")
+    lines += ["", "**Pareto set** (no other setting has both lower error and lower effort): "
+              + ", ".join(result["pareto"]) + ".", "", "## Does the gate hand over at the right moments?", ""]
+    lines += [f"- {s}" for s in chance_sentences(result)] or ["- No gate or blend setting in this sweep."]
+    rec = result["recommended"]
+    if rec:
+        lines += ["", "## Recommendation", "",
+                  f"**{rec['setting']}**: tracking RMS {_mm(rec['tracking_rmse_m'])} mm, effort "
+                  f"{_num(rec['voluntary_effort'])} rad"
+                  + ("." if rec["beats_random"] else "; no setting beats chance, so this is only the lowest error.")
+                  + f" Criterion: {rec['criterion']}.", ""]
+    lines += ["![effort against error](pareto.png)", ""]
+    return "\n".join(lines)
+
+
+def _plot(result: dict[str, Any], path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7, 5), layout="constrained")
+    ax = fig.add_subplot()
+    colors = {"gate": "C0", "blend": "C1", "random_handover": "C7", "voluntary": "C3", "reactive": "C2",
+              "oracle_preview": "C4"}
+    pts = {n: (s["tracking_rmse_m"]["mean"], s["voluntary_effort"]["mean"], s["strategy"])
+           for n, s in result["summary"].items()
+           if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None}
+    for name, (err, eff, strat) in pts.items():
+        ax.scatter(1e3 * err, eff, color=colors.get(strat, "k"), marker="o" if strat != "random_handover" else "x",
+                   edgecolor="k" if name in result["pareto"] else None, zorder=3)
+        ax.annotate(name, (1e3 * err, eff), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    vol = [v for v in pts.values() if v[2] == "voluntary"]
+    for err, eff, _ in (v for v in pts.values() if v[2] == "reactive"):
+        for ve, vf, _ in vol:
+            ax.plot([1e3 * ve, 1e3 * err], [vf, eff], "--", color="0.6", lw=0.8, zorder=1)
+    ax.set_xlabel("tracking RMS [mm]")
+    ax.set_ylabel("voluntary effort [rad]")
+    ax.set_title("effort against error (dashed: voluntary to reactive; edged: Pareto set)", fontsize=9)
+    fig.savefig(path, dpi=120)
+
+
+def write_tune(result: dict[str, Any], out: str | Path) -> None:
+    """Write ``tune.json``, ``tune.md`` and ``pareto.png`` into ``out``."""
+    out = Path(out)
+    with atomic_open(out / "tune.json", "w") as f:
+        json.dump(strict_json(result), f, indent=1)
+    with atomic_open(out / "tune.md", "w") as f:
+        f.write(tune_markdown(result))
+    _plot(result, out / "pareto.png")

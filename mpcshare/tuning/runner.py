@@ -1,0 +1,163 @@
+"""Running a closed-loop sweep: bundles per K, episodes on a backend, rows kept as they finish.
+
+:func:`run_tune` trains one bundle per percentile on one data preparation
+(:func:`mpcshare.training.train.train_bundles`: the HMM and quotients are fitted once) into
+``out/bundles/p<P>``, runs phase 1 and then phase 2 of :mod:`mpcshare.tuning.episodes` on a
+backend, and appends each finished row at once to ``out/episodes.jsonl``. Started again with
+the same arguments (``out/sweep_args.json``) it reuses the bundles and the rows already there
+and runs only the rest; with other arguments it starts over.
+
+Backends (:func:`map_tasks`): ``local`` — in this process (``workers`` = 1) or a
+``concurrent.futures`` process pool (spawned workers); ``ray`` — one Ray task per episode on
+the cluster at ``address`` (None: a local Ray). Each episode is deterministic given its task,
+so the rows are the same whatever the backend and the number of workers (but
+:data:`~mpcshare.tuning.episodes.TIMING_KEYS`).
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any, Callable, Iterator, Sequence
+
+from mpcshare.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
+
+__all__ = ["BACKENDS", "RayMissing", "map_tasks", "run_tune"]
+
+BACKENDS: tuple[str, ...] = ("local", "ray")
+
+
+class RayMissing(ImportError):
+    """``--backend ray`` without Ray installed."""
+
+
+def _local(tasks: Sequence[EpisodeTask], workers: int) -> Iterator[dict[str, Any]]:
+    if workers <= 1:
+        for t in tasks:
+            yield run_task(t)
+        return
+    ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        for fut in as_completed([pool.submit(run_task, t) for t in tasks]):
+            yield fut.result()
+
+
+def _ray(tasks: Sequence[EpisodeTask], address: str | None) -> Iterator[dict[str, Any]]:
+    try:
+        import ray
+    except ImportError:
+        raise RayMissing("--backend ray needs Ray: pip install -e .[ray] (or choose --backend local)") from None
+    if not ray.is_initialized():
+        ray.init(address=address, include_dashboard=False, log_to_driver=False)
+    remote = ray.remote(num_cpus=1)(run_task)
+    pending = [remote.remote(t) for t in tasks]
+    while pending:
+        done, pending = ray.wait(pending, num_returns=1)
+        yield ray.get(done[0])
+
+
+def map_tasks(tasks: Sequence[EpisodeTask], backend: str = "local", workers: int = 1,
+              address: str | None = None) -> Iterator[dict[str, Any]]:
+    """The rows of ``tasks`` in the order they finish (module docstring)."""
+    if backend == "local":
+        return _local(tasks, workers)
+    if backend == "ray":
+        return _ray(tasks, address)
+    raise ValueError(f"unknown backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
+
+
+class _Store:
+    """Rows by task key, appended to ``episodes.jsonl`` one line per finished episode."""
+
+    def __init__(self, out: Path, signature: dict[str, Any]) -> None:
+        self.path = out / "episodes.jsonl"
+        args = out / "sweep_args.json"
+        self.rows: dict[str, dict[str, Any]] = {}
+        if args.exists() and json.loads(args.read_text()) == signature and self.path.exists():
+            for line in self.path.read_text().splitlines():
+                try:
+                    row = json.loads(line)
+                except json.JSONDecodeError:  # a line cut by an interruption
+                    continue
+                self.rows[task_key(row)] = row
+        else:
+            self.path.write_text("")
+            args.write_text(json.dumps(signature, indent=1))
+
+    def add(self, row: dict[str, Any]) -> None:
+        self.rows[task_key(row)] = row
+        with self.path.open("a") as f:
+            f.write(json.dumps(row) + "\n")
+
+
+def _bundles(data: Any, config: Any, percentiles: Sequence[float], out: Path, progress: bool) -> dict[float, str]:
+    """``out/bundles/p<P>`` per percentile, trained once on one data preparation (kept when present)."""
+    from mpcshare.bundle import is_bundle, save_bundle
+    from mpcshare.training.train import train_bundles
+
+    paths = {p: out / "bundles" / f"p{p:g}" for p in percentiles}
+    todo = [p for p in percentiles if not is_bundle(paths[p])]
+    if todo:
+        for p, bundle in train_bundles(data, config, todo, progress=progress).items():
+            save_bundle(bundle, paths[p])
+    return {p: str(paths[p]) for p in percentiles}
+
+
+def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[float], betas: Sequence[float],
+             strategies: Sequence[str], n_trials: int, seeds: Sequence[int], duration_s: float | None,
+             wearer: str, config: Any = None, backend: str = "local", workers: int = 1,
+             address: str | None = None, progress: bool = True, mode_names: Sequence[str] | None = None,
+             log: Callable[[str], None] | None = print) -> dict[str, Any]:
+    """Run the sweep (module docstring); returns ``{"rows": [...], "trials": [...], "bundles": {...}}``.
+
+    Raises ValueError when the data has fewer held-out trials than ``n_trials``.
+    """
+    from learning.data import load
+    from mpcshare.training.config import TrainConfig
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    config = config or TrainConfig()
+    signature = {"data": str(Path(data_path).resolve()), "percentiles": list(percentiles), "betas": list(betas),
+                 "strategies": list(strategies), "trials": n_trials, "seeds": list(seeds),
+                 "duration_s": duration_s, "wearer": wearer, "config": config.to_dict()}
+    store = _Store(out, signature)
+    demos = load(data_path)
+    bundles = _bundles(demos, config, percentiles, out, progress)
+    from mpcshare.bundle import load_bundle
+
+    heldout = [int(t) for t in load_bundle(bundles[percentiles[0]]).heldout_trials]
+    if len(heldout) < n_trials:
+        raise ValueError(f"--trials {n_trials}: the data has only {len(heldout)} held-out trials {heldout}; "
+                         f"valid: 1 to {len(heldout)}")
+    trials = heldout[:n_trials]
+    tasks = plan_tasks(percentiles, betas, strategies, trials, seeds, bundles, str(Path(data_path).resolve()),
+                       duration_s, wearer, mode_names)
+    n_total = len(tasks) + sum(t.strategy in strategies for t in tasks)  # phase 2: one per setting episode
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=int(n_total), desc="tune", unit="episode", initial=len(store.rows))
+
+    def run(batch: list[EpisodeTask]) -> None:
+        todo = [t for t in batch if task_key(t) not in store.rows]
+        for row in map_tasks(todo, backend, workers, address):
+            store.add(row)
+            if bar is not None:
+                bar.update(1)
+
+    try:
+        run(tasks)
+        settings = [store.rows[task_key(t)] for t in tasks if t.strategy in strategies]
+        phase2 = random_tasks(settings, tasks)
+        run(phase2)
+    finally:
+        if bar is not None:
+            bar.close()
+    order = {task_key(t): i for i, t in enumerate(tasks + phase2)}
+    rows = sorted((r for k, r in store.rows.items() if k in order), key=lambda r: order[task_key(r)])
+    if log is not None:
+        log(f"{len(rows)} episodes ({len(tasks) + len(phase2) - len(rows)} missing) in {out / 'episodes.jsonl'}")
+    return {"rows": rows, "trials": trials, "bundles": {f"{p:g}": b for p, b in bundles.items()}}

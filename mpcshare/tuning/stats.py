@@ -1,0 +1,133 @@
+"""Statistics of a sweep's rows: per-setting summaries, the gate against chance, Pareto, recommendation.
+
+* **Summary** per setting (strategy, matched_to, percentile, β): for each of
+  :data:`SUMMARY_KEYS` the mean over its episodes (trials × seeds) and a 95 % bootstrap CI
+  of that mean (``scipy.stats.bootstrap``, percentile method, 2000 resamples, seed 0;
+  None with fewer than 2 episodes).
+* **Tests** per setting of ``gate`` or ``blend``: paired over (trial, seed), the difference
+  d = e_random − e_setting of the tracking RMS [m] against the setting's matched
+  ``random_handover``; one-sided Wilcoxon signed-rank test of H1: d > 0 (the setting tracks
+  better than its placebo; exact for small n), the effect mean(d) [m] with its bootstrap CI,
+  and the relative effect mean(d) / mean(e_random).
+* **Pareto set**: the settings (baselines included) that no other beats on both the mean
+  tracking RMS and the mean voluntary effort (both lower is better).
+* **Recommended** (:data:`CRITERION`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+from scipy import stats as st
+
+__all__ = ["ALPHA_LEVEL", "CRITERION", "SUMMARY_KEYS", "gate_vs_random", "pareto", "recommend", "setting_name",
+           "summarise"]
+
+SUMMARY_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
+                                 "handovers", "conflict_share", "lag_s", "saw_amplitude_ratio", "saw_correlation")
+ALPHA_LEVEL = 0.05
+CRITERION = (f"the gate or blend setting with the lowest mean tracking RMS among those that beat their matched "
+             f"random_handover (one-sided paired Wilcoxon p < {ALPHA_LEVEL}); if none does, the lowest mean "
+             f"tracking RMS of all gate and blend settings, marked as not beating chance")
+
+
+def setting_name(row: dict[str, Any]) -> str:
+    """``gate p90 b0.5``, ``random_handover[gate] p90 b0.5``, ``reactive p90``, ``voluntary``."""
+    name = row["strategy"] + (f"[{row['matched_to']}]" if row.get("matched_to") else "")
+    if row.get("percentile") is not None:
+        name += f" p{row['percentile']:g}"
+    if row.get("beta") is not None:
+        name += f" b{row['beta']:g}"
+    return name
+
+
+def _ci(values: np.ndarray) -> list[float] | None:
+    """95 % bootstrap CI of the mean (None with fewer than 2 values or no spread)."""
+    if values.size < 2 or np.ptp(values) == 0:
+        return None if values.size < 2 else [float(values[0])] * 2
+    res = st.bootstrap((values,), np.mean, confidence_level=0.95, n_resamples=2000, method="percentile",
+                       random_state=np.random.default_rng(0))
+    return [float(res.confidence_interval.low), float(res.confidence_interval.high)]
+
+
+def _values(rows: Sequence[dict[str, Any]], key: str) -> np.ndarray:
+    v = np.array([np.nan if r.get(key) is None else float(r[key]) for r in rows], dtype=float)
+    return v[np.isfinite(v)]
+
+
+def summarise(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Setting name → its fields, ``n`` episodes and, per key, ``{"mean", "ci95"}`` (module docstring)."""
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault(setting_name(r), []).append(r)
+    out = {}
+    for name, rs in groups.items():
+        entry: dict[str, Any] = {k: rs[0].get(k) for k in ("strategy", "matched_to", "percentile", "beta")}
+        entry["n"] = len(rs)
+        for key in SUMMARY_KEYS:
+            v = _values(rs, key)
+            entry[key] = {"mean": float(v.mean()) if v.size else None, "ci95": _ci(v)}
+        out[name] = entry
+    return out
+
+
+def gate_vs_random(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per gate/blend setting: ``{"vs_random_handover": {...}}`` (module docstring)."""
+    key = ("trial", "seed")
+    tests = {}
+    settings = [r for r in rows if r["strategy"] in ("gate", "blend")]
+    placebo = {(r["matched_to"], r["percentile"], r["beta"], r["trial"], r["seed"]): r
+               for r in rows if r["strategy"] == "random_handover"}
+    for name in dict.fromkeys(setting_name(r) for r in settings):
+        pairs = []
+        for r in (r for r in settings if setting_name(r) == name):
+            p = placebo.get((r["strategy"], r["percentile"], r["beta"], *(r[k] for k in key)))
+            if p is not None and r.get("tracking_rmse_m") is not None and p.get("tracking_rmse_m") is not None:
+                pairs.append((float(p["tracking_rmse_m"]), float(r["tracking_rmse_m"])))
+        e_rand, e_set = (np.array(x) for x in zip(*pairs)) if pairs else (np.zeros(0), np.zeros(0))
+        d = e_rand - e_set
+        p_value = statistic = None
+        if d.size and np.any(d != 0):
+            res = st.wilcoxon(d, alternative="greater", zero_method="wilcox")
+            p_value, statistic = float(res.pvalue), float(res.statistic)
+        elif d.size:
+            p_value = 1.0
+        effect = float(d.mean()) if d.size else None
+        tests[name] = {"vs_random_handover": {
+            "test": "Wilcoxon signed-rank, one-sided (setting's tracking RMS < its random_handover's), "
+                    "paired over trials x seeds",
+            "n_pairs": int(d.size), "statistic": statistic, "p_value": p_value,
+            "effect_m": effect, "effect_ci95_m": _ci(d),
+            "relative_effect": effect / float(e_rand.mean()) if d.size and e_rand.mean() > 0 else None,
+            "beats_random": bool(p_value is not None and p_value < ALPHA_LEVEL and (effect or 0) > 0)}}
+    return tests
+
+
+def pareto(summary: dict[str, dict[str, Any]]) -> list[str]:
+    """The settings no other beats on both mean tracking RMS and mean effort (module docstring)."""
+    pts = {n: (s["tracking_rmse_m"]["mean"], s["voluntary_effort"]["mean"]) for n, s in summary.items()
+           if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None}
+
+    def dominated(a: tuple[float, float]) -> bool:
+        return any(b[0] <= a[0] and b[1] <= a[1] and b != a for b in pts.values())
+
+    return sorted((n for n, a in pts.items() if not dominated(a)), key=lambda n: pts[n][0])
+
+
+def recommend(summary: dict[str, dict[str, Any]], tests: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
+    """The recommended setting by :data:`CRITERION` (None without gate or blend settings)."""
+    def rmse(n: str) -> float:
+        m = summary[n]["tracking_rmse_m"]["mean"]
+        return math.inf if m is None else m
+
+    names = [n for n in tests if n in summary]
+    if not names:
+        return None
+    winners = [n for n in names if tests[n]["vs_random_handover"]["beats_random"]]
+    best = min(winners or names, key=rmse)
+    s = summary[best]
+    return {"setting": best, "strategy": s["strategy"], "percentile": s["percentile"], "beta": s["beta"],
+            "tracking_rmse_m": s["tracking_rmse_m"]["mean"], "voluntary_effort": s["voluntary_effort"]["mean"],
+            "beats_random": bool(winners), "criterion": CRITERION}
