@@ -100,8 +100,10 @@ def _plot(result: dict[str, Any], path: Path) -> None:
            for n, s in result["summary"].items()
            if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None}
     for name, (err, eff, strat) in pts.items():
-        ax.scatter(1e3 * err, eff, color=colors.get(strat, "k"), marker="o" if strat != "random_handover" else "x",
-                   edgecolor="k" if name in result["pareto"] else None, zorder=3)
+        edged = {"edgecolor": "k", "linewidth": 1.5} if name in result["pareto"] else {}
+        marker = "x" if strat == "random_handover" else "o"
+        ax.scatter(1e3 * err, eff, color=colors.get(strat, "k"), marker=marker, zorder=3,
+                   **(edged if marker == "o" else {}))
         ax.annotate(name, (1e3 * err, eff), fontsize=6, xytext=(3, 3), textcoords="offset points")
     vol = [v for v in pts.values() if v[2] == "voluntary"]
     for err, eff, _ in (v for v in pts.values() if v[2] == "reactive"):
