@@ -14,14 +14,8 @@ import argparse
 import math
 import sys
 
-from mpcshare.commands.base import (
-    Command,
-    CommandError,
-    load_or_fail,
-    positive_float,
-    positive_int,
-    prepare_output_folder,
-)
+from mpcshare.commands import base
+from mpcshare.commands.base import Command, CommandError, load_or_fail, prepare_output_folder
 from mpcshare.commands.data import DATA_HELP
 from mpcshare.commands.sim import add_wearer_argument
 from sim.demonstrator import MODE_NAMES
@@ -63,14 +57,14 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--betas", type=_beta, nargs="+", default=[0.0, 0.5, 1.0], help="β values (default 0 0.5 1)")
     p.add_argument("--strategies", nargs="+", choices=_STRATEGIES, default=list(_STRATEGIES),
                    help="strategies swept (default gate blend); each gets a matched random_handover")
-    p.add_argument("--trials", type=positive_int, default=4, help="held-out trials (default 4)")
-    p.add_argument("--duration", type=positive_float, default=30.0, help="seconds per trial (default 30)")
-    p.add_argument("--seeds", type=positive_int, default=1, help="paired seeds 0..N-1 (default 1)")
-    p.add_argument("--workers", type=positive_int, default=1, help="local worker processes (default 1)")
+    p.add_argument("--trials", type=base.positive_int, default=4, help="held-out trials (default 4)")
+    p.add_argument("--duration", type=base.positive_float, default=30.0, help="seconds per trial (default 30)")
+    p.add_argument("--seeds", type=base.positive_int, default=1, help="paired seeds 0..N-1 (default 1)")
+    p.add_argument("--workers", type=base.positive_int, default=1, help="local worker processes (default 1)")
     p.add_argument("--backend", choices=["local", "ray"], default="local",
                    help="local process pool, or a Ray cluster (optional extra: pip install -e .[ray])")
     p.add_argument("--address", default=None, help="Ray cluster address (default: start a local Ray)")
-    p.add_argument("--epochs", type=positive_int, default=TrainConfig().max_epochs,
+    p.add_argument("--epochs", type=base.positive_int, default=TrainConfig().max_epochs,
                    help=f"maximum LSTM epochs per bundle (default {TrainConfig().max_epochs})")
     add_wearer_argument(p)
     p.add_argument("--quiet", action="store_true", help="no progress bars")
