@@ -19,7 +19,7 @@ from learning.atomic import atomic_open
 from mpcshare.reports.comparison import strict_json
 from mpcshare.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
 
-__all__ = ["build_result", "chance_sentences", "tune_markdown", "write_tune"]
+__all__ = ["baseline_sentence", "build_result", "chance_sentences", "tune_markdown", "write_tune"]
 
 
 def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
@@ -54,8 +54,29 @@ def chance_sentences(result: dict[str, Any]) -> list[str]:
             p = "no test (no pair differs)" if v["p_value"] is None else f"p = {v['p_value']:.3g}"
             out.append(f"{name} does not beat chance: random hand-overs at the same share and count track "
                        f"{_mm(v['effect_m'])} mm worse on average{ci_txt}, {p} over {v['n_pairs']} pairs "
-                       f"(threshold {ALPHA_LEVEL}); its hand-over times add nothing measurable here.")
+                       f"(threshold {ALPHA_LEVEL}): this sweep cannot tell its hand-over times from chance.")
     return out
+
+
+def baseline_sentence(result: dict[str, Any]) -> str | None:
+    """The recommended setting against ``voluntary`` and the best ``reactive`` (mean tracking RMS, effort)."""
+    rec, summary = result["recommended"], result["summary"]
+    if not rec:
+        return None
+    vol = summary.get("voluntary")
+    reac = [s for s in summary.values() if s["strategy"] == "reactive" and s["tracking_rmse_m"]["mean"] is not None]
+    parts = []
+    if vol and vol["tracking_rmse_m"]["mean"] is not None:
+        v = vol["tracking_rmse_m"]["mean"]
+        word = "lower" if rec["tracking_rmse_m"] < v else "higher"
+        parts.append(f"{word} tracking RMS than the wearer alone ({_mm(rec['tracking_rmse_m'])} against {_mm(v)} mm; "
+                     f"effort {_num(rec['voluntary_effort'])} against {_num(vol['voluntary_effort']['mean'])} rad)")
+    if reac:
+        best = min(reac, key=lambda s: s["tracking_rmse_m"]["mean"])
+        word = "lower" if rec["tracking_rmse_m"] < best["tracking_rmse_m"]["mean"] else "higher"
+        parts.append(f"{word} than the best robot alone ({_mm(best['tracking_rmse_m']['mean'])} mm at the "
+                     f"{best['percentile']:g}th percentile)")
+    return f"{rec['setting']} has " + " and ".join(parts) + "." if parts else None
 
 
 def tune_markdown(result: dict[str, Any]) -> str:
@@ -75,7 +96,8 @@ def tune_markdown(result: dict[str, Any]) -> str:
         lines.append(f"| {name} | {s['n']} | {_mm(r['mean'])}{rci} | {_num(e['mean'])}{eci} "
                      f"| {_num(s['reactive_share']['mean'], '.2f')} | {_num(s['handovers']['mean'], '.1f')} "
                      f"| {eff} | {p} |")
-    lines += ["", "**Pareto set** (no other setting has both lower error and lower effort): "
+    lines += ["", "**Pareto set** (realisable settings and baselines that no other beats on both error and "
+              "effort; the upper bound and the placebo left out): "
               + ", ".join(result["pareto"]) + ".", "", "## Does the gate hand over at the right moments?", ""]
     lines += [f"- {s}" for s in chance_sentences(result)] or ["- No gate or blend setting in this sweep."]
     rec = result["recommended"]
@@ -84,7 +106,7 @@ def tune_markdown(result: dict[str, Any]) -> str:
                   f"**{rec['setting']}**: tracking RMS {_mm(rec['tracking_rmse_m'])} mm, effort "
                   f"{_num(rec['voluntary_effort'])} rad"
                   + ("." if rec["beats_random"] else "; no setting beats chance, so this is only the lowest error.")
-                  + f" Criterion: {rec['criterion']}.", ""]
+                  + f" Criterion: {rec['criterion']}.", "", baseline_sentence(result) or "", ""]
     lines += ["![effort against error](pareto.png)", ""]
     return "\n".join(lines)
 

@@ -9,8 +9,9 @@
   ``random_handover``; one-sided Wilcoxon signed-rank test of H1: d > 0 (the setting tracks
   better than its placebo; exact for small n), the effect mean(d) [m] with its bootstrap CI,
   and the relative effect mean(d) / mean(e_random).
-* **Pareto set**: the settings (baselines included) that no other beats on both the mean
-  tracking RMS and the mean voluntary effort (both lower is better).
+* **Pareto set**: among the realisable settings (gate, blend, ``voluntary``, ``reactive``: not
+  the upper bound ``oracle_preview`` nor the placebo), those that no other beats on both the
+  mean tracking RMS and the mean voluntary effort (both lower is better).
 * **Recommended** (:data:`CRITERION`).
 """
 
@@ -22,12 +23,14 @@ from typing import Any, Sequence
 import numpy as np
 from scipy import stats as st
 
-__all__ = ["ALPHA_LEVEL", "CRITERION", "SUMMARY_KEYS", "gate_vs_random", "pareto", "recommend", "setting_name",
-           "summarise"]
+__all__ = ["ALPHA_LEVEL", "CRITERION", "PARETO_STRATEGIES", "SUMMARY_KEYS", "gate_vs_random", "pareto", "recommend",
+           "setting_name", "summarise"]
 
 SUMMARY_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                  "handovers", "conflict_share", "lag_s", "saw_amplitude_ratio", "saw_correlation")
 ALPHA_LEVEL = 0.05
+#: The realisable strategies the Pareto set is drawn from.
+PARETO_STRATEGIES: tuple[str, ...] = ("gate", "blend", "voluntary", "reactive")
 CRITERION = (f"the gate or blend setting with the lowest mean tracking RMS among those that beat their matched "
              f"random_handover (one-sided paired Wilcoxon p < {ALPHA_LEVEL}); if none does, the lowest mean "
              f"tracking RMS of all gate and blend settings, marked as not beating chance")
@@ -108,7 +111,8 @@ def gate_vs_random(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
 def pareto(summary: dict[str, dict[str, Any]]) -> list[str]:
     """The settings no other beats on both mean tracking RMS and mean effort (module docstring)."""
     pts = {n: (s["tracking_rmse_m"]["mean"], s["voluntary_effort"]["mean"]) for n, s in summary.items()
-           if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None}
+           if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None
+           and s["strategy"] in PARETO_STRATEGIES}
 
     def dominated(a: tuple[float, float]) -> bool:
         return any(b[0] <= a[0] and b[1] <= a[1] and b != a for b in pts.values())
