@@ -52,9 +52,13 @@ def chance_sentences(result: dict[str, Any]) -> list[str]:
                        f"tracking RMS{ci_txt}, p = {v['p_value']:.3g} over {v['n_pairs']} trial x seed pairs.")
         else:
             p = "no test (no pair differs)" if v["p_value"] is None else f"p = {v['p_value']:.3g}"
+            forced = (f" In {v['n_forced']} of its {v['n_pairs']} episodes it handed over at most once, so the "
+                      "matched random schedule was its own and those pairs cannot differ."
+                      if v.get("n_forced") else "")
             out.append(f"{name} does not beat chance: random hand-overs at the same share and count track "
                        f"{_mm(v['effect_m'])} mm worse on average{ci_txt}, {p} over {v['n_pairs']} pairs "
-                       f"(threshold {ALPHA_LEVEL}): this sweep cannot tell its hand-over times from chance.")
+                       f"(threshold {ALPHA_LEVEL}): this sweep cannot tell its hand-over times from chance."
+                       + forced)
     return out
 
 

@@ -8,7 +8,8 @@
   d = e_random − e_setting of the tracking RMS [m] against the setting's matched
   ``random_handover``; one-sided Wilcoxon signed-rank test of H1: d > 0 (the setting tracks
   better than its placebo; exact for small n), the effect mean(d) [m] with its bootstrap CI,
-  and the relative effect mean(d) / mean(e_random).
+  and the relative effect mean(d) / mean(e_random). ``n_forced``: the setting's episodes with at
+  most one hand-over, where the matched schedule is the setting's own (nothing to draw).
 * **Pareto set**: among the realisable settings (gate, blend, ``voluntary``, ``reactive``: not
   the upper bound ``oracle_preview`` nor the placebo), those that no other beats on both the
   mean tracking RMS and the mean voluntary effort (both lower is better).
@@ -84,8 +85,9 @@ def gate_vs_random(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     placebo = {(r["matched_to"], r["percentile"], r["beta"], r["trial"], r["seed"]): r
                for r in rows if r["strategy"] == "random_handover"}
     for name in dict.fromkeys(setting_name(r) for r in settings):
-        pairs = []
+        pairs, forced = [], 0
         for r in (r for r in settings if setting_name(r) == name):
+            forced += int((r.get("handovers") or 0) <= 1)
             p = placebo.get((r["strategy"], r["percentile"], r["beta"], *(r[k] for k in key)))
             if p is not None and r.get("tracking_rmse_m") is not None and p.get("tracking_rmse_m") is not None:
                 pairs.append((float(p["tracking_rmse_m"]), float(r["tracking_rmse_m"])))
@@ -101,7 +103,7 @@ def gate_vs_random(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
         tests[name] = {"vs_random_handover": {
             "test": "Wilcoxon signed-rank, one-sided (setting's tracking RMS < its random_handover's), "
                     "paired over trials x seeds",
-            "n_pairs": int(d.size), "statistic": statistic, "p_value": p_value,
+            "n_pairs": int(d.size), "n_forced": forced, "statistic": statistic, "p_value": p_value,
             "effect_m": effect, "effect_ci95_m": _ci(d),
             "relative_effect": effect / float(e_rand.mean()) if d.size and e_rand.mean() > 0 else None,
             "beats_random": bool(p_value is not None and p_value < ALPHA_LEVEL and (effect or 0) > 0)}}
