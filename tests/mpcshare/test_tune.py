@@ -89,7 +89,7 @@ def test_one_and_two_workers_give_the_same_rows_and_a_rerun_resumes(data, swept,
 
 def _row(strategy, seed, trial, rmse, matched_to=None, effort=0.1):
     return {"strategy": strategy, "matched_to": matched_to, "percentile": 90.0, "beta": 0.5, "trial": trial,
-            "seed": seed, "tracking_rmse_m": rmse, "voluntary_effort": effort}
+            "seed": seed, "tracking_rmse_m": rmse, "voluntary_effort": effort, "handovers": 1 + seed}
 
 
 def test_gate_against_random_is_a_paired_one_sided_test():
@@ -104,6 +104,7 @@ def test_gate_against_random_is_a_paired_one_sided_test():
     test = gate_vs_random(rows)["gate p90 b0.5"]["vs_random_handover"]
     expected = st.wilcoxon(rand_err - gate_err, alternative="greater")
     assert test["p_value"] == pytest.approx(expected.pvalue) and test["n_pairs"] == 8
+    assert test["n_forced"] == 4  # the seed-0 episodes handed over once: their placebo is forced
     assert test["p_value"] < 0.05 and test["beats_random"]
     assert test["effect_m"] == pytest.approx(np.mean(rand_err - gate_err))
     lo, hi = test["effect_ci95_m"]
