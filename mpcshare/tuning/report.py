@@ -55,8 +55,10 @@ def chance_sentences(result: dict[str, Any]) -> list[str]:
             forced = (f" In {v['n_forced']} of its {v['n_pairs']} episodes it handed over at most once, so the "
                       "matched random schedule was its own and those pairs cannot differ."
                       if v.get("n_forced") else "")
+            eff = v["effect_m"]
+            how = "–" if eff is None else f"{_mm(abs(eff))} mm {'worse' if eff > 0 else 'better'}"
             out.append(f"{name} does not beat chance: random hand-overs at the same share and count track "
-                       f"{_mm(v['effect_m'])} mm worse on average{ci_txt}, {p} over {v['n_pairs']} pairs "
+                       f"{how} on average{ci_txt}, {p} over {v['n_pairs']} pairs "
                        f"(threshold {ALPHA_LEVEL}): this sweep cannot tell its hand-over times from chance."
                        + forced)
     return out
