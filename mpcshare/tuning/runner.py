@@ -7,7 +7,7 @@ backend, and appends each finished row at once to ``out/episodes.jsonl``. Starte
 the same arguments (``out/sweep_args.json``) it reuses the bundles and the rows already there
 and runs only the rest; with other arguments it starts over.
 
-Backends (:func:`map_tasks`): ``local`` — in this process (``workers`` = 1) or a
+Backends (:func:`open_backend`, one for the whole sweep): ``local`` — in this process (``workers`` = 1) or a
 ``concurrent.futures`` process pool (spawned workers); ``ray`` — one Ray task per episode on
 the cluster at ``address`` (None: a local Ray). Each episode is deterministic given its task,
 so the rows are the same whatever the backend and the number of workers (but
@@ -24,7 +24,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 from mpcshare.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
 
-__all__ = ["BACKENDS", "RayMissing", "map_tasks", "run_tune"]
+__all__ = ["BACKENDS", "RayMissing", "open_backend", "run_tune"]
 
 BACKENDS: tuple[str, ...] = ("local", "ray")
 
@@ -33,38 +33,57 @@ class RayMissing(ImportError):
     """``--backend ray`` without Ray installed."""
 
 
-def _local(tasks: Sequence[EpisodeTask], workers: int) -> Iterator[dict[str, Any]]:
-    if workers <= 1:
-        for t in tasks:
-            yield run_task(t)
-        return
-    ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        for fut in as_completed([pool.submit(run_task, t) for t in tasks]):
+class _LocalPool:
+    """This process (``workers`` = 1) or one spawned process pool kept for the whole sweep."""
+
+    def __init__(self, workers: int) -> None:
+        self.workers = workers
+        self.pool: ProcessPoolExecutor | None = None
+
+    def map(self, tasks: Sequence[EpisodeTask]) -> Iterator[dict[str, Any]]:
+        if self.workers <= 1:
+            yield from (run_task(t) for t in tasks)
+            return
+        if self.pool is None:
+            ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
+            self.pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx)
+        for fut in as_completed([self.pool.submit(run_task, t) for t in tasks]):
             yield fut.result()
 
-
-def _ray(tasks: Sequence[EpisodeTask], address: str | None) -> Iterator[dict[str, Any]]:
-    try:
-        import ray
-    except ImportError:
-        raise RayMissing("--backend ray needs Ray: pip install -e .[ray] (or choose --backend local)") from None
-    if not ray.is_initialized():
-        ray.init(address=address, include_dashboard=False, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(run_task)
-    pending = [remote.remote(t) for t in tasks]
-    while pending:
-        done, pending = ray.wait(pending, num_returns=1)
-        yield ray.get(done[0])
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.shutdown(cancel_futures=True)
 
 
-def map_tasks(tasks: Sequence[EpisodeTask], backend: str = "local", workers: int = 1,
-              address: str | None = None) -> Iterator[dict[str, Any]]:
-    """The rows of ``tasks`` in the order they finish (module docstring)."""
+class _RayCluster:
+    """One Ray task per episode on the cluster at ``address`` (None: a local Ray)."""
+
+    def __init__(self, address: str | None) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise RayMissing("--backend ray needs Ray: pip install -e .[ray] (or choose --backend local)") from None
+        if not ray.is_initialized():
+            ray.init(address=address, include_dashboard=False, log_to_driver=False)
+        self.ray = ray
+        self.remote = ray.remote(num_cpus=1)(run_task)
+
+    def map(self, tasks: Sequence[EpisodeTask]) -> Iterator[dict[str, Any]]:
+        pending = [self.remote.remote(t) for t in tasks]
+        while pending:
+            done, pending = self.ray.wait(pending, num_returns=1)
+            yield self.ray.get(done[0])
+
+    def close(self) -> None:
+        pass
+
+
+def open_backend(backend: str = "local", workers: int = 1, address: str | None = None) -> _LocalPool | _RayCluster:
+    """A backend with ``map(tasks)`` → the rows in the order they finish, and ``close()`` (module docstring)."""
     if backend == "local":
-        return _local(tasks, workers)
+        return _LocalPool(workers)
     if backend == "ray":
-        return _ray(tasks, address)
+        return _RayCluster(address)
     raise ValueError(f"unknown backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
 
 
@@ -141,9 +160,11 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
         from tqdm.auto import tqdm
         bar = tqdm(total=int(n_total), desc="tune", unit="episode", initial=len(store.rows))
 
+    runner = open_backend(backend, workers, address)
+
     def run(batch: list[EpisodeTask]) -> None:
         todo = [t for t in batch if task_key(t) not in store.rows]
-        for row in map_tasks(todo, backend, workers, address):
+        for row in runner.map(todo):
             store.add(row)
             if bar is not None:
                 bar.update(1)
@@ -154,6 +175,7 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
         phase2 = random_tasks(settings, tasks)
         run(phase2)
     finally:
+        runner.close()
         if bar is not None:
             bar.close()
     order = {task_key(t): i for i, t in enumerate(tasks + phase2)}
