@@ -68,7 +68,8 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert analysis["modes"]["n_modes"] == 3 and analysis["window_s"] == 0.8
     assert (out / "model" / "bundle.json").exists()
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
-    assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview"}
+    assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview",
+                                             "random_handover", "oracle_handover"}
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
     assert comparison["wearer"]["preset"] == "unimpaired"  # --wearer reaches the closed loop
     gate = comparison["strategies"]["gate"]  # the task figures: lag, sawing while cutting, RMS per mode
