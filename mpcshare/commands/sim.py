@@ -124,8 +124,10 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
                               mcap=getattr(args, "mcap", False), wearer=wearer)
-    if args.video:
-        shown = next((r for r in runs if r.name == "gate"), runs[0])
+    shown = next((r for r in runs if r.name == "gate"), next((r for r in runs if r.schedule is None), None))
+    if args.video and shown is None:
+        print("no video: only replayed schedules were run (add --runs gate)")
+    elif args.video and shown is not None:
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
                                      strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
                                      beta=args.beta, wearer=wearer)
