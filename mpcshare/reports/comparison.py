@@ -73,6 +73,17 @@ def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
         out.append(f"Upper bound: given the wearer's true intent as its preview (not realisable), the arm tracks "
                    f"at {o['tracking_rmse_m'] * 1e3:.1f} mm RMS; `reactive` is at "
                    f"{_ratio(r['tracking_rmse_m'], o['tracking_rmse_m']):.1f}× that: the rest is the predictor's.")
+    if "gate" in s and "random_handover" in s:
+        g, r = s["gate"]["tracking_rmse_m"], s["random_handover"]["tracking_rmse_m"]
+        word = "better than" if g < 0.98 * r else ("no better than" if g <= 1.02 * r else "WORSE than")
+        out.append(f"Timing: with the same share of robot control and the same hand-overs at random times "
+                   f"(`random_handover`), the arm tracks at {r * 1e3:.1f} mm RMS against the gate's {g * 1e3:.1f} mm: "
+                   f"the gate's hand-over times are {word} chance on these trials (`mpcshare tune` tests it).")
+    if "oracle_handover" in s:
+        out.append(f"Upper bound: the hand-over schedule that minimises the error (from `voluntary` and `reactive`, "
+                   f"with the same dwell; uses the future) tracks at "
+                   f"{s['oracle_handover']['tracking_rmse_m'] * 1e3:.1f} mm RMS with the robot leading "
+                   f"{s['oracle_handover']['reactive_share']:.0%} of the time.")
     if "gate" in s and s["gate"].get("saw_amplitude_ratio") is not None:
         out.append(task_sentence("gate", s["gate"]))
     bad = [k for k, m in s.items() if m["limit_violations"]]

@@ -130,3 +130,5 @@ def test_sim_runs_the_placebo_and_the_oracle_hand_overs_beside_the_gate(trained,
         assert abs(np.mean(run.alpha > 0.5) - np.mean(gate.alpha > 0.5)) <= 0.02
         assert np.count_nonzero(np.diff(run.alpha > 0.5)) == np.count_nonzero(np.diff(gate.alpha > 0.5))
     assert comp["strategies"]["oracle_handover"]["limit_violations"] == 0
+    md = (out / "comparison.md").read_text()
+    assert "at random times" in md and "minimises the error" in md
