@@ -133,7 +133,7 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
 
     Raises ValueError when the data has fewer held-out trials than ``n_trials``.
     """
-    from learning.data import load
+    from learning.data import load, split_by_trial
     from mpcshare.training.config import TrainConfig
 
     out = Path(out)
@@ -142,16 +142,15 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     signature = {"data": str(Path(data_path).resolve()), "percentiles": list(percentiles), "betas": list(betas),
                  "strategies": list(strategies), "trials": n_trials, "seeds": list(seeds),
                  "duration_s": duration_s, "wearer": wearer, "config": config.to_dict()}
-    store = _Store(out, signature)
     demos = load(data_path)
-    bundles = _bundles(demos, config, percentiles, out, progress)
-    from mpcshare.bundle import load_bundle
-
-    heldout = [int(t) for t in load_bundle(bundles[percentiles[0]]).heldout_trials]
+    _, held = split_by_trial(demos, config.heldout_fraction, seed=config.seed)  # the split training makes
+    heldout = [int(t) for t in held.trial_ids]
     if len(heldout) < n_trials:
         raise ValueError(f"--trials {n_trials}: the data has only {len(heldout)} held-out trials {heldout}; "
                          f"valid: 1 to {len(heldout)}")
     trials = heldout[:n_trials]
+    store = _Store(out, signature)
+    bundles = _bundles(demos, config, percentiles, out, progress)
     tasks = plan_tasks(percentiles, betas, strategies, trials, seeds, bundles, str(Path(data_path).resolve()),
                        duration_s, wearer, mode_names)
     n_total = len(tasks) + sum(t.strategy in strategies for t in tasks)  # phase 2: one per setting episode

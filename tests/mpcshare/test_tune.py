@@ -57,6 +57,8 @@ def test_tiny_sweep_writes_the_three_files_with_the_documented_keys(swept):
     md = (swept / "tune.md").read_text()
     assert "Pareto set" in md and "Recommendation" in md and ("beats" in md or "does not beat chance" in md)
     assert (swept / "pareto.png").stat().st_size > 1000
+    bundle = json.loads((swept / "bundles" / "p90" / "bundle.json").read_text())
+    assert result["trials"] == bundle["heldout_trials"][:1]  # held-out trials of the bundles
 
 
 def test_random_handover_keeps_the_matched_settings_share(swept):
