@@ -64,6 +64,14 @@ def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison:
                f"(percentile {t['percentile']:g}); on held-out trials its gate hands "
                f"{_pct(training['voluntary_share'])} of the time to the wearer, with accuracy "
                f"{_pct(g['accuracy'])} against the quotient labels.")
+    fc = training.get("forecast")
+    if fc and fc.get("forecast") and None not in (fc["forecast"][-1], fc["hold"][-1]):
+        m = 1e3 if str(fc.get("units", "")).startswith("m ") else 1.0
+        unit = " mm" if m == 1e3 else ""
+        out.append(f"The predictor forecasts the knife {fc['horizons_s'][-1]:g} s ahead: on held-out reactive steps "
+                   f"its error grows from {_num(fc['forecast'][0] * m)} to {_num(fc['forecast'][-1] * m)}{unit}, "
+                   f"against {_num(fc['hold'][-1] * m)}{unit} for holding its present estimate and "
+                   f"{_num(fc['constant_velocity'][-1] * m)}{unit} for extrapolating it.")
     if comparison:
         s = comparison["strategies"]
         if "gate" in s:
