@@ -234,10 +234,13 @@ class ModeEvidence:
     ``q_modes``, ``q_reference`` (N,), ``q_random`` (n_random, N) over the window rows;
     ``reference_labels`` (N_samples,) per sample; ``vs_reference`` and ``vs_random`` the
     per-trial tests against the time-free reference and against random groups of equal
-    sizes. The claim needs both (intersection–union test, level alpha; ``p_value`` is the
-    larger p): on confounded data a coherent time-free grouping can lose to random groups
-    (random thinning removes close conflicting neighbours, a spatial cluster keeps them),
-    so beating the reference alone is not evidence when random labels would beat it too.
+    sizes. The claim "the temporal model adds information" needs both (intersection–union
+    test, level alpha; ``p_value`` is the larger p): on confounded data a coherent
+    time-free grouping can lose to random groups (random thinning removes close conflicting
+    neighbours, a spatial cluster keeps them), so beating the reference alone is not
+    evidence when random labels would beat it too. ``modes_help``: the claim "modes help",
+    modes against random groups alone with its own smallest effect of interest
+    (``help_effect`` of :func:`mode_evidence`; the paper's test).
     """
 
     q_modes: np.ndarray
@@ -246,6 +249,7 @@ class ModeEvidence:
     reference_labels: np.ndarray
     vs_reference: TrialTest
     vs_random: TrialTest
+    modes_help: TrialTest
 
     @property
     def p_value(self) -> float:
@@ -282,7 +286,8 @@ def _known(q, name: str, n: int) -> np.ndarray:
 def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index: np.ndarray,
                   features: np.ndarray, labels: np.ndarray, *, reference: Reference = "gmm",
                   n_random: int = 20, random_method: str = "permutation", alpha: float = 1e-3,
-                  min_effect: float = 0.0, seed: int = 0, quotient: Callable[..., np.ndarray] | None = None,
+                  min_effect: float = 0.0, help_effect: float | None = None, seed: int = 0,
+                  quotient: Callable[..., np.ndarray] | None = None,
                   q_modes: np.ndarray | None = None, q_random: np.ndarray | None = None,
                   reference_labels: np.ndarray | None = None,
                   q_reference: np.ndarray | None = None) -> ModeEvidence:
@@ -299,7 +304,8 @@ def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index:
     (``q_random`` for the groupings ``random_labelings(labels[source_index], n_random,
     random_method, seed)``), and ``reference_labels`` (N_samples,), the result of
     ``reference_segmentation(features, labels, reference, seed)``, with ``q_reference``
-    (N,) the quotients within it when already computed.
+    (N,) the quotients within it when already computed. ``help_effect``: the smallest effect
+    of interest of the claim "modes help" (modes against random groups alone; None: ``min_effect``).
     """
     from learning.lipschitz import pointwise_quotients, pointwise_quotients_multi
 
@@ -329,4 +335,6 @@ def mode_evidence(X: np.ndarray, Y: np.ndarray, trial: np.ndarray, source_index:
     return ModeEvidence(
         q_modes=qm, q_reference=qr, q_random=qrand, reference_labels=ref,
         vs_reference=trial_test(qm, qr, trial, alpha=alpha, min_effect=min_effect, seed=seed),
-        vs_random=trial_test(qm, qrand, trial, alpha=alpha, min_effect=min_effect, seed=seed))
+        vs_random=trial_test(qm, qrand, trial, alpha=alpha, min_effect=min_effect, seed=seed),
+        modes_help=trial_test(qm, qrand, trial, alpha=alpha,
+                              min_effect=min_effect if help_effect is None else help_effect, seed=seed))

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from learning.atomic import atomic_open
+from mpcshare.reports.claims import claim_sentences, mixture_advice
 from mpcshare.reports.comparison import comparison_findings, strict_json
 from mpcshare.reports.html import write_html_report
 
@@ -48,16 +49,15 @@ def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison:
     out: list[str] = []
     q = analysis["quotients"]
     seg = analysis["segmentation_test"]
-    claim = ("so the task mode is information the robot needs beyond where the fork is"
-             if seg["significant"] else
-             f"but a {seg['reference']} grouping of the same observations without any temporal model does as well "
-             f"(median {_num(seg['reference_median_q'])}, p = {_num(seg['p_value'], 2)} over {seg['n_trials']} "
-             f"trials): on these data the mode is visible in a single observation, so the calibrated claim that "
-             f"modes add information beyond the observation is not made")
     out.append(f"Without task modes the knife is hard to predict from the fork: median Lipschitz quotient "
                f"{_num(q['p50'])} (p90 {_num(q['p90'])}). Within the {analysis['modes']['n_modes']} HMM task modes "
                f"the median falls to {_num(seg['hmm_median_q'])} (random groups of equal size: "
-               f"{_num(seg['random_median_q'])}), {claim}.")
+               f"{_num(seg['random_median_q'])}; a time-free {seg['reference']} grouping: "
+               f"{_num(seg['reference_median_q'])}).")
+    out += claim_sentences(seg)
+    advice = mixture_advice(seg)
+    if advice:
+        out.append(advice)
     t = training["training"]
     g = training["gate"]["overall"]
     out.append(f"The robot was trained to act where the within-mode quotient is below K = {_num(t['K'])} "

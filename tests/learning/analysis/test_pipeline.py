@@ -52,6 +52,12 @@ def test_modes_found_and_they_explain_confounding(result):
     # issue 13: the claim used to be the pooled Mann-Whitney test against random groups.)
     assert not t["significant"] and t["p_value"] > 1e-3
     assert abs(t["effect_size"]) < t["min_effect"] and t["ci"]["low"] <= t["effect_size"] <= t["ci"]["high"]
+    # The two claims, each with its own test (issue 22): modes help (against random groups,
+    # with its larger smallest effect), the temporal model adds nothing beyond the mixture.
+    helps, temporal = t["claims"]["modes_help"], t["claims"]["temporal_model_adds"]
+    assert helps["made"] and helps["p_value"] < 1e-3 and helps["ci"]["low"] > helps["min_effect"] > t["min_effect"]
+    assert helps["effect_size"] == pytest.approx(t["random"]["effect_size"])
+    assert not temporal["made"] and temporal["p_value"] == t["p_value"] and temporal["effect_size"] == t["effect_size"]
     v = r["voluntary_share"]["5"]
     assert v["with_modes"] < v["random"] < v["without_modes"] + 1e-12
     assert abs(v["with_modes"] - v["reference"]) < 0.02
@@ -78,6 +84,7 @@ def test_too_few_trials_is_said_not_claimed():
     assert t["n_trials"] == 8 and t["min_trials"] == 10
     assert not t["reachable"] and not t["significant"]
     assert t["random"]["effect_size"] > t["min_effect"]  # modes beat random groups: the claim is withheld
+    assert not t["claims"]["modes_help"]["made"] and not t["claims"]["temporal_model_adds"]["made"]
 
 
 def test_no_mode_structure_claims_no_gain():
