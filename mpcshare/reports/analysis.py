@@ -310,7 +310,8 @@ def _markdown(report: AnalysisReport, mode_names: Sequence[str] | None) -> str:
 def _claim_lines(t) -> list[str]:
     """The two claims in words (one line each), the advice they give, then what was compared."""
     seg = t.to_dict()
-    lines = [f"- {line}" for line in claim_sentences(seg)]
+    lines = ["### What the modes add: two claims, each with its own test", "",
+             *[f"- {line}" for line in claim_sentences(seg)]]
     advice = mixture_advice(seg)
     if advice:
         lines += ["", advice]

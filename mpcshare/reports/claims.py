@@ -47,7 +47,7 @@ def claim_sentence(seg: dict[str, Any], key: str) -> str:
     ci = c["ci"]
     return (f"{c['name'].capitalize()}: {verdict}. Against {c['compared']}, the median quotient of a trial "
             f"within the HMM modes is {_pct(c['effect_size'])} (ln ratio {c['effect_size']:.3f}, "
-            f"{100 * ci['level']:.0f} % CI [{ci['low']:.3f}, {ci['high']:.3f}]; {_p(c['p_value'])} over {n} "
+            f"{100 * ci['level']:.0f} % bootstrap CI [{ci['low']:.3f}, {ci['high']:.3f}]; {_p(c['p_value'])} over {n} "
             f"trials, claimed below {seg['alpha']:g} with an effect above {c['min_effect']:.3f}).")
 
 
@@ -64,4 +64,4 @@ def mixture_advice(seg: dict[str, Any]) -> str | None:
         return None
     return ("Grouping the data into modes helps, but a time-free grouping of the same observations "
             f"({seg['reference']}) does as well as the HMM: the controller could use the time-free grouping "
-            "(`mpcshare train --modes-from mixture`), whose online mode filter needs no transition model.")
+            "(`mpcshare train --modes-from mixture`), whose online mode filter then uses each observation alone.")

@@ -68,7 +68,12 @@ def test_analyze_writes_report_and_plots(data_file, tmp_path, capsys):
     for png in ("quotients_trial.png", "quotient_hist.png", "segmentation.png", "voluntary_share.png",
                 "candidates.png"):
         assert (out / png).stat().st_size > 10_000, png
-    assert "voluntary share at K = 5" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "voluntary share at K = 5" in text
+    # the two claims, one line each (issue 22): modes help, the temporal model adds nothing
+    assert t["claims"]["modes_help"]["made"] and not t["claims"]["temporal_model_adds"]["made"]
+    assert "Modes help: made." in text and "The temporal model adds information: not made." in text
+    assert "--modes-from mixture" in text and "Modes help: made." in md
 
 
 @pytest.mark.parametrize("args", [["--modes", "0"], ["--window", "-1"], ["-K", "-5"], ["--rate", "inf"],
