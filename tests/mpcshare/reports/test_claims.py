@@ -17,7 +17,7 @@ def _seg(helps: bool, temporal: bool, n_trials: int = 15, reachable: bool = True
     return {"n_trials": n_trials, "reachable": reachable, "min_trials": 10, "alpha": 1e-3, "reference": "gmm",
             "claims": {
                 "modes_help": _claim("modes help", "random groups of equal sizes", 0.64, 3e-5, helps,
-                                     math.log(1.25)),
+                                     math.log(1.5)),
                 "temporal_model_adds": _claim("the temporal model adds information",
                                               "the time-free gmm reference grouping (and random groups)",
                                               0.031, 1.0, temporal, math.log(1.1))}}
