@@ -19,6 +19,9 @@ Strategies, each on the same data (agreement after Hungarian matching, per sampl
 - ``heldout``: each restart seed fitted on two thirds of the trials and scored on the rest
   (3 folds by trial); the seed with the best total held-out log-likelihood is refitted on
   all data (choosing among restarts by held-out likelihood over trials);
+- ``window_init``: k-means of the initialisation on the features averaged over a centred
+  window of 21 samples (2 s), the per-sample features for the statistics and EM (a
+  ``TaskModes`` subclass: an experiment, not an option of the package);
 - ``mixture``: the time-free Gaussian mixture (``TaskModes(temporal=False)``), as a baseline.
 
 For every data set also the spread of the restarts' training log-likelihoods [nats a sample],
@@ -35,13 +38,31 @@ import sys
 import warnings
 
 import numpy as np
+from scipy.ndimage import uniform_filter1d
+from sklearn.cluster import KMeans
 
 from learning.modes import TaskModes, mode_agreement
 from learning.preprocessing.preprocess import Standardizer, downsample
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 from sim.hidden_regime import HiddenRegimeConfig, generate_hidden_regime
 
-STRATEGIES = ("default", "sticky", "heldout", "mixture")
+STRATEGIES = ("default", "sticky", "heldout", "window_init", "mixture")
+INIT_WINDOW = 21  # samples (2 s at 10 Hz)
+
+
+class WindowInitModes(TaskModes):
+    """TaskModes whose k-means initialisation runs on features averaged over ``INIT_WINDOW`` samples."""
+
+    def _init_hmm(self, hmm, Z, lengths, seed) -> None:
+        super()._init_hmm(hmm, Z, lengths, seed)
+        K, D = int(self.n_modes), Z.shape[1]
+        smooth = np.concatenate([uniform_filter1d(z, INIT_WINDOW, axis=0, mode="nearest")
+                                 for z in np.split(Z, np.cumsum(lengths)[:-1])])
+        labels = KMeans(n_clusters=K, n_init=1, random_state=seed).fit_predict(smooth)
+        if min(np.bincount(labels, minlength=K)) <= D:
+            return  # a cluster too small for a covariance: keep the per-sample initialisation
+        hmm.means_ = np.stack([Z[labels == k].mean(axis=0) for k in range(K)])
+        hmm.covars_ = np.stack([np.cov(Z[labels == k].T) + self.min_covar * np.eye(D) for k in range(K)])
 
 
 def _data(name: str, seed: int):
@@ -80,6 +101,7 @@ def run(name: str, seed: int, restarts: int) -> dict:
     out = {}
     fits = {"default": TaskModes(K, n_restarts=restarts, seed=seed),
             "sticky": TaskModes(K, n_restarts=restarts, seed=seed, sticky=0.05 * len(Z)),
+            "window_init": WindowInitModes(K, n_restarts=restarts, seed=seed),
             "mixture": TaskModes(K, n_restarts=restarts, seed=seed, temporal=False)}
     for key, m in fits.items():
         m.fit(Z, L)
