@@ -51,7 +51,9 @@ class ModesSummary:
     ``occupancy[k]``: share of windows in mode k; ``loglik``: total log-likelihood
     of the fit [nats]; ``bic``: Bayesian information criterion [nats]; ``restart_logliks``:
     the training log-likelihood of every EM restart [nats] (the fit kept is the best
-    without empty states; a wide spread means EM has poor local optima on these data).
+    without empty states; a wide spread means EM has poor local optima on these data);
+    ``restart_ari``: adjusted Rand index of every restart's modes against the kept fit's
+    (1 for all: the restarts agree on the partition, whatever the seed of their start).
     """
 
     n_modes: int
@@ -62,11 +64,13 @@ class ModesSummary:
     loglik: float
     bic: float
     restart_logliks: list[float] = field(default_factory=list)
+    restart_ari: list[float] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return {"n_modes": self.n_modes, "agreement": self.agreement, "ari": self.ari,
                 "occupancy": list(self.occupancy), "converged": self.converged, "loglik": self.loglik,
-                "bic": self.bic, "restart_logliks": list(self.restart_logliks)}
+                "bic": self.bic, "restart_logliks": list(self.restart_logliks),
+                "restart_ari": list(self.restart_ari)}
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from sklearn.base import BaseEstimator
 from sklearn.cluster import KMeans
 from sklearn.decomposition import PCA
 from sklearn.exceptions import ConvergenceWarning
+from sklearn.metrics import adjusted_rand_score
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted
 
@@ -96,6 +97,8 @@ class TaskModes(BaseEstimator):
         converged_: bool — last EM improvement below ``tol`` per sample, before ``n_iter``.
         n_iter_: EM iterations of the kept restart. loglik_: its training log-likelihood.
         restart_logliks_: training log-likelihood of every restart.
+        restart_ari_: adjusted Rand index of every restart's Viterbi labels against the kept
+            restart's (1 for all: every restart found the same partition).
         empty_modes_: indices of states left with ~no occupancy (normally empty).
         n_parameters_: free HMM parameters (used by ``bic``).
         startprob_, transmat_: π and A. expected_durations_: 1/(1−A_ii) [samples].
@@ -175,6 +178,9 @@ class TaskModes(BaseEstimator):
         self.n_iter_ = best.n_iter
         self.converged_ = best.converged
         self.restart_logliks_ = [r.loglik for r in runs]
+        kept = best.model.predict(Z, lengths)
+        self.restart_ari_ = [1.0 if r is best else float(adjusted_rand_score(kept, r.model.predict(Z, lengths)))
+                             for r in runs]
         self.empty_modes_ = best.empty
         self.n_parameters_ = n_hmm_parameters(K, self.n_components_, self.covariance_type)
         if not self.temporal:  # A is not a parameter of the mixture

@@ -264,6 +264,9 @@ def _markdown(report: AnalysisReport, mode_names: Sequence[str] | None) -> str:
         ll = m.restart_logliks
         lines.append(f"EM restarts: {len(ll)}, training log-likelihoods {min(ll):.6g} … {max(ll):.6g} nats "
                      f"(spread {max(ll) - min(ll):.3g}; the best without empty states is kept).")
+        if m.restart_ari:
+            lines.append(f"Partitions of the restarts against the kept one: adjusted Rand index "
+                         f"{min(m.restart_ari):.3f} … {max(m.restart_ari):.3f} (1: the same modes whatever the start).")
     if m.agreement is not None:
         lines.append(f"Agreement with the ground-truth labels: **{100 * m.agreement:.1f} %** "
                      f"(Hungarian matching), adjusted Rand index {m.ari:.3f}.")

@@ -27,7 +27,9 @@ def test_report_has_the_documented_keys(result):
                 "segmentation_test", "voluntary_share", "candidates"):
         assert key in r
     assert {"p50", "p90", "p99", "max", "K_by_percentile"} <= set(r["quotients"])
-    assert {"n_modes", "agreement", "ari"} <= set(r["modes"])
+    assert {"n_modes", "agreement", "ari", "restart_logliks", "restart_ari"} <= set(r["modes"])
+    m = r["modes"]  # the kept restart against itself: 1; one entry per restart
+    assert len(m["restart_ari"]) == len(m["restart_logliks"]) and max(m["restart_ari"]) == 1.0
     assert {"statistic", "p_value", "effect_size", "hmm_median_q", "random_median_q", "reference",
             "reference_median_q", "unit", "ci", "reachable"} <= set(r["segmentation_test"])
     assert r["segmentation_test"]["unit"] == "trial" and r["segmentation_test"]["reference"] == "gmm"
