@@ -120,6 +120,10 @@ class TaskModes(BaseEstimator):
         self.n_jobs = n_jobs
         self.temporal = temporal
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        state.setdefault("temporal", True)  # models pickled before the option were HMMs
+        super().__setstate__(state)
+
     # ------------------------------------------------------------------ fitting
     def _check_params(self) -> None:
         if int(self.n_modes) != self.n_modes or self.n_modes < 1:

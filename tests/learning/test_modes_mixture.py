@@ -48,3 +48,15 @@ def test_temporal_must_be_a_bool():
     X, _, L = sample_hmm(K=2, D=2, n_trials=2, T=50)
     with pytest.raises(ValueError, match="temporal must be True"):
         TaskModes(2, temporal="mixture").fit(X, L)
+
+
+def test_a_model_pickled_before_the_option_loads_as_an_hmm(fitted):
+    import pickle
+
+    m = fitted[3]
+    state = m.__getstate__()
+    del state["temporal"]
+    old = TaskModes.__new__(TaskModes)
+    old.__setstate__(state)
+    assert old.temporal is True and "temporal=True" not in repr(old)  # default params are not shown
+    assert pickle.loads(pickle.dumps(old)).get_params()["temporal"] is True
