@@ -182,3 +182,15 @@ def test_optional_mode_selection_is_reported():
     assert sel["rule"] == "1se" and se[int(np.argmax(ll))] == 0.0
     assert sel["n_modes"] == next(k for k, v, s in zip(sel["candidates"], ll, se) if v >= max(ll) - s)
     json.dumps(r, allow_nan=False)
+
+
+def test_modes_help_is_claimed_at_12_trials_in_at_least_2_of_3_seeds():
+    # power of the claim "modes help" (issue 22): 12 trials of 1 min of the default demonstrations,
+    # whose modes explain the confounding; with 12 trials the smallest p is 2.4e-4
+    made = []
+    for seed in range(3):
+        demos = generate_demonstrations(3, 4, seed=seed, config=GeneratorConfig(trial_minutes=1.0))
+        t = analyze(demos, AnalysisConfig(**FAST, hmm_restarts=2)).report["segmentation_test"]
+        assert t["n_trials"] == 12
+        made.append(t["claims"]["modes_help"]["made"])
+    assert sum(made) >= 2, made
