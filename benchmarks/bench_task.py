@@ -3,7 +3,9 @@
 Prints one JSON object:
 
 * ``data``: which data set (``default``: the project's generator, seed 0, as ``mpcshare demo``;
-  ``other_seed``: the generator at another seed with 2 subjects and other subject styles);
+  ``other_seed``: the generator at another seed with 2 subjects and other subject styles;
+  ``other_structure``: more confounded modes (overlap 0.85), noisier, the knife reacting
+  0.25 s after the fork, one slow wide sawyer (1.3 Hz, 3 cm) and one fast short one (2.9 Hz, 1.2 cm));
 * ``runs``: per wearer preset, per run (voluntary, reactive, gate, gate_mpc, oracle_preview) the
   pooled metrics of :func:`mpcshare.experiments.compare_strategies` on held-out trials;
 * ``targets``: per preset, each target of issue 19 with its figure and whether it is met
@@ -16,7 +18,7 @@ Prints one JSON object:
 The bundle: ``--bundle DIR --data NPZ`` (a trained bundle and its data), else one is trained
 here with the default settings (``TrainConfig()``) on generated data (about 1–2 min).
 
-Usage: ``python benchmarks/bench_task.py [--data-kind default|other_seed] [--presets ...]
+Usage: ``python benchmarks/bench_task.py [--data-kind default|other_seed|other_structure] [--presets ...]
 [--trials 2] [--duration 30]``.
 """
 
@@ -36,7 +38,7 @@ from mpcshare.bundle import load_bundle
 from mpcshare.control import SharedController
 from mpcshare.experiments import DEFAULT_RUNS, compare_strategies
 from sim.closed_loop import run_episode
-from sim.demonstrator import MODE_NAMES, generate_demonstrations
+from sim.demonstrator import MODE_NAMES, GeneratorConfig, SubjectStyle, generate_demonstrations
 from sim.task_metrics import time_lag
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS, wearer_preset
 
@@ -49,7 +51,12 @@ def make_data(kind: str) -> Demonstrations:
         return generate_demonstrations(seed=0)
     if kind == "other_seed":
         return generate_demonstrations(n_subjects=2, minutes=12.0, seed=11)
-    raise SystemExit(f"--data-kind must be default or other_seed, got {kind!r}")
+    if kind == "other_structure":  # more confounded modes, noisier, a slower reaction, two unlike sawyers
+        styles = (SubjectStyle(speed=0.75, amplitude=1.2, duration_scale=1.3, saw_hz=1.3, saw_amplitude_m=0.03),
+                  SubjectStyle(speed=1.35, amplitude=0.8, duration_scale=0.8, saw_hz=2.9, saw_amplitude_m=0.012))
+        config = GeneratorConfig(overlap=0.85, obs_noise=0.01, act_noise=0.02, reaction_s=0.25, styles=styles)
+        return generate_demonstrations(n_subjects=2, minutes=12.0, seed=5, config=config)
+    raise SystemExit(f"--data-kind must be default, other_seed or other_structure, got {kind!r}")
 
 
 def latency_budget(bundle, demos: Demonstrations, trial_id: int, duration_s: float, strategy: str) -> dict:

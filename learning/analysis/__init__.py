@@ -9,9 +9,9 @@
 - :mod:`learning.analysis.report` — the report's records (``AnalysisReport``).
 """
 
-from learning.analysis.config import MIN_EFFECT, SIGNIFICANCE, AnalysisConfig, AnalysisError
+from learning.analysis.config import HELP_EFFECT, MIN_EFFECT, SIGNIFICANCE, AnalysisConfig, AnalysisError
 
-__all__ = ["MIN_EFFECT", "SIGNIFICANCE", "AnalysisConfig", "AnalysisError", "AnalysisResult", "analyze"]
+__all__ = ["HELP_EFFECT", "MIN_EFFECT", "SIGNIFICANCE", "AnalysisConfig", "AnalysisError", "AnalysisResult", "analyze"]
 
 
 def __getattr__(name: str):

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # only for the annotation: the object is built by the analysis
     from learning.modes import ModeSelection
 
-__all__ = ["QuotientStats", "ModesSummary", "SegmentationTest", "VoluntaryShare", "Candidate",
+__all__ = ["QuotientStats", "ModesSummary", "Claim", "SegmentationTest", "VoluntaryShare", "Candidate",
            "AnalysisReport"]
 
 
@@ -51,7 +51,9 @@ class ModesSummary:
     ``occupancy[k]``: share of windows in mode k; ``loglik``: total log-likelihood
     of the fit [nats]; ``bic``: Bayesian information criterion [nats]; ``restart_logliks``:
     the training log-likelihood of every EM restart [nats] (the fit kept is the best
-    without empty states; a wide spread means EM has poor local optima on these data).
+    without empty states; a wide spread means EM has poor local optima on these data);
+    ``restart_ari``: adjusted Rand index of every restart's modes against the kept fit's
+    (1 for all: the restarts agree on the partition, whatever the seed of their start).
     """
 
     n_modes: int
@@ -62,11 +64,45 @@ class ModesSummary:
     loglik: float
     bic: float
     restart_logliks: list[float] = field(default_factory=list)
+    restart_ari: list[float] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return {"n_modes": self.n_modes, "agreement": self.agreement, "ari": self.ari,
                 "occupancy": list(self.occupancy), "converged": self.converged, "loglik": self.loglik,
-                "bic": self.bic, "restart_logliks": list(self.restart_logliks)}
+                "bic": self.bic, "restart_logliks": list(self.restart_logliks),
+                "restart_ari": list(self.restart_ari)}
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One of the two claims of the segmentation test, with its own test and verdict.
+
+    ``key``: ``"modes_help"`` (HMM modes against random groups of equal sizes: the paper's
+    claim) or ``"temporal_model_adds"`` (HMM modes against the time-free reference grouping,
+    and against random groups: what the Markov chain adds beyond one observation);
+    ``name`` the claim in words; ``compared`` what the modes are compared against.
+    ``p_value``: one-sided Wilcoxon signed-rank over trials of ln(reference / HMM per-trial
+    median q) − ``min_effect``; ``effect_size`` the median over trials of that log ratio
+    (> 0: modes lower q), ``ci_low``/``ci_high`` its percentile-bootstrap interval;
+    ``made``: reachable, p < alpha and effect > ``min_effect``.
+    """
+
+    key: str
+    name: str
+    compared: str
+    p_value: float
+    effect_size: float
+    ci_low: float
+    ci_high: float
+    ci_level: float
+    min_effect: float
+    made: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "compared": self.compared, "p_value": self.p_value,
+                "effect_size": self.effect_size,
+                "ci": {"low": self.ci_low, "high": self.ci_high, "level": self.ci_level},
+                "min_effect": self.min_effect, "made": self.made}
 
 
 @dataclass(frozen=True)
@@ -84,7 +120,10 @@ class SegmentationTest:
     (at least ``min_trials`` trials, else p < ``alpha`` is impossible: 2⁻ⁿ is the smallest p)
     and both tests with p < ``alpha`` and effect > ``min_effect``; ``p_value`` = the larger
     of the two p-values (intersection–union test). The medians ``*_median_q`` are over all
-    windows.
+    windows. ``significant`` and ``p_value`` are the claim "the temporal model adds
+    information"; ``claims`` holds both claims by key (:class:`Claim`): ``"modes_help"``
+    (against random groups alone, smallest effect ``help_effect``) and
+    ``"temporal_model_adds"``.
     """
 
     test: str
@@ -113,6 +152,7 @@ class SegmentationTest:
     significant: bool
     alpha: float
     effect_size_name: str = "median over trials of ln(reference / HMM median q)"
+    claims: dict[str, Claim] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return {"test": self.test, "unit": self.unit, "n_trials": self.n_trials,
@@ -129,7 +169,8 @@ class SegmentationTest:
                            "n_random": self.n_random, "method": self.random_method},
                 "n_random": self.n_random, "random_method": self.random_method,
                 "reachable": self.reachable, "min_trials": self.min_trials,
-                "significant": self.significant, "alpha": self.alpha}
+                "significant": self.significant, "alpha": self.alpha,
+                "claims": {k: c.to_dict() for k, c in self.claims.items()}}
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from sklearn.base import BaseEstimator
 from sklearn.cluster import KMeans
 from sklearn.decomposition import PCA
 from sklearn.exceptions import ConvergenceWarning
+from sklearn.metrics import adjusted_rand_score
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted
 
@@ -84,6 +85,11 @@ class TaskModes(BaseEstimator):
         seed: everything random (k-means, restarts) derives from it.
         n_jobs: restarts run in this many processes (joblib; None = 1, -1 = all cores). Each
             restart has its own seed, so the fitted model does not depend on it.
+        temporal: True (default): the HMM. False: the time-free Gaussian mixture of the same
+            emissions (scikit-learn ``GaussianMixture``, one fit per restart), stored as an HMM
+            whose every row of A and π equal the mixture weights w, so that p(s_t | s_{t−1}) =
+            w_{s_t}: Viterbi, the filter and :class:`ModeFilter` then give the mixture's
+            per-sample posteriors p(s | o_t) ∝ w_s·N(o_t; μ_s, Σ_s). ``sticky`` is unused.
 
     Fitted attributes:
         model_: the hmmlearn ``GaussianHMM`` (in the preprocessed space).
@@ -91,6 +97,8 @@ class TaskModes(BaseEstimator):
         converged_: bool — last EM improvement below ``tol`` per sample, before ``n_iter``.
         n_iter_: EM iterations of the kept restart. loglik_: its training log-likelihood.
         restart_logliks_: training log-likelihood of every restart.
+        restart_ari_: adjusted Rand index of every restart's Viterbi labels against the kept
+            restart's (1 for all: every restart found the same partition).
         empty_modes_: indices of states left with ~no occupancy (normally empty).
         n_parameters_: free HMM parameters (used by ``bic``).
         startprob_, transmat_: π and A. expected_durations_: 1/(1−A_ii) [samples].
@@ -99,7 +107,7 @@ class TaskModes(BaseEstimator):
     def __init__(self, n_modes: int = 4, covariance_type: str = "full",
                  n_pca: float | None = None, n_restarts: int = 5, sticky: float = 10.0,
                  n_iter: int = 200, tol: float = 1e-4, min_covar: float = 1e-3,
-                 seed: int = 0, n_jobs: int | None = None) -> None:
+                 seed: int = 0, n_jobs: int | None = None, temporal: bool = True) -> None:
         self.n_modes = n_modes
         self.covariance_type = covariance_type
         self.n_pca = n_pca
@@ -110,6 +118,11 @@ class TaskModes(BaseEstimator):
         self.min_covar = min_covar
         self.seed = seed
         self.n_jobs = n_jobs
+        self.temporal = temporal
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        state.setdefault("temporal", True)  # models pickled before the option were HMMs
+        super().__setstate__(state)
 
     # ------------------------------------------------------------------ fitting
     def _check_params(self) -> None:
@@ -122,6 +135,8 @@ class TaskModes(BaseEstimator):
             raise ValueError(f"n_restarts must be a positive integer, got {self.n_restarts!r}")
         if int(self.n_iter) != self.n_iter or self.n_iter < 1:
             raise ValueError(f"n_iter must be a positive integer, got {self.n_iter!r}")
+        if not isinstance(self.temporal, (bool, np.bool_)):
+            raise ValueError(f"temporal must be True (HMM) or False (Gaussian mixture), got {self.temporal!r}")
         if not self.sticky >= 0:
             raise ValueError(f"sticky must be >= 0, got {self.sticky!r}")
         if not self.tol >= 0:
@@ -167,8 +182,13 @@ class TaskModes(BaseEstimator):
         self.n_iter_ = best.n_iter
         self.converged_ = best.converged
         self.restart_logliks_ = [r.loglik for r in runs]
+        kept = best.model.predict(Z, lengths)
+        self.restart_ari_ = [1.0 if r is best else float(adjusted_rand_score(kept, r.model.predict(Z, lengths)))
+                             for r in runs]
         self.empty_modes_ = best.empty
         self.n_parameters_ = n_hmm_parameters(K, self.n_components_, self.covariance_type)
+        if not self.temporal:  # A is not a parameter of the mixture
+            self.n_parameters_ -= K * (K - 1)
         self.startprob_ = np.array(best.model.startprob_)
         self.transmat_ = np.array(best.model.transmat_)
         with np.errstate(divide="ignore"):
@@ -224,11 +244,33 @@ class TaskModes(BaseEstimator):
                        "spherical": np.diagonal(covs, axis1=1, axis2=2).mean(axis=1),
                        "tied": covs.mean(axis=0)}[self.covariance_type]
 
+    def _fit_mixture(self, Z: np.ndarray, lengths: np.ndarray, seed: int) -> _Restart:
+        """One time-free restart: a Gaussian mixture (``temporal=False``, see class doc) as an HMM."""
+        from sklearn.mixture import GaussianMixture
+
+        N = Z.shape[0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            gm = GaussianMixture(int(self.n_modes), covariance_type=self.covariance_type,
+                                 reg_covar=float(self.min_covar), max_iter=int(self.n_iter),
+                                 tol=float(self.tol), random_state=seed).fit(Z)
+        hmm = self._new_hmm(N, seed)
+        w = np.asarray(gm.weights_, dtype=float)
+        hmm.startprob_ = w
+        hmm.transmat_ = np.tile(w, (len(w), 1))
+        hmm.means_ = gm.means_
+        hmm.covars_ = gm.covariances_
+        loglik, post = hmm.score_samples(Z, lengths)
+        empty = np.flatnonzero(post.sum(axis=0) < max(_EMPTY_FRACTION * N, 1.0))
+        return _Restart(hmm, float(loglik), [float(loglik)], bool(gm.converged_), empty, seed, int(gm.n_iter_))
+
     def _fit_restart(self, Z: np.ndarray, lengths: np.ndarray, seed: int) -> _Restart:
         """One EM run. hmmlearn's "scaling" forward–backward is used for the fit (measured
         on 108k samples, 5 modes: 2.6× faster than "log", the same log-likelihood to 1e-13
         and the same labels); when it under- or overflows (a sample no state explains)
         the run is repeated in log space. The model keeps "log" for inference."""
+        if not self.temporal:
+            return self._fit_mixture(Z, lengths, seed)
         try:
             run = self._fit_restart_with(Z, lengths, seed, "scaling")
             if np.isfinite(run.loglik) and np.isfinite(run.history).all():

@@ -87,6 +87,7 @@ def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
 def print_headline(report: AnalysisReport) -> None:
     """The few lines a person reads first: quotients, modes, the two tests."""
     from mpcshare.reports.analysis import fmt, fmt_p
+    from mpcshare.reports.claims import claim_sentences, mixture_advice
 
     q = report.quotients
     print(f"quotients without modes: median {fmt(q.p50)}, p90 {fmt(q.p90)}, max {fmt(q.max)}")
@@ -94,13 +95,14 @@ def print_headline(report: AnalysisReport) -> None:
     if m.agreement is not None:
         print(f"HMM modes: {m.n_modes}, agreement with labels {100 * m.agreement:.1f} %, ARI {m.ari:.3f}")
     t = report.segmentation_test
-    if not t.reachable:
-        verdict = f"no claim possible: {t.n_trials} trials, at least {t.min_trials} needed for p < {t.alpha:g}"
-    else:
-        verdict = "modes add information" if t.significant else "no evidence that modes add information"
-    print(f"HMM vs {t.reference} reference over {t.n_trials} trials: median q {t.hmm_median_q:.2f} vs "
-          f"{t.reference_median_q:.2f} (random groups {t.random_median_q:.2f}); effect ln ratio "
-          f"{t.effect_size:.3f} [{t.ci_low:.3f}, {t.ci_high:.3f}], {fmt_p(t.p_value)}: {verdict}")
+    print(f"median q over all windows: {t.hmm_median_q:.2f} within HMM modes, {t.reference_median_q:.2f} "
+          f"within the {t.reference} reference, {t.random_median_q:.2f} within random groups")
+    seg = t.to_dict()
+    for line in claim_sentences(seg):
+        print(line)
+    advice = mixture_advice(seg)
+    if advice:
+        print(advice)
     for K, v in report.voluntary_share.items():
         print(f"voluntary share at K = {K}: {100 * v.without_modes:.1f} % without modes, "
               f"{100 * v.with_modes:.1f} % with modes, {100 * v.reference:.1f} % within the reference "

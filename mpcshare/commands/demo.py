@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from learning.atomic import atomic_open
@@ -68,8 +69,10 @@ def _demo(args: argparse.Namespace) -> int:
     from mpcshare.bundle import load_bundle, save_bundle
     from mpcshare.experiments import compare_strategies, render_clip
     from mpcshare.reports.analysis import plot_demonstrations, write_json_atomic
+    from mpcshare.reports.claims import mixture_advice
     from mpcshare.reports.comparison import write_comparison
     from mpcshare.reports.demo import write_demo_report
+    from mpcshare.reports.mode_sources import mode_source_comparison, mode_source_sentence
     from mpcshare.training import TrainingError, train_bundle
     from sim.wearer_presets import wearer_preset
 
@@ -115,6 +118,15 @@ def _demo(args: argparse.Namespace) -> int:
     bundle.config["data_path"] = str((out / "demos.npz").resolve())
     save_bundle(bundle, out / "model")
     bundle = load_bundle(out / "model")  # what `mpcshare sim --model` would see
+    mode_sources = None
+    if mixture_advice(analysis.segmentation_test.to_dict()):  # modes help, the temporal model adds nothing
+        print("training on the time-free mixture's modes too, to compare (--modes-from mixture)", flush=True)
+        try:
+            mixture = train_bundle(demos, replace(config, modes_from="mixture"), progress=False)
+        except TrainingError as exc:
+            raise CommandError(f"cannot train on the mixture's modes: {exc}") from None
+        mode_sources = mode_source_comparison({"hmm": bundle, "mixture": mixture})
+        print(mode_source_sentence(mode_sources))
     lap("training", t0)
 
     sweep = None
@@ -148,7 +160,7 @@ def _demo(args: argparse.Namespace) -> int:
     timings["total"] = time.perf_counter() - t_start
     missing = write_demo_report(out, data_summary_md=summary_md, analysis=analysis.to_dict(),
                                 training=bundle.metrics, comparison=comparison, timings_s=timings,
-                                data_summary=summary, sweep=sweep)
+                                data_summary=summary, sweep=sweep, mode_sources=mode_sources)
     if missing:
         print(f"report.html: could not embed {missing}")
     from mpcshare.reports.comparison import comparison_findings

@@ -27,7 +27,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.data import DATA_HELP
-from mpcshare.training.config import DEFAULT_PERCENTILES, TrainConfig
+from mpcshare.training.config import DEFAULT_PERCENTILES, MODES_FROM, TrainConfig
 
 __all__ = ["TRAIN_COMMAND"]
 
@@ -53,6 +53,10 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"percentiles of the sweep (default {' '.join(f'{x:g}' for x in DEFAULT_PERCENTILES)})")
     g = p.add_argument_group("training")
     g.add_argument("--modes", type=positive_int, default=d.n_modes, help=f"HMM task modes (default {d.n_modes})")
+    g.add_argument("--modes-from", choices=MODES_FROM, default=d.modes_from,
+                   help=f"hmm: the HMM task modes; mixture: the time-free Gaussian mixture of the same "
+                        f"observations (where the analysis finds that modes help but the temporal model "
+                        f"adds nothing) (default {d.modes_from})")
     g.add_argument("--window", type=nonnegative_float, default=d.window_s,
                    help=f"causal window [s] (default {d.window_s:g})")
     g.add_argument("--rate", type=positive_float, default=d.model_hz, help=f"model rate [Hz] (default {d.model_hz:g})")
@@ -74,7 +78,8 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _config(args: argparse.Namespace) -> TrainConfig:
     return TrainConfig(percentile=args.percentile, model_hz=args.rate, window_s=args.window,
-                       n_modes=args.modes, hmm_restarts=args.hmm_restarts, heldout_fraction=args.heldout,
+                       n_modes=args.modes, modes_from=args.modes_from, hmm_restarts=args.hmm_restarts,
+                       heldout_fraction=args.heldout,
                        max_epochs=args.epochs, lstm_baseline=args.baselines, device=args.device,
                        forecast_s=args.forecast, seed=args.seed)
 

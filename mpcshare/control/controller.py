@@ -17,8 +17,9 @@ Per :meth:`SharedController.step`:
 4. optional MPC (``robot.mpc.tip_mpc.TipMPC``) over its horizon on the preview
    r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (the robot's share from the forecast,
    the wearer's extrapolated; ``mpc_preview=False``: the smoothed reference p_s extrapolated at
-   its velocity); its planned tip at t + dt (position, central-difference velocity and
-   acceleration) is the reference of
+   its velocity), solved every ``mpc_every`` steps and followed in between
+   (:class:`~mpcshare.control.mpc_follow.MPCFollower`); its planned tip at t + dt (position,
+   central-difference velocity and acceleration) is the reference of
 5. ``robot.qp.QPController``, which enforces joint position, velocity, acceleration and
    torque limits at the control rate. When the MPC fails or runs out of time, the QP
    tracks the smoothed reference alone.
@@ -59,6 +60,7 @@ import numpy as np
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
+from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc
 from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
@@ -109,8 +111,8 @@ class SharedController:
         qp_cfg = cfg.qp if abs(cfg.qp.dt - self.dt) < 1e-12 else QPConfig(**{**cfg.qp.__dict__, "dt": self.dt})
         self.qp = QPController.for_superlimb(self.params, qp_cfg)
         self.mpc = mpc if mpc is not None else (make_mpc(self.params, self.dt) if use_mpc else None)
-        if self.mpc is not None and not (hasattr(self.mpc, "solve") and int(getattr(self.mpc, "horizon", 0)) >= 2):
-            raise ValueError("mpc must have solve(q, v, p_ref, deadline_s) and a horizon of at least 2 steps")
+        self.mpc_follower = None if self.mpc is None else \
+            MPCFollower(self.mpc, self.dt, cfg.mpc_deadline_s, cfg.mpc_every)
         self.tip = TipKinematics(self.qp.model, TOOL_FRAME)
         self.reach = ReachShell(self.qp.model, self.tip.frame_id, margin=cfg.reach_margin)
         self.frontend = StreamingFrontEnd(bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz,
@@ -161,8 +163,8 @@ class SharedController:
         self.frontend.reset()
         self.arbiter.reset()
         self.qp.reset()
-        if self.mpc is not None and hasattr(self.mpc, "reset"):
-            self.mpc.reset()
+        if self.mpc_follower is not None:
+            self.mpc_follower.reset()
         self.smoother = ReferenceSmoother(3, self.dt, self.config.max_velocity, self.config.max_acceleration,
                                           self.config.max_jerk)
         self._stream = self.bundle.predictor.make_stream()
@@ -180,8 +182,6 @@ class SharedController:
         self._pose = np.array(self.default_base_pose, dtype=float)
         self._fork_vel = np.zeros(self.layout.d_o)
         self._last: ControlCommand | None = None
-        self._plan: np.ndarray | None = None  # last MPC tip plan (model frame)
-        self._plan_age = 0
 
     # ------------------------------------------------------------------ helpers
     def _to_model(self, p: np.ndarray) -> np.ndarray:
@@ -351,9 +351,9 @@ class SharedController:
             sm = self.smoother.update(p_model, u_model, self._pose[:3, :3].T @ self._acc_ff)
         timings["smoothing"] = time.perf_counter() - ta
         p_qp, v_qp, a_qp = sm.position, sm.velocity, sm.acceleration
-        if self.mpc is not None:
+        if self.mpc_follower is not None:
             ta = time.perf_counter()
-            refs = self._mpc_reference(q, v, sm, faults)
+            refs = self.mpc_follower.step(q, v, lambda H: self._mpc_preview(sm, H), faults)
             if refs is not None:
                 p_qp, v_qp, a_qp = refs
             timings["mpc"] = time.perf_counter() - ta
@@ -391,37 +391,6 @@ class SharedController:
             self._gate_proba = None
             faults.append(("internal_error", f"gate failed: {exc}"))
 
-    def _mpc_reference(self, q, v, sm, faults):
-        """MPC over the smoothed reference extrapolated at constant velocity; QP references at t + dt.
-
-        With ``mpc_every = n > 1`` the MPC is solved every n-th step; in between the QP follows
-        the last plan shifted by the steps since it was solved.
-        """
-        H = int(self.mpc.horizon)
-        every = max(int(self.config.mpc_every), 1)
-        if self._plan is not None and 0 < self._plan_age < every and self._plan_age + 2 <= H:
-            j = self._plan_age
-            self._plan_age += 1
-            return self._plan_reference(self._plan, j)
-        self._plan, self._plan_age = None, 0
-        p_ref = self._mpc_preview(sm, H)
-        try:
-            r = self.mpc.solve(q, v, p_ref, deadline_s=self.config.mpc_deadline_s)
-        except Exception as exc:  # noqa: BLE001 — the QP takes over
-            faults.append(("mpc_failed", f"MPC raised {type(exc).__name__}: {exc}; QP tracks the smoothed reference"))
-            return None
-        timed_out = r.solve_time > self.config.mpc_deadline_s or "time" in str(r.status).lower()
-        if not r.ok or not np.all(np.isfinite(r.tip_plan)):
-            name = "mpc_timeout" if timed_out else "mpc_failed"
-            faults.append((name, f"MPC {r.status}; QP tracks the smoothed reference"))
-            return None
-        if timed_out:
-            why = f"MPC took {r.solve_time * 1e3:.2f} ms > deadline; QP tracks the smoothed reference"
-            faults.append(("mpc_timeout", why))
-            return None
-        self._plan, self._plan_age = np.asarray(r.tip_plan, dtype=float), 1
-        return self._plan_reference(self._plan, 0)
-
     def _mpc_preview(self, sm, H: int) -> np.ndarray:
         """The MPC's reference (H+1, 3), model frame (module docstring, item 4)."""
         k = np.arange(H + 1)[:, None] * self.dt
@@ -433,8 +402,3 @@ class SharedController:
             return sm.position[None, :] + k * sm.velocity[None, :]
         offset = alpha * (p - p[0]) + beta * k * u_v[None, :]  # plate frame
         return sm.position[None, :] + offset @ self._pose[:3, :3]
-
-    def _plan_reference(self, tp: np.ndarray, j: int):
-        """Tip position, velocity, acceleration of plan ``tp`` at step j + 1 (central differences)."""
-        dt = self.dt
-        return tp[j + 1], (tp[j + 2] - tp[j]) / (2 * dt), (tp[j + 2] - 2 * tp[j + 1] + tp[j]) / dt ** 2

@@ -17,8 +17,10 @@ from pathlib import Path
 from typing import Any
 
 from learning.atomic import atomic_open
+from mpcshare.reports.claims import claim_sentences, mixture_advice
 from mpcshare.reports.comparison import comparison_findings, strict_json
 from mpcshare.reports.html import write_html_report
+from mpcshare.reports.mode_sources import mode_source_sentence
 
 __all__ = ["demo_summary", "write_demo_report"]
 
@@ -43,27 +45,38 @@ def _section(md: str, folder: str, drop_title: bool = True) -> str:
     return "\n".join("#" + ln if ln.startswith("#") else ln for ln in lines).strip() + "\n"
 
 
-def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison: dict[str, Any] | None) -> list[str]:
-    """The bullet points at the top of the report, in words."""
+def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison: dict[str, Any] | None,
+                 mode_sources: dict[str, Any] | None = None) -> list[str]:
+    """The bullet points at the top of the report, in words (``mode_sources``: the HMM against the
+    mixture for the controller, :func:`mpcshare.reports.mode_sources.mode_source_comparison`)."""
     out: list[str] = []
     q = analysis["quotients"]
     seg = analysis["segmentation_test"]
-    claim = ("so the task mode is information the robot needs beyond where the fork is"
-             if seg["significant"] else
-             f"but a {seg['reference']} grouping of the same observations without any temporal model does as well "
-             f"(median {_num(seg['reference_median_q'])}, p = {_num(seg['p_value'], 2)} over {seg['n_trials']} "
-             f"trials): on these data the mode is visible in a single observation, so the calibrated claim that "
-             f"modes add information beyond the observation is not made")
     out.append(f"Without task modes the knife is hard to predict from the fork: median Lipschitz quotient "
                f"{_num(q['p50'])} (p90 {_num(q['p90'])}). Within the {analysis['modes']['n_modes']} HMM task modes "
                f"the median falls to {_num(seg['hmm_median_q'])} (random groups of equal size: "
-               f"{_num(seg['random_median_q'])}), {claim}.")
+               f"{_num(seg['random_median_q'])}; a time-free {seg['reference']} grouping: "
+               f"{_num(seg['reference_median_q'])}).")
+    out += claim_sentences(seg)
+    advice = mixture_advice(seg)
+    if advice:
+        out.append(advice)
+    if mode_sources:
+        out.append(mode_source_sentence(mode_sources))
     t = training["training"]
     g = training["gate"]["overall"]
     out.append(f"The robot was trained to act where the within-mode quotient is below K = {_num(t['K'])} "
                f"(percentile {t['percentile']:g}); on held-out trials its gate hands "
                f"{_pct(training['voluntary_share'])} of the time to the wearer, with accuracy "
                f"{_pct(g['accuracy'])} against the quotient labels.")
+    fc = training.get("forecast")
+    if fc and fc.get("forecast") and None not in (fc["forecast"][-1], fc["hold"][-1]):
+        m = 1e3 if str(fc.get("units", "")).startswith("m ") else 1.0
+        unit = " mm" if m == 1e3 else ""
+        out.append(f"The predictor forecasts the knife {fc['horizons_s'][-1]:g} s ahead: on held-out reactive steps "
+                   f"its error grows from {_num(fc['forecast'][0] * m)} to {_num(fc['forecast'][-1] * m)}{unit}, "
+                   f"against {_num(fc['hold'][-1] * m)}{unit} for holding its present estimate and "
+                   f"{_num(fc['constant_velocity'][-1] * m)}{unit} for extrapolating it.")
     if comparison:
         s = comparison["strategies"]
         if "gate" in s:
@@ -77,11 +90,12 @@ def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison:
 
 def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[str, Any], training: dict[str, Any],
                       comparison: dict[str, Any] | None, timings_s: dict[str, float],
-                      data_summary: dict[str, Any] | None = None, sweep: dict[str, Any] | None = None) -> list[str]:
+                      data_summary: dict[str, Any] | None = None, sweep: dict[str, Any] | None = None,
+                      mode_sources: dict[str, Any] | None = None) -> list[str]:
     """Write ``report.md``, ``report.html`` and ``report.json`` into ``out``; returns links not inlined in the HTML."""
     out = Path(out)
     parts = ["# mpcshare demo: from demonstrations to a shared controller", "",
-             "## Summary", "", *[f"- {s}" for s in demo_summary(analysis, training, comparison)], "",
+             "## Summary", "", *[f"- {s}" for s in demo_summary(analysis, training, comparison, mode_sources)], "",
              "Stages and their own files: `demos.npz` and `data_summary.*` (data), `analysis/` "
              "(predictability analysis), `model/` (the trained bundle), `sweep/` (the K trade-off), "
              "`sim/` (closed-loop runs, `comparison.json`).", "",
@@ -115,7 +129,7 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
     with atomic_open(out / "report.md", "w") as f:
         f.write(md)
     obj = {"format_version": 1, "data": data_summary, "analysis": analysis, "training": training,
-           "sweep": sweep, "comparison": comparison, "timings_s": timings_s}
+           "sweep": sweep, "comparison": comparison, "mode_sources": mode_sources, "timings_s": timings_s}
     with atomic_open(out / "report.json", "w") as f:
         json.dump(strict_json(obj), f, indent=2, default=_jsonable, allow_nan=False)
     return write_html_report(out / "report.md", out / "report.html")

@@ -11,7 +11,10 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
-__all__ = ["DEFAULT_PERCENTILES", "TrainConfig"]
+__all__ = ["DEFAULT_PERCENTILES", "MODES_FROM", "TrainConfig"]
+
+#: sources of the task modes (``TrainConfig.modes_from``, ``mpcshare train --modes-from``)
+MODES_FROM: tuple[str, ...] = ("hmm", "mixture")
 
 #: percentiles of the K trade-off sweep (``mpcshare train --sweep``, :func:`~mpcshare.training.sweep.run_sweep`)
 DEFAULT_PERCENTILES: tuple[float, ...] = (100.0, 90.0, 80.0, 70.0, 60.0, 50.0)
@@ -27,6 +30,10 @@ class TrainConfig:
         model_hz: rate of the models after causal downsampling [Hz].
         window_s: causal window of the gates [s].
         n_modes, hmm_restarts: HMM task modes and EM restarts.
+        modes_from: where the modes come from, "hmm" (the HMM task modes) or "mixture" (the
+            time-free Gaussian mixture of the same observations, as an HMM whose rows of A
+            equal the weights: ``TaskModes(temporal=False)``; the analysis's advice where
+            modes help but the temporal model adds nothing).
         heldout_fraction: share of trials held out for evaluation (at least one).
         val_fraction: share of the training trials used for the LSTM's early stopping.
         hidden_size, batch_size, max_epochs, patience, learning_rate: LSTM settings
@@ -58,6 +65,7 @@ class TrainConfig:
     window_s: float = 1.0
     n_modes: int = 4
     hmm_restarts: int = 3
+    modes_from: str = "hmm"
     heldout_fraction: float = 0.25
     val_fraction: float = 0.2
     hidden_size: int = 28
@@ -92,6 +100,8 @@ class TrainConfig:
         for name in ("heldout_fraction", "val_fraction"):
             if not 0.0 < getattr(self, name) < 1.0:
                 raise ValueError(f"{name} must be in (0, 1), got {getattr(self, name)!r}")
+        if self.modes_from not in MODES_FROM:
+            raise ValueError(f"modes_from must be one of {MODES_FROM}, got {self.modes_from!r}")
         if self.gate_kernel not in ("rbf", "nystroem"):
             raise ValueError(f"gate_kernel must be 'rbf' or 'nystroem', got {self.gate_kernel!r}")
         if self.gate_max_samples is not None and (int(self.gate_max_samples) != self.gate_max_samples

@@ -173,7 +173,8 @@ def prepare_training_data(demos: Demonstrations, config: TrainConfig,
     if len(obs) < 10 * config.n_modes:
         raise TrainingError(f"{len(obs)} training samples at {config.model_hz:g} Hz are too few for "
                             f"{config.n_modes} HMM modes (need at least {10 * config.n_modes})")
-    hmm = TaskModes(n_modes=config.n_modes, n_restarts=config.hmm_restarts, seed=config.seed)
+    hmm = TaskModes(n_modes=config.n_modes, n_restarts=config.hmm_restarts, seed=config.seed,
+                    temporal=config.modes_from == "hmm")
     hmm.fit(obs, lengths)
     neg_log = -hmm.log_predictive(obs, lengths)
     novelty = float(np.percentile(neg_log, 99.9))

@@ -442,3 +442,14 @@ def test_scaling_fit_equals_log_fit_and_falls_back(outlier, monkeypatch):
     np.testing.assert_allclose(fast.restart_logliks_, slow.restart_logliks_, rtol=1e-9)
     np.testing.assert_allclose(fast.model_.means_, slow.model_.means_, rtol=1e-7, atol=1e-9)
     assert np.array_equal(fast.predict(Z, lengths), slow.predict(Z, lengths))
+
+
+def test_restart_ari_compares_every_restart_with_the_kept_partition(data):
+    X, S, L = data  # overlapping states (sep 1): restarts end in different optima
+    m = TaskModes(4, n_restarts=4, seed=2).fit(X, L)
+    kept = int(np.argmax(m.restart_logliks_))
+    assert len(m.restart_ari_) == 4 and m.restart_ari_[kept] == 1.0
+    assert all(-1.0 <= a <= 1.0 for a in m.restart_ari_)
+    # well-separated states: every restart finds the same partition
+    X2, _, L2 = sample_hmm(sep=4.0, seed=5)
+    assert min(TaskModes(4, n_restarts=3, seed=2).fit(X2, L2).restart_ari_) > 0.99

@@ -80,6 +80,9 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert report["comparison"]["trials"] == comparison["trials"]
     md = (out / "report.md").read_text()
     assert md.startswith("# mpcshare demo") and "## Summary" in md and "## 4. Closed loop in MuJoCo" in md
+    # the summary states both claims, each in its own sentence (issue 22)
+    summary_md = md.split("## Summary", 1)[1].split("\n## ", 1)[0]
+    assert "Modes help: " in summary_md and "The temporal model adds information: " in summary_md
     page = (out / "report.html").read_text()
     assert "<img" in page and 'src="data:image/png;base64,' in page
     assert 'src="analysis/' not in page and 'src="sim/' not in page  # every plot embedded

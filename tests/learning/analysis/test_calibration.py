@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy import signal, stats
 
-from learning.analysis import MIN_EFFECT, SIGNIFICANCE, AnalysisConfig, analyze
+from learning.analysis import HELP_EFFECT, MIN_EFFECT, SIGNIFICANCE, AnalysisConfig, analyze
 from learning.analysis.reference import (
     REFERENCES,
     min_trials_for,
@@ -28,12 +28,18 @@ FAST = {"n_random": 1, "search_windows": (), "search_modes": (), "hmm_restarts":
 
 @pytest.mark.parametrize("k", range(4))
 def test_small_regime_free_family_makes_no_claim(k):
-    # one data set of each map kind (linear/nonlinear observation and action), 10 trials of 45 s
+    # one data set of each map kind (linear/nonlinear observation and action), 10 trials of 45 s;
+    # neither claim ("modes help", "the temporal model adds information") may be made
     cfg, seed = calibration_family(4, seed=7, trial_s=(45.0, 45.0), trials=(10, 10))[k]
     t = analyze(generate_regime_free(cfg, seed), AnalysisConfig(**FAST)).report["segmentation_test"]
     assert t["reachable"] and t["n_trials"] >= 10
     assert not t["significant"], (cfg, t["p_value"], t["effect_size"])
     assert t["p_value"] > SIGNIFICANCE
+    claims = t["claims"]
+    assert set(claims) == {"modes_help", "temporal_model_adds"}
+    assert not claims["temporal_model_adds"]["made"] and claims["temporal_model_adds"]["p_value"] == t["p_value"]
+    assert not claims["modes_help"]["made"], (cfg, claims["modes_help"])
+    assert claims["modes_help"]["min_effect"] == pytest.approx(HELP_EFFECT)
 
 
 def _hidden_regime_data(n_trials: int, T: int, seed: int):

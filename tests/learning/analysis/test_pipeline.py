@@ -27,7 +27,9 @@ def test_report_has_the_documented_keys(result):
                 "segmentation_test", "voluntary_share", "candidates"):
         assert key in r
     assert {"p50", "p90", "p99", "max", "K_by_percentile"} <= set(r["quotients"])
-    assert {"n_modes", "agreement", "ari"} <= set(r["modes"])
+    assert {"n_modes", "agreement", "ari", "restart_logliks", "restart_ari"} <= set(r["modes"])
+    m = r["modes"]  # the kept restart against itself: 1; one entry per restart
+    assert len(m["restart_ari"]) == len(m["restart_logliks"]) and max(m["restart_ari"]) == 1.0
     assert {"statistic", "p_value", "effect_size", "hmm_median_q", "random_median_q", "reference",
             "reference_median_q", "unit", "ci", "reachable"} <= set(r["segmentation_test"])
     assert r["segmentation_test"]["unit"] == "trial" and r["segmentation_test"]["reference"] == "gmm"
@@ -52,6 +54,12 @@ def test_modes_found_and_they_explain_confounding(result):
     # issue 13: the claim used to be the pooled Mann-Whitney test against random groups.)
     assert not t["significant"] and t["p_value"] > 1e-3
     assert abs(t["effect_size"]) < t["min_effect"] and t["ci"]["low"] <= t["effect_size"] <= t["ci"]["high"]
+    # The two claims, each with its own test (issue 22): modes help (against random groups,
+    # with its larger smallest effect), the temporal model adds nothing beyond the mixture.
+    helps, temporal = t["claims"]["modes_help"], t["claims"]["temporal_model_adds"]
+    assert helps["made"] and helps["p_value"] < 1e-3 and helps["ci"]["low"] > helps["min_effect"] > t["min_effect"]
+    assert helps["effect_size"] == pytest.approx(t["random"]["effect_size"])
+    assert not temporal["made"] and temporal["p_value"] == t["p_value"] and temporal["effect_size"] == t["effect_size"]
     v = r["voluntary_share"]["5"]
     assert v["with_modes"] < v["random"] < v["without_modes"] + 1e-12
     assert abs(v["with_modes"] - v["reference"]) < 0.02
@@ -78,6 +86,7 @@ def test_too_few_trials_is_said_not_claimed():
     assert t["n_trials"] == 8 and t["min_trials"] == 10
     assert not t["reachable"] and not t["significant"]
     assert t["random"]["effect_size"] > t["min_effect"]  # modes beat random groups: the claim is withheld
+    assert not t["claims"]["modes_help"]["made"] and not t["claims"]["temporal_model_adds"]["made"]
 
 
 def test_no_mode_structure_claims_no_gain():
@@ -173,3 +182,15 @@ def test_optional_mode_selection_is_reported():
     assert sel["rule"] == "1se" and se[int(np.argmax(ll))] == 0.0
     assert sel["n_modes"] == next(k for k, v, s in zip(sel["candidates"], ll, se) if v >= max(ll) - s)
     json.dumps(r, allow_nan=False)
+
+
+def test_modes_help_is_claimed_at_12_trials_in_at_least_2_of_3_seeds():
+    # power of the claim "modes help" (issue 22): 12 trials of 1 min of the default demonstrations,
+    # whose modes explain the confounding; with 12 trials the smallest p is 2.4e-4
+    made = []
+    for seed in range(3):
+        demos = generate_demonstrations(3, 4, seed=seed, config=GeneratorConfig(trial_minutes=1.0))
+        t = analyze(demos, AnalysisConfig(**FAST, hmm_restarts=2)).report["segmentation_test"]
+        assert t["n_trials"] == 12
+        made.append(t["claims"]["modes_help"]["made"])
+    assert sum(made) >= 2, made

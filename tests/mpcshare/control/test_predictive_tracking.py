@@ -53,3 +53,43 @@ def test_the_gate_lets_go_below_even_odds_after_the_dwell():
     alphas = [arb.decide(0.1 * k, 0.45).alpha for k in range(1, 20)]
     assert alphas[-1] == 0.0
     assert all(a == 1.0 for a in alphas[: int(cfg.min_dwell_s / 0.1) - 1])  # not before the dwell
+
+
+def test_between_ticks_the_forecast_is_followed_not_held():
+    """With a forecast (horizons > 0) the aimed tip moves between the 10 Hz ticks; without, it is held."""
+    import dataclasses
+
+    from learning.predictor import ReactivePredictor
+    from tests.mpcshare.control.controller_doubles import real_model_bundle
+
+    demos, bundle = real_model_bundle(0)
+    held_steps = []
+    for horizons in (0, 3):
+        predictor = bundle.predictor
+        if horizons:
+            predictor = ReactivePredictor(hidden_size=8, max_epochs=2, chunk_len=25, seed=0, horizons=horizons)
+            seqs, targets = _training_sequences(bundle, demos)
+            predictor.fit(seqs, targets, progress=False)
+        ctl = SharedController.from_bundle(dataclasses.replace(bundle, predictor=predictor), strategy="reactive")
+        trial = demos.trials[0]
+        q, v = np.zeros(3), np.zeros(3)
+        aimed = []
+        for k in range(400):
+            c = ctl.step(trial.t[k], trial.obs[k], trial.voluntary[k], q, v)
+            q, v = c.q_cmd, c.v_cmd
+            aimed.append(c.predicted_tip)
+        aimed = np.array(aimed[200:])
+        moving = np.linalg.norm(np.diff(aimed, axis=0), axis=1) > 1e-12
+        held_steps.append(float(np.mean(~moving)))
+    assert held_steps[0] >= 0.85  # 9 of every 10 steps repeat the tick's output
+    assert held_steps[1] <= 0.15
+
+
+def _training_sequences(bundle, demos):
+    from learning.preprocessing.resample import causal_downsample
+
+    std = bundle.preprocessor.standardize(causal_downsample(demos, 10.0, zero_phase_act=True))
+    lengths = [len(tr) for tr in std.trials]
+    P = bundle.modes.filter_proba(np.concatenate([tr.obs for tr in std.trials]), lengths)
+    posts = np.split(P, np.cumsum(lengths)[:-1])
+    return [np.hstack([tr.obs, p]) for tr, p in zip(std.trials, posts)], [tr.act for tr in std.trials]

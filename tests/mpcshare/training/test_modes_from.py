@@ -1,0 +1,75 @@
+"""`mpcshare train --modes-from mixture`: the bundle's modes are the time-free Gaussian mixture,
+stored as an HMM whose rows of A are the weights, and the online mode filter runs it."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from learning.data import save
+from mpcshare.bundle import load_bundle
+from mpcshare.cli import main
+from mpcshare.commands.train import TRAIN_COMMAND
+from mpcshare.training.config import TrainConfig
+from sim.demonstrator import GeneratorConfig, generate_demonstrations
+
+
+def test_modes_from_is_checked_and_names_the_choices():
+    assert TrainConfig().modes_from == "hmm"
+    with pytest.raises(ValueError, match=r"modes_from must be one of \('hmm', 'mixture'\), got 'gmm'"):
+        TrainConfig(modes_from="gmm")
+
+
+def test_cli_trains_a_bundle_with_mixture_modes_and_the_filter_runs_them(tmp_path, capsys):
+    demos = generate_demonstrations(2, 1.5, seed=1, config=GeneratorConfig(trial_minutes=0.5))
+    path = tmp_path / "d.npz"
+    save(demos, path)
+    out = tmp_path / "model"
+    argv = ["train", str(path), "--out", str(out), "--modes", "3", "--modes-from", "mixture",
+            "--epochs", "2", "--hmm-restarts", "1", "--quiet"]
+    assert main(argv, commands=(TRAIN_COMMAND,)) == 0
+    assert "gate: accuracy" in capsys.readouterr().out
+    b = load_bundle(out, expect_obs_names=demos.obs_names, expect_act_names=demos.act_names)
+    assert b.config["modes_from"] == "mixture" and b.modes.temporal is False
+    A = b.modes.transmat_
+    np.testing.assert_allclose(A, np.tile(b.modes.startprob_, (3, 1)))  # no temporal model
+    # the online filter (as the controller builds it from the bundle) gives the per-sample
+    # posterior: the same whatever came before
+    f = b.modes.make_filter()
+    o = np.zeros(len(demos.obs_names))
+    f.step(o + 1.0)
+    after_other = f.step(o)
+    g = b.modes.make_filter()
+    np.testing.assert_allclose(g.step(o), after_other, atol=1e-12)
+    with pytest.raises(SystemExit) as exc:  # argparse: a usage error names the choices
+        main(["train", str(path), "--out", str(tmp_path / "m2"), "--modes-from", "time"], commands=(TRAIN_COMMAND,))
+    assert exc.value.code == 2
+    assert "invalid choice: 'time'" in capsys.readouterr().err
+
+
+def test_the_demo_compares_hmm_and_mixture_modes_for_the_controller():
+    from mpcshare.reports.demo import demo_summary
+    from mpcshare.reports.mode_sources import mode_source_comparison, mode_source_sentence
+    from mpcshare.training import train_bundle
+
+    demos = generate_demonstrations(2, 1.5, seed=1, config=GeneratorConfig(trial_minutes=0.5))
+    small = TrainConfig(percentile=80, n_modes=3, hmm_restarts=1, max_epochs=2, patience=1, gate_max_samples=200)
+    bundles = {src: train_bundle(demos, replace(small, modes_from=src), progress=False) for src in ("hmm", "mixture")}
+    cmp = mode_source_comparison(bundles)
+    for src, b in bundles.items():
+        assert cmp[src]["voluntary_share"] == b.metrics["voluntary_share"]
+        assert cmp[src]["gate_accuracy"] == b.metrics["gate"]["overall"]["accuracy"]
+        assert 0 < cmp[src]["filter_step_us"] < 1e5
+    s = mode_source_sentence(cmp)
+    assert f"{100 * cmp['mixture']['voluntary_share']:.1f} % of the held-out time" in s
+    assert f"(HMM {100 * cmp['hmm']['gate_accuracy']:.1f} %)" in s
+    # the demo's summary carries the sentence when the comparison was made
+    seg = {"n_trials": 12, "reachable": True, "min_trials": 10, "alpha": 1e-3, "reference": "gmm",
+           "hmm_median_q": 2.0, "random_median_q": 4.0, "reference_median_q": 2.1, "claims": {
+               k: {"name": k, "compared": "x", "p_value": 1.0, "effect_size": 0.0, "made": made, "min_effect": 0.1,
+                   "ci": {"low": 0.0, "high": 0.0, "level": 0.95}}
+               for k, made in (("modes_help", True), ("temporal_model_adds", False))}}
+    analysis = {"quotients": {"p50": 4.0, "p90": 8.0}, "modes": {"n_modes": 3}, "segmentation_test": seg}
+    lines = demo_summary(analysis, bundles["hmm"].metrics, None, cmp)
+    assert s in lines and any("--modes-from mixture" in x for x in lines)
+    assert s not in demo_summary(analysis, bundles["hmm"].metrics, None)
