@@ -6,7 +6,8 @@ Prints one JSON object:
   ``other_seed``: the generator at another seed with 2 subjects and other subject styles;
   ``other_structure``: more confounded modes (overlap 0.85), noisier, the knife reacting
   0.25 s after the fork, one slow wide sawyer (1.3 Hz, 3 cm) and one fast short one (2.9 Hz, 1.2 cm));
-* ``runs``: per wearer preset, per run (voluntary, reactive, gate, gate_mpc, oracle_preview) the
+* ``runs``: per wearer preset, per run (voluntary, reactive, gate, gate_mpc, oracle_preview, and the
+  hand-over baselines random_handover, matched to the gate, and oracle_handover) the
   pooled metrics of :func:`mpcshare.experiments.compare_strategies` on held-out trials;
 * ``targets``: per preset, each target of issue 19 with its figure and whether it is met
   (ratios against runs of the same process: the machine is shared);
@@ -118,6 +119,10 @@ def targets(runs: dict) -> dict:
         add("mpc_gain_on_gate>=0.10", gain, gain >= 0.10)
     e = g["voluntary_effort"] / v["voluntary_effort"]
     add("gate_effort_vs_voluntary<=0.6", e, e <= 0.6)
+    rh = runs.get("random_handover")
+    if rh:  # not a target of issue 19: does the gate hand over at better moments than chance (issue 20)?
+        ratio = g["tracking_rmse_m"] / rh["tracking_rmse_m"]
+        add("gate_rms_vs_random_handover<1", ratio, ratio < 1)
     viol = sum(int(m["limit_violations"]) for m in runs.values())
     add("limit_violations==0", viol, viol == 0)
     p99 = max(m["step_p99_ms"] for m in runs.values())
@@ -147,7 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     trials = list(bundle.heldout_trials[:a.trials])
     result: dict = {"data": a.data_kind if not a.bundle else a.data, "trials": trials, "duration_s": a.duration,
                     "forecast_rmse": bundle.metrics.get("forecast"), "runs": {}, "targets": {}}
-    runs = [r for r in DEFAULT_RUNS if r.name in ("voluntary", "reactive", "gate", "gate_mpc", "oracle_preview")]
+    runs = [r for r in DEFAULT_RUNS if r.name in ("voluntary", "reactive", "gate", "gate_mpc", "oracle_preview",
+                                                  "random_handover", "oracle_handover")]
     for preset in a.presets:
         comp = compare_strategies(bundle, demos, trials, runs=runs, duration_s=a.duration, log=None,
                                   mode_names=MODE_NAMES, wearer=wearer_preset(preset))
