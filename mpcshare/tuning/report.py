@@ -52,6 +52,8 @@ def chance_sentences(result: dict[str, Any]) -> list[str]:
                        f"tracking RMS{ci_txt}, p = {v['p_value']:.3g} over {v['n_pairs']} trial x seed pairs.")
         else:
             p = "no test (no pair differs)" if v["p_value"] is None else f"p = {v['p_value']:.3g}"
+            if v["p_value"] is not None and v["n_pairs"] and v["p_value"] <= 0.5 ** v["n_pairs"] * (1 + 1e-9):
+                p += f" (the smallest p that {v['n_pairs']} pairs allow: a claim needs more trials or --seeds)"
             forced = (f" In {v['n_forced']} of its {v['n_pairs']} episodes it handed over at most once, so the "
                       "matched random schedule was its own and those pairs cannot differ."
                       if v.get("n_forced") else "")

@@ -169,3 +169,16 @@ def test_ray_gives_the_same_rows_as_the_local_pool(data, swept, tmp_path):
     local = json.loads((swept / "tune.json").read_text())["rows"]
     remote = json.loads((tmp_path / "ray" / "tune.json").read_text())["rows"]
     assert _comparable(local) == _comparable(remote)
+
+
+def test_chance_sentence_says_when_the_pairs_cannot_reach_significance():
+    from mpcshare.tuning.report import chance_sentences
+
+    def result(p, n):
+        return {"tests": {"gate p90 b0": {"vs_random_handover": {
+            "effect_ci95_m": [0.001, 0.003], "beats_random": False, "p_value": p, "n_pairs": n,
+            "effect_m": 0.002, "n_forced": 0}}}}
+
+    floor = chance_sentences(result(0.0625, 4))[0]
+    assert "smallest p that 4 pairs allow" in floor and "2.0 mm worse" in floor
+    assert "smallest p" not in chance_sentences(result(0.2, 4))[0]
