@@ -134,14 +134,20 @@ def _plot(result: dict[str, Any], path: Path) -> None:
         marker = "x" if strat == "random_handover" else "o"
         ax.scatter(1e3 * err, eff, color=colors.get(strat, "k"), marker=marker, zorder=3,
                    **(edged if marker == "o" else {}))
-        ax.annotate(name, (1e3 * err, eff), fontsize=6, xytext=(3, 3), textcoords="offset points")
+        if name in result["pareto"] or strat in ("voluntary", "oracle_preview"):  # the rest by colour and legend
+            ax.annotate(name, (1e3 * err, eff), fontsize=6, xytext=(3, 3), textcoords="offset points")
     vol = [v for v in pts.values() if v[2] == "voluntary"]
     for err, eff, _ in (v for v in pts.values() if v[2] == "reactive"):
         for ve, vf, _ in vol:
             ax.plot([1e3 * ve, 1e3 * err], [vf, eff], "--", color="0.6", lw=0.8, zorder=1)
+    from matplotlib.lines import Line2D
+
+    shown = sorted({v[2] for v in pts.values()})
+    ax.legend([Line2D([], [], ls="", marker="x" if k == "random_handover" else "o", color=colors.get(k, "k"))
+               for k in shown], shown, fontsize=7, loc="best")
     ax.set_xlabel("tracking RMS [mm]")
     ax.set_ylabel("voluntary effort [rad]")
-    ax.set_title("effort against error (dashed: voluntary to reactive; edged: Pareto set)", fontsize=9)
+    ax.set_title("effort against error (dashed: voluntary to reactive; edged and named: Pareto set)", fontsize=9)
     fig.savefig(path, dpi=120)
 
 
