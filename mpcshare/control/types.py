@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -9,7 +10,11 @@ import numpy as np
 from mpcshare.control.workspace import DEFAULT_WORKSPACE, WorkspaceBox
 from robot.qp import QPConfig
 
-__all__ = ["STATUSES", "ControlCommand", "ControllerConfig"]
+__all__ = ["SMOOTHER_TARGETS", "STATUSES", "ControlCommand", "ControllerConfig"]
+
+#: What the reference smoother aims at: the reference's position (moved ``smoother_lead_s``
+#: ahead along the fused velocity), or its whole state (position, velocity, acceleration).
+SMOOTHER_TARGETS: tuple[str, ...] = ("position", "state")
 
 #: Status names, most severe first.
 STATUSES: tuple[str, ...] = (
@@ -59,7 +64,10 @@ class ControllerConfig:
     after the reference: smoother, QP, servo; docs/design.md, "Latency budget");
     reactive_feedforward: add the forecast's velocity (and acceleration, to the smoother)
     to the reactive term; mpc_preview: the MPC's reference over its horizon is the fused
-    forecast (else the smoothed reference extrapolated at constant velocity).
+    forecast (else the smoothed reference extrapolated at constant velocity); forecast_fade_s [s]:
+    cross-fade between successive forecasts (None: one model period; 0: none, measured best);
+    smoother_target (:data:`SMOOTHER_TARGETS`) and smoother_lead_s [s]; handover_s [s]: the
+    gate's α ramp between the robot and the wearer (see ``Arbiter``).
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
@@ -94,3 +102,13 @@ class ControllerConfig:
     forecast_fade_s: float | None = 0.0
     smoother_lead_s: float = 0.05
     handover_s: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.smoother_target not in SMOOTHER_TARGETS:
+            raise ValueError(f"smoother_target {self.smoother_target!r} not in {list(SMOOTHER_TARGETS)}")
+        for name in ("forecast_lead_s", "smoother_lead_s", "handover_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0.0 <= v <= 1.0):
+                raise ValueError(f"ControllerConfig.{name} must be in [0, 1] s, got {v!r}")
+        if self.forecast_fade_s is not None and not (math.isfinite(self.forecast_fade_s) and self.forecast_fade_s >= 0):
+            raise ValueError(f"ControllerConfig.forecast_fade_s must be None or >= 0, got {self.forecast_fade_s!r}")

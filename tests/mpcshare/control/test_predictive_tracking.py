@@ -93,3 +93,13 @@ def _training_sequences(bundle, demos):
     P = bundle.modes.filter_proba(np.concatenate([tr.obs for tr in std.trials]), lengths)
     posts = np.split(P, np.cumsum(lengths)[:-1])
     return [np.hstack([tr.obs, p]) for tr, p in zip(std.trials, posts)], [tr.act for tr in std.trials]
+
+
+def test_config_refuses_unknown_smoother_targets_and_bad_leads():
+    with pytest.raises(ValueError, match=r"smoother_target 'velocity' not in \['position', 'state'\]"):
+        ControllerConfig(smoother_target="velocity")
+    for name in ("forecast_lead_s", "smoother_lead_s", "handover_s"):
+        with pytest.raises(ValueError, match=name):
+            ControllerConfig(**{name: -0.1})
+    with pytest.raises(ValueError, match="forecast_fade_s"):
+        ControllerConfig(forecast_fade_s=float("nan"))
