@@ -1,10 +1,12 @@
 """Benchmark: exact point-wise Lipschitz quotients vs a blocked NumPy float32 brute force.
 
     python benchmarks/bench_lipschitz.py --n 50000 --d 90 [--data windowed|windowed-other|iid|demos]
-        [--block 256] [--compile-time]
+        [--block 256] [--floor] [--certify ROWS] [--compile-time]
 
 Prints one JSON object: the project's time, the brute force's time on the same
-data in the same process (for large N measured on a subset of rows and
+data in the same process (its block size tuned over 256–2,048 rows in the same run, the
+fastest used and reported: the baseline is the best simple blocked brute force; for large
+N measured on a subset of rows and
 extrapolated linearly in the number of rows, flagged in the JSON), their ratio,
 the fraction of pairs the project evaluated exactly, peak memory (ru_maxrss of the process after the data and after
 the project's run, and the process RSS sampled every 20 ms during the project's run, input
@@ -16,6 +18,12 @@ sample of rows.
 on this machine: the bare float32 products of the screen (inner length dy + 12 + 3, the
 engine's smallest; tiles of 256 × 4096 on every core, nothing else) timed for about 2 s and
 extrapolated to the N(N − 1)/2 pairs (``screen_floor_s``), and the engine's time over it.
+
+``--certify ROWS`` adds the share of points that no bound on a *group* of partners (balls
+or boxes in x and y: trees, dual trees, block pruning) can rule out for a row
+(``certification_share``): the part of the pairs such pruning must still screen one by one.
+On data whose outputs have a part independent of x it stays a sizeable share of N, so the
+screen's N² floor is also the floor of those methods (issue 21).
 
 ``--compile-time`` adds the numba compile time of the compiled loops (``_compiled``),
 measured in a fresh interpreter with an empty cache directory, and the time to load them
@@ -169,7 +177,8 @@ def brute_force_f32(X: np.ndarray, Y: np.ndarray, rows: np.ndarray, block: int |
     """Plain blocked float32 brute force: q_i for the given rows against all points.
 
     ‖a−b‖² = ‖a‖² + ‖b‖² − 2a·b in float32 (fast, inexact for close pairs).
-    Blocks of 512 rows, fewer for large N so a (block × N) matrix stays ≤ 256 MB.
+    Blocks of 512 rows by default, fewer for large N so a (block × N) matrix stays ≤ 256 MB
+    (``tune_brute_block`` picks the fastest block size on this machine).
     """
     if block is None:
         block = int(max(16, min(512, (1 << 26) // len(X))))
@@ -190,6 +199,59 @@ def brute_force_f32(X: np.ndarray, Y: np.ndarray, rows: np.ndarray, block: int |
         ratio[np.isnan(ratio)] = 0.0
         out[s:s + block] = np.sqrt(ratio.max(1))
     return out
+
+
+def brute_block_cap(n: int) -> int:
+    """Largest block of the brute force whose (block × n) float32 matrices stay ≤ 256 MB."""
+    return int(max(16, (1 << 26) // n))
+
+
+def tune_brute_block(X: np.ndarray, Y: np.ndarray, rng: np.random.Generator,
+                     sizes: tuple[int, ...] = (256, 512, 1024, 2048), rows: int = 2048
+                     ) -> tuple[int, dict[str, float]]:
+    """The fastest block size of ``brute_force_f32`` on this data and machine: each size
+    within the memory cap timed on the same random rows (at least two blocks), best of two.
+    Returns (block, µs a row per size)."""
+    cap = brute_block_cap(len(X))
+    cands = [b for b in sizes if b <= cap] or [cap]
+    per_row: dict[str, float] = {}
+    for b in cands:
+        r = np.sort(rng.choice(len(X), size=min(len(X), max(rows, 2 * b)), replace=False))
+        best = np.inf
+        for _ in range(2):
+            t0 = time.perf_counter()
+            brute_force_f32(X, Y, r, block=b)
+            best = min(best, (time.perf_counter() - t0) / len(r))
+        per_row[str(b)] = round(best * 1e6, 2)
+    block = int(min(cands, key=lambda b: per_row[str(b)]))
+    return block, per_row
+
+
+def certification_share(X: np.ndarray, Y: np.ndarray, q: np.ndarray, rows: np.ndarray
+                        ) -> dict[str, float]:
+    """Share of the points that no bound of a *group* of partners by balls can rule out.
+
+    For a row i with quotient q_i > 0, a partner j can only be excluded without looking at
+    the pair when ‖x_i − x_j‖ ≥ D_i / q_i, D_i = max_k ‖y_i − y_k‖ (the farthest any output
+    is from y_i): inside that radius some output could still give a quotient above q_i,
+    and where the outputs have a part independent of x (the voluntary part), groups of
+    partners near x_i hold outputs anywhere in the output spread. The share of points
+    inside the radius is therefore the part of the N² pairs that every tree or block
+    pruning (ball or box bounds in x and y, e.g. a dual tree) must still screen pair by
+    pair. float64, direct differences."""
+    shares = []
+    for i in rows:
+        if not q[i] > 0 or not np.isfinite(q[i]):
+            continue
+        dy_max = float(np.sqrt(((Y - Y[i]) ** 2).sum(1)).max())
+        dx = np.sqrt(((X - X[i]) ** 2).sum(1))
+        shares.append((np.count_nonzero(dx < dy_max / q[i]) - 1) / (len(X) - 1))
+    if not shares:
+        return {"certification_rows": 0}
+    sh = np.asarray(shares)
+    return {"certification_rows": len(sh), "certification_share_median": round(float(np.median(sh)), 4),
+            "certification_share_mean": round(float(sh.mean()), 4),
+            "certification_share_p10": round(float(np.quantile(sh, 0.1)), 4)}
 
 
 def reference_rows(X: np.ndarray, Y: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -227,6 +289,9 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--progress", action="store_true")
     ap.add_argument("--floor", action="store_true",
                     help="also time the bare float32 screen products over all pairs (the floor)")
+    ap.add_argument("--certify", type=int, default=0, metavar="ROWS",
+                    help="also measure, on ROWS of the float64-checked rows, the share of points "
+                         "no ball or box bound can rule out (certification_share)")
     ap.add_argument("--compile-time", action="store_true",
                     help="also measure the numba compile time (fresh interpreter, empty cache)")
     a = ap.parse_args(argv)
@@ -262,11 +327,12 @@ def main(argv: list[str] | None = None) -> dict:
     rss_project = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
     rng = np.random.default_rng(a.seed + 1)
+    brute_block, brute_tuning = tune_brute_block(X, Y, np.random.default_rng(a.seed + 2))
     n_brute = a.brute_rows or min(a.n, 20000 if a.n <= 200000 else 2000)
     brute_rows = np.sort(rng.choice(a.n, size=n_brute, replace=False))
     t0 = time.perf_counter()
     c0 = time.process_time()
-    q32 = brute_force_f32(X, Y, brute_rows)
+    q32 = brute_force_f32(X, Y, brute_rows, block=brute_block)
     t_brute_sub = time.perf_counter() - t0
     cpu_brute = (time.process_time() - c0) * a.n / n_brute
     t_brute = t_brute_sub * a.n / n_brute
@@ -294,6 +360,8 @@ def main(argv: list[str] | None = None) -> dict:
         "brute_force_extrapolated": n_brute < a.n,
         "brute_force_rows_timed": int(n_brute),
         "brute_force_timed_s": round(t_brute_sub, 3),
+        "brute_force_block": brute_block,
+        "brute_force_us_per_row_by_block": brute_tuning,
         "speedup": round(t_brute / t_project, 2),
         "project_cpu_s": round(cpu_project, 3),
         "brute_force_cpu_s": round(cpu_brute, 3),
@@ -301,6 +369,7 @@ def main(argv: list[str] | None = None) -> dict:
         "fraction_pairs_exact": stats["pairs_exact"] / (2 * n_pairs),
         "fraction_pairs_screened_lowdim": stats["pairs_screened"] / (2 * n_pairs),
         "fraction_pairs_screened_full_d": stats["pairs_full_screened"] / (2 * n_pairs),
+        "pairs_screened": stats["pairs_screened"],
         "peak_rss_mb_after_data": round(rss_data, 1),
         "peak_rss_mb_after_project": round(rss_project, 1),
         "peak_rss_mb_during_project": round(rss_run.peak_mb, 1),
@@ -310,6 +379,8 @@ def main(argv: list[str] | None = None) -> dict:
         "max_rel_diff_bruteforce_f32_vs_float64": rel32,
         "q_median": float(np.median(q)),
     }
+    if a.certify:
+        out.update(certification_share(X, Y, q, ref_rows[: a.certify]))
     if a.floor:
         floor = screen_floor(a.n, int(Y.shape[1]), a.n_jobs)
         out["project_over_floor"] = round(t_project / floor.pop("floor_exact_s"), 2)
