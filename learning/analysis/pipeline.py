@@ -51,7 +51,7 @@ from learning.analysis.report import (
     SegmentationTest,
     VoluntaryShare,
 )
-from learning.analysis.search import fit_modes, search_candidates, within_group_quotients
+from learning.analysis.search import fit_modes, search_candidates, search_labelings, within_group_quotients
 from learning.data import Demonstrations
 from learning.lipschitz import pointwise_quotients_multi
 from learning.modes import TaskModes, mode_agreement, mode_ari, select_n_modes
@@ -243,6 +243,37 @@ def _segmentation_test(ev: Any, config: AnalysisConfig) -> SegmentationTest:
         significant=bool(ev.claimed), alpha=SIGNIFICANCE, claims=_claims(ev, config))
 
 
+def _search_only_rows(search_rand: np.ndarray, rand: np.ndarray, config: AnalysisConfig) -> np.ndarray:
+    """The search's random groupings at the main window that the test's draws do not already
+    hold: at the main number of modes the search's R draws are the first R of the test's
+    (same labels, same seed; checked), the other numbers of modes are new rows."""
+    R = config.search_random
+    rows = []
+    for k, n in enumerate(config.search_modes):
+        block = search_rand[k * R:(k + 1) * R]
+        if not (n == config.n_modes and R <= len(rand) and np.array_equal(block, rand[:R])):
+            rows.append(block)
+    return np.vstack(rows) if rows else np.zeros((0, search_rand.shape[1]), np.int64)
+
+
+def _search_pass(Q: np.ndarray, rand: np.ndarray, search_rand: np.ndarray, config: AnalysisConfig
+                 ) -> np.ndarray:
+    """The search's shared pass at the main window (no grouping, then R random groupings per
+    number of modes) picked out of the main pass's rows (no grouping, the test's draws, then
+    the rows of ``_search_only_rows``)."""
+    R = config.search_random
+    out = [Q[0:1]]
+    nxt = 1 + len(rand)
+    for k, n in enumerate(config.search_modes):
+        block = search_rand[k * R:(k + 1) * R]
+        if n == config.n_modes and R <= len(rand) and np.array_equal(block, rand[:R]):
+            out.append(Q[1:1 + R])
+        else:
+            out.append(Q[nxt:nxt + R])
+            nxt += R
+    return np.vstack(out)
+
+
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             progress: bool = False) -> AnalysisResult:
     """Run the whole predictability analysis (see module docstring).
@@ -283,14 +314,29 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     if true is not None:
         agreement = float(mode_agreement(modes, true)[0])
         ari = float(mode_ari(modes, true))
+    # the search's other numbers of modes too, where its random groupings join step 3's pass
+    shared = bool(n_search) and float(config.window_s) in {float(v) for v in config.search_windows}
+    if shared:
+        for n in config.search_modes:
+            if n not in fitted:
+                fitted[n] = fit_modes(Z, lengths, n, config)
     steps.done("modes")
 
     # 3. quotients without modes and within the random segmentations of the test, in one
-    #    pass over the pairs (pointwise_quotients_multi; each equal to its own call)
+    #    pass over the pairs (pointwise_quotients_multi; each equal to its own call). Where
+    #    the search has a candidate at this window, the same pass also takes its random
+    #    groupings (their HMMs are fitted first), so the search does not pass over these
+    #    windows again.
     rand = random_labelings(modes, config.n_random, config.random_method, config.seed)
-    Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]),
+    extra = np.zeros((0, len(w)), np.int64)
+    search_rand = None
+    if shared:
+        search_rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
+        extra = _search_only_rows(search_rand, rand, config)
+    Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand, extra]),
                                   progress=progress)
     q = Q[0]
+    known_pass = ({float(config.window_s): _search_pass(Q, rand, search_rand, config)} if shared else {})
     K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
     steps.done("quotients")
 
@@ -302,7 +348,8 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, features, labels,
                        reference=config.reference, n_random=config.n_random,
                        random_method=config.random_method, alpha=SIGNIFICANCE, min_effect=config.min_effect,
-                       help_effect=config.help_effect, seed=config.seed, q_random=Q[1:], q_modes=within["modes"],
+                       help_effect=config.help_effect, seed=config.seed, q_random=Q[1:1 + len(rand)],
+                       q_modes=within["modes"],
                        reference_labels=ref_labels, q_reference=within["reference"])
     q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
     steps.done("segmentation test")
@@ -315,8 +362,10 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     # 6. search for missing information
     # the main analysis's quotients within its modes are those of the search's candidate
     # (window_s, n_modes): same windows, same HMM labels
+    main = (float(config.window_s), int(config.n_modes))
     candidates = (search_candidates(std, Z, lengths, config, fitted, SIGNIFICANCE, progress,
-                                    known_q_modes={(float(config.window_s), int(config.n_modes)): q_modes})
+                                    known_q_modes={main: q_modes}, known_q_reference={main: q_ref},
+                                    known_pass=known_pass)
                   if n_search else [])
     if n_search:
         steps.done("search")

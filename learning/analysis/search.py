@@ -22,7 +22,7 @@ from learning.preprocessing.preprocess import causal_windows
 if TYPE_CHECKING:
     from learning.analysis import AnalysisConfig
 
-__all__ = ["fit_modes", "mean_share", "search_candidates", "within_group_quotients"]
+__all__ = ["fit_modes", "mean_share", "search_candidates", "search_labelings", "within_group_quotients"]
 
 
 def fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: AnalysisConfig
@@ -36,10 +36,22 @@ def fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: Analysis
 
 
 
+def search_labelings(window_labels: dict[int, np.ndarray], config: AnalysisConfig) -> np.ndarray:
+    """The random groupings the search compares the candidates of one window against:
+    ``search_random`` draws per number of modes (``window_labels[n]``: the HMM labels of the
+    windows), stacked in the order of ``search_modes`` ((len(search_modes)·R, N)). The draws
+    use ``config.seed``, as the main analysis's test does, so at the main window and number
+    of modes they are the first R of the test's draws."""
+    return np.vstack([random_labelings(window_labels[n], config.search_random, config.random_method, config.seed)
+                      for n in config.search_modes])
+
+
 def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
                       fitted: dict[int, tuple[TaskModes, np.ndarray]], alpha: float,
                       progress: bool = False,
-                      known_q_modes: dict[tuple[float, int], np.ndarray] | None = None) -> list[Candidate]:
+                      known_q_modes: dict[tuple[float, int], np.ndarray] | None = None,
+                      known_pass: dict[float, np.ndarray] | None = None,
+                      known_q_reference: dict[tuple[float, int], np.ndarray] | None = None) -> list[Candidate]:
     """Rank (window, n_modes) candidates by the median over trials of
     log10(median q within the reference / median q within modes) (per-trial inference).
 
@@ -49,15 +61,22 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     and within the reference from one :func:`pointwise_quotients` call each, two calls at
     a time (:func:`within_group_quotients`).
     ``known_q_modes`` maps (window [s], n_modes) to quotients within those modes already
-    computed on the same windows (the main analysis's), which are then not recomputed."""
+    computed on the same windows (the main analysis's), which are then not recomputed;
+    ``known_q_reference`` the same for the reference grouping, and ``known_pass`` maps a
+    window to the rows of its shared pass (no grouping, then :func:`search_labelings`),
+    computed by the caller in its own pass over the same windows."""
     K0 = config.K[0]
     rows = []
     todo = [n for n in config.search_modes if n not in fitted]
     known = known_q_modes or {}
+    known_ref = known_q_reference or {}
+    passes = known_pass or {}
     bar = None
     if progress:  # one step per HMM fit, per shared pass and per call within a grouping
         from tqdm.auto import tqdm
-        n_known = sum((float(w), int(n)) in known for w in config.search_windows for n in config.search_modes)
+        n_known = sum(((float(w), int(n)) in known) + ((float(w), int(n)) in known_ref)
+                      for w in config.search_windows for n in config.search_modes)
+        n_known += sum(float(w) in passes for w in config.search_windows)
         bar = tqdm(total=len(todo) + len(config.search_windows) * (1 + 2 * len(config.search_modes)) - n_known,
                    desc="search", unit="step", leave=False)
     for n_modes in todo:
@@ -67,20 +86,25 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     R = config.search_random
     # What does not depend on the window, once per number of modes: the time-free
     # reference grouping (a mixture fit) and the HMM's BIC.
-    refs = {n: reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed + 1)
+    refs = {n: reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed)
             for n in config.search_modes}
     bics = {n: float(fitted[n][0].bic(Z, lengths)) for n in config.search_modes}
     for window in config.search_windows:
         w = causal_windows(std, window, rms=True)
         # No grouping and every candidate's random groupings: one pass over the pairs.
-        rand = [random_labelings(fitted[n][1][w.source_index], R, config.random_method, config.seed + 1)
-                for n in config.search_modes]
-        Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64)] + rand))
-        if bar is not None:
-            bar.update(1)
+        Q = passes.get(float(window))
+        if Q is None:
+            rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
+            Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]))
+            if bar is not None:
+                bar.update(1)
+        elif Q.shape != (1 + R * len(config.search_modes), len(w)):
+            raise ValueError(f"known_pass[{window}] must be ({1 + R * len(config.search_modes)}, {len(w)}) "
+                             f"(no grouping, then {R} random groupings per number of modes), got {Q.shape}")
         q0 = Q[0]
         share0 = mean_share(q0, w.trial, K0)
-        jobs = {("reference", n): refs[n][w.source_index] for n in config.search_modes}
+        jobs = {("reference", n): refs[n][w.source_index] for n in config.search_modes
+                if (float(window), int(n)) not in known_ref}
         jobs.update({("modes", n): fitted[n][1][w.source_index] for n in config.search_modes
                      if (float(window), int(n)) not in known})
         within = within_group_quotients(w.X, w.Y, jobs, done=None if bar is None else lambda: bar.update(1))
@@ -90,9 +114,11 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
             ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
                                reference=config.reference, n_random=R,
                                random_method=config.random_method, alpha=alpha,
-                               min_effect=config.min_effect, seed=config.seed + 1,
+                               min_effect=config.min_effect, seed=config.seed,
                                q_random=Q[1 + k * R:1 + (k + 1) * R], reference_labels=refs[n_modes],
-                               q_modes=q_modes, q_reference=within[("reference", n_modes)])
+                               q_modes=q_modes,
+                               q_reference=known_ref.get((float(window), int(n_modes)),
+                                                         within.get(("reference", n_modes))))
             rows.append(Candidate(
                 window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
                 median_q_modes=float(np.median(ev.q_modes)),

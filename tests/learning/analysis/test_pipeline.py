@@ -1,5 +1,6 @@
 """The end-to-end predictability analysis (learning.analysis)."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -194,3 +195,26 @@ def test_modes_help_is_claimed_at_12_trials_in_at_least_2_of_3_seeds():
         assert t["n_trials"] == 12
         made.append(t["claims"]["modes_help"]["made"])
     assert sum(made) >= 2, made
+
+
+@pytest.mark.parametrize("n_random, search_random", [(2, 3), (4, 2)])
+def test_search_sharing_the_main_pass_gives_the_candidates_of_its_own_passes(n_random, search_random):
+    # analyze hands the search the quotients it already has at the main window (its shared
+    # pass, which also takes the search's random groupings; within modes; within the
+    # reference): the candidates equal those of a search that computes everything itself,
+    # both where the search's draws are the first of the test's (R <= n_random) and not.
+    from learning.analysis.config import SIGNIFICANCE
+    from learning.analysis.pipeline import _preprocess
+    from learning.analysis.search import fit_modes, search_candidates
+
+    demos = generate_demonstrations(1, 4, seed=1)
+    config = AnalysisConfig(n_random=n_random, search_random=search_random, search_windows=(0.5, 1.0),
+                            search_modes=(2, 4), hmm_restarts=1)
+    shared = analyze(demos, config).summary.candidates
+    std, _ = _preprocess(demos, config)
+    Z, lengths = std.obs_sequences()
+    fitted = {n: fit_modes(Z, lengths, n, config) for n in config.search_modes}
+    own = search_candidates(std, Z, lengths, config, fitted, SIGNIFICANCE)
+    assert len(shared) == len(own) == 4
+    for a, b in zip(shared, own):
+        np.testing.assert_equal(dataclasses.asdict(a), dataclasses.asdict(b))
