@@ -365,7 +365,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     main = (float(config.window_s), int(config.n_modes))
     candidates = (search_candidates(std, Z, lengths, config, fitted, SIGNIFICANCE, progress,
                                     known_q_modes={main: q_modes}, known_q_reference={main: q_ref},
-                                    known_pass=known_pass)
+                                    known_pass=known_pass, reference_labels={config.n_modes: ref_labels})
                   if n_search else [])
     if n_search:
         steps.done("search")

@@ -51,7 +51,8 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
                       progress: bool = False,
                       known_q_modes: dict[tuple[float, int], np.ndarray] | None = None,
                       known_pass: dict[float, np.ndarray] | None = None,
-                      known_q_reference: dict[tuple[float, int], np.ndarray] | None = None) -> list[Candidate]:
+                      known_q_reference: dict[tuple[float, int], np.ndarray] | None = None,
+                      reference_labels: dict[int, np.ndarray] | None = None) -> list[Candidate]:
     """Rank (window, n_modes) candidates by the median over trials of
     log10(median q within the reference / median q within modes) (per-trial inference).
 
@@ -64,7 +65,9 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     computed on the same windows (the main analysis's), which are then not recomputed;
     ``known_q_reference`` the same for the reference grouping, and ``known_pass`` maps a
     window to the rows of its shared pass (no grouping, then :func:`search_labelings`),
-    computed by the caller in its own pass over the same windows."""
+    computed by the caller in its own pass over the same windows; ``reference_labels``
+    maps a number of modes to its reference grouping of the samples, already fitted
+    (``reference_segmentation`` of those modes with ``config.seed``)."""
     K0 = config.K[0]
     rows = []
     todo = [n for n in config.search_modes if n not in fitted]
@@ -86,8 +89,10 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     R = config.search_random
     # What does not depend on the window, once per number of modes: the time-free
     # reference grouping (a mixture fit) and the HMM's BIC.
-    refs = {n: reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed)
-            for n in config.search_modes}
+    refs = dict(reference_labels or {})
+    for n in config.search_modes:
+        if n not in refs:
+            refs[n] = reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed)
     bics = {n: float(fitted[n][0].bic(Z, lengths)) for n in config.search_modes}
     for window in config.search_windows:
         w = causal_windows(std, window, rms=True)
