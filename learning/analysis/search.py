@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
@@ -22,7 +22,8 @@ from learning.preprocessing.preprocess import causal_windows
 if TYPE_CHECKING:
     from learning.analysis import AnalysisConfig
 
-__all__ = ["fit_modes", "mean_share", "search_candidates", "search_labelings", "within_group_quotients"]
+__all__ = ["QuotientCall", "fit_modes", "mean_share", "run_calls", "search_candidates", "search_labelings",
+           "within_group_quotients"]
 
 
 def fit_modes(Z: np.ndarray, lengths: np.ndarray, n_modes: int, config: AnalysisConfig
@@ -59,8 +60,8 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     ``fitted`` holds the HMMs already fitted (by number of modes); the others are fitted
     and added. Per window, the quotients without modes and within every candidate's
     random groupings come from one :func:`pointwise_quotients_multi` pass; within modes
-    and within the reference from one :func:`pointwise_quotients` call each, two calls at
-    a time (:func:`within_group_quotients`).
+    and within the reference from one :func:`pointwise_quotients` call each; all calls of
+    all windows share one schedule, two at a time, longest first (:func:`run_calls`).
     ``known_q_modes`` maps (window [s], n_modes) to quotients within those modes already
     computed on the same windows (the main analysis's), which are then not recomputed;
     ``known_q_reference`` the same for the reference grouping, and ``known_pass`` maps a
@@ -94,28 +95,37 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
         if n not in refs:
             refs[n] = reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed)
     bics = {n: float(fitted[n][0].bic(Z, lengths)) for n in config.search_modes}
+    # Every quotient call of the search (a shared pass per window, a call per grouping)
+    # goes to one pool of single-threaded calls, longest first (run_calls).
+    windows, calls = {}, {}
     for window in config.search_windows:
         w = causal_windows(std, window, rms=True)
-        # No grouping and every candidate's random groupings: one pass over the pairs.
+        windows[window] = w
         Q = passes.get(float(window))
         if Q is None:
+            # No grouping and every candidate's random groupings: one pass over the pairs.
             rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
-            Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]))
-            if bar is not None:
-                bar.update(1)
+            calls[(window, "pass", 0)] = QuotientCall(
+                w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]), multi=True)
         elif Q.shape != (1 + R * len(config.search_modes), len(w)):
             raise ValueError(f"known_pass[{window}] must be ({1 + R * len(config.search_modes)}, {len(w)}) "
                              f"(no grouping, then {R} random groupings per number of modes), got {Q.shape}")
+        for n in config.search_modes:
+            if (float(window), int(n)) not in known_ref:
+                calls[(window, "reference", n)] = QuotientCall(w.X, w.Y, refs[n][w.source_index])
+            if (float(window), int(n)) not in known:
+                calls[(window, "modes", n)] = QuotientCall(w.X, w.Y, fitted[n][1][w.source_index])
+    done = run_calls(calls, done=None if bar is None else lambda: bar.update(1))
+    for window in config.search_windows:
+        w = windows[window]
+        Q = passes.get(float(window))
+        if Q is None:
+            Q = done[(window, "pass", 0)]
         q0 = Q[0]
         share0 = mean_share(q0, w.trial, K0)
-        jobs = {("reference", n): refs[n][w.source_index] for n in config.search_modes
-                if (float(window), int(n)) not in known_ref}
-        jobs.update({("modes", n): fitted[n][1][w.source_index] for n in config.search_modes
-                     if (float(window), int(n)) not in known})
-        within = within_group_quotients(w.X, w.Y, jobs, done=None if bar is None else lambda: bar.update(1))
         for k, n_modes in enumerate(config.search_modes):
             model, labels = fitted[n_modes]
-            q_modes = known.get((float(window), int(n_modes)), within.get(("modes", n_modes)))
+            q_modes = known.get((float(window), int(n_modes)), done.get((window, "modes", n_modes)))
             ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, model.transform(Z), labels,
                                reference=config.reference, n_random=R,
                                random_method=config.random_method, alpha=alpha,
@@ -123,7 +133,7 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
                                q_random=Q[1 + k * R:1 + (k + 1) * R], reference_labels=refs[n_modes],
                                q_modes=q_modes,
                                q_reference=known_ref.get((float(window), int(n_modes)),
-                                                         within.get(("reference", n_modes))))
+                                                         done.get((window, "reference", n_modes))))
             rows.append(Candidate(
                 window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
                 median_q_modes=float(np.median(ev.q_modes)),
@@ -142,24 +152,52 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     return [replace(r, rank=rank) for rank, r in enumerate(rows, 1)]
 
 
-def within_group_quotients(X: np.ndarray, Y: np.ndarray, groupings: dict, max_parallel: int = 2,
-                           done: Callable[[], None] | None = None) -> dict:
-    """``pointwise_quotients(X, Y, g)`` for every grouping ``g`` of ``groupings`` (same keys),
-    up to ``max_parallel`` calls at a time, the cores shared among them. Each call has
-    serial parts (features, k-d leaves) during which its other threads wait; two calls
-    side by side fill those gaps (measured on 2 cores, the 107k windows of 3 × 60 min, the
-    search's 5 groupings of one window with 2, 4 and 6 modes: median 0.88 of the time one
-    after the other over 3 paired runs, range 0.75–1.06 on this shared machine). Two at a time
-    bounds the memory: each call holds its own copies of X and Y in pass order. The
-    quotients do not depend on it (exact). ``done()`` is called as each call finishes."""
-    keys = list(groupings)
+@dataclass(frozen=True)
+class QuotientCall:
+    """One quotient call of the analysis: ``pointwise_quotients(X, Y, labels)`` (labels
+    (N,)), or with ``multi`` one :func:`pointwise_quotients_multi` pass over the labelings
+    (L, N)."""
+
+    X: np.ndarray
+    Y: np.ndarray
+    labels: np.ndarray
+    multi: bool = False
+
+    def cost(self) -> float:
+        """Relative cost for the schedule: the pairs screened (within groups; all pairs,
+        about 1.35× as dear a pair, for a shared pass: measured, 107k windows)."""
+        if self.multi:
+            n = self.labels.shape[1]
+            return 1.35 * n * (n - 1) / 2
+        _, sizes = np.unique(self.labels, return_counts=True)
+        return float(np.sum(sizes.astype(np.float64) * (sizes - 1) / 2))
+
+    def run(self, n_jobs: int) -> np.ndarray:
+        if self.multi:
+            return pointwise_quotients_multi(self.X, self.Y, self.labels, n_jobs=n_jobs)
+        return pointwise_quotients(self.X, self.Y, self.labels, n_jobs=n_jobs)
+
+
+def run_calls(calls: dict, max_parallel: int = 2, done: Callable[[], None] | None = None) -> dict:
+    """The results of every :class:`QuotientCall` of ``calls`` (same keys), up to
+    ``max_parallel`` at a time with the cores shared among them, the most expensive first
+    (longest-processing-time order: no core waits long at the end for the last call).
+    Each call has serial parts (features, k-d leaves) during which its other threads wait;
+    two calls side by side fill those gaps (measured on 2 cores, the 107k windows of
+    3 × 60 min, the search's 5 groupings of one window with 2, 4 and 6 modes: median 0.88
+    of the time one after the other over 3 paired runs, range 0.75–1.06 on this shared
+    machine). Two at a time bounds the memory: each call holds its own copies of X and Y in
+    pass order. The quotients do not depend on the schedule (exact). ``done()`` is called
+    as each call finishes."""
+    keys = sorted(calls, key=lambda k: -calls[k].cost())
     if not keys:
         return {}
     cores = default_jobs()
     workers = max(1, min(max_parallel, len(keys), cores))
     threads = max(1, cores // workers)
+
     def one(key) -> np.ndarray:
-        q = pointwise_quotients(X, Y, groupings[key], n_jobs=threads)
+        q = calls[key].run(threads)
         if done is not None:
             done()
         return q
@@ -167,6 +205,14 @@ def within_group_quotients(X: np.ndarray, Y: np.ndarray, groupings: dict, max_pa
     with ThreadPoolExecutor(max_workers=workers) as pool:
         qs = list(pool.map(one, keys))
     return dict(zip(keys, qs))
+
+
+def within_group_quotients(X: np.ndarray, Y: np.ndarray, groupings: dict, max_parallel: int = 2,
+                           done: Callable[[], None] | None = None) -> dict:
+    """``pointwise_quotients(X, Y, g)`` for every grouping ``g`` of ``groupings`` (same keys),
+    scheduled by :func:`run_calls`."""
+    return run_calls({k: QuotientCall(X, Y, np.asarray(g)) for k, g in groupings.items()},
+                     max_parallel, done)
 
 
 def mean_share(q: np.ndarray, trial: np.ndarray, K: float) -> float:
