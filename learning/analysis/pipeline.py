@@ -243,35 +243,27 @@ def _segmentation_test(ev: Any, config: AnalysisConfig) -> SegmentationTest:
         significant=bool(ev.claimed), alpha=SIGNIFICANCE, claims=_claims(ev, config))
 
 
-def _search_only_rows(search_rand: np.ndarray, rand: np.ndarray, config: AnalysisConfig) -> np.ndarray:
-    """The search's random groupings at the main window that the test's draws do not already
-    hold: at the main number of modes the search's R draws are the first R of the test's
-    (same labels, same seed; checked), the other numbers of modes are new rows."""
+def _search_rows(search_rand: np.ndarray, rand: np.ndarray, config: AnalysisConfig
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Where the search's random groupings at the main window go in the main pass, whose
+    rows are: no grouping, the test's draws ``rand``, then the returned new rows. At the
+    main number of modes the search's R draws are the first R of the test's (same labels,
+    same seed; checked) and are reused; the others are new. Returns (new rows, the indices
+    of the main pass's rows that make the search's pass: no grouping, then R per number of
+    modes)."""
     R = config.search_random
-    rows = []
-    for k, n in enumerate(config.search_modes):
-        block = search_rand[k * R:(k + 1) * R]
-        if not (n == config.n_modes and R <= len(rand) and np.array_equal(block, rand[:R])):
-            rows.append(block)
-    return np.vstack(rows) if rows else np.zeros((0, search_rand.shape[1]), np.int64)
-
-
-def _search_pass(Q: np.ndarray, rand: np.ndarray, search_rand: np.ndarray, config: AnalysisConfig
-                 ) -> np.ndarray:
-    """The search's shared pass at the main window (no grouping, then R random groupings per
-    number of modes) picked out of the main pass's rows (no grouping, the test's draws, then
-    the rows of ``_search_only_rows``)."""
-    R = config.search_random
-    out = [Q[0:1]]
+    new, index = [], [0]
     nxt = 1 + len(rand)
     for k, n in enumerate(config.search_modes):
         block = search_rand[k * R:(k + 1) * R]
         if n == config.n_modes and R <= len(rand) and np.array_equal(block, rand[:R]):
-            out.append(Q[1:1 + R])
+            index.extend(range(1, 1 + R))
         else:
-            out.append(Q[nxt:nxt + R])
+            new.append(block)
+            index.extend(range(nxt, nxt + R))
             nxt += R
-    return np.vstack(out)
+    rows = np.vstack(new) if new else np.zeros((0, search_rand.shape[1]), np.int64)
+    return rows, np.asarray(index)
 
 
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
@@ -329,14 +321,13 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     #    windows again.
     rand = random_labelings(modes, config.n_random, config.random_method, config.seed)
     extra = np.zeros((0, len(w)), np.int64)
-    search_rand = None
     if shared:
         search_rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
-        extra = _search_only_rows(search_rand, rand, config)
+        extra, search_rows = _search_rows(search_rand, rand, config)
     Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand, extra]),
                                   progress=progress)
     q = Q[0]
-    known_pass = ({float(config.window_s): _search_pass(Q, rand, search_rand, config)} if shared else {})
+    known_pass = {float(config.window_s): Q[search_rows]} if shared else {}
     K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
     steps.done("quotients")
 
