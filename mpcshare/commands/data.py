@@ -1,5 +1,6 @@
 """Data subcommands: ``inspect`` (summarise or reject a data set) and ``generate``
-(synthetic demonstrations from :mod:`sim.demonstrator`)."""
+(synthetic demonstrations from :mod:`sim.demonstrator`, or with ``--world SEED`` a world of
+the randomised family :mod:`sim.world_family`)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from typing import Sequence
 from learning.data import Demonstrations, save
 from mpcshare.commands.base import Command, CommandError, load_or_fail, positive_float, positive_int
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
+from sim.world_family import world_demonstrations
 
 __all__ = ["INSPECT_COMMAND", "GENERATE_COMMAND", "format_summary", "DATA_HELP"]
 
@@ -69,19 +71,35 @@ def _generate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rate", type=positive_float, default=100.0, help="sample rate [Hz] (default 100)")
     p.add_argument("--single-regime", action="store_true",
                    help="no mode structure: the knife is one smooth function of the fork")
+    p.add_argument("--world", type=int, default=None, metavar="SEED",
+                   help="a world of the randomised family (sim.world_family) instead of the project's generator: "
+                        "its structure drawn from SEED; then --trials and --trial-seconds set the size")
+    p.add_argument("--trials", type=positive_int, default=12, help="trials of a --world (default 12)")
+    p.add_argument("--trial-seconds", type=positive_float, default=60.0,
+                   help="seconds per trial of a --world (default 60)")
     p.add_argument("--out", required=True, help="output: FILE.npz, or a folder for CSV files")
 
 
 def _generate(args: argparse.Namespace) -> int:
-    config = GeneratorConfig(rate_hz=args.rate, single_regime=args.single_regime)
     t0 = time.perf_counter()
-    demos = generate_demonstrations(args.subjects, args.minutes, seed=args.seed, config=config)
+    names: Sequence[str] = MODE_NAMES
+    if args.world is not None:
+        if args.single_regime:
+            raise CommandError("--single-regime is a setting of the project's generator, not of a --world")
+        demos, spec = world_demonstrations(args.world, args.trials, args.trial_seconds, args.rate)
+        names = spec.mode_names
+    else:
+        config = GeneratorConfig(rate_hz=args.rate, single_regime=args.single_regime)
+        demos = generate_demonstrations(args.subjects, args.minutes, seed=args.seed, config=config)
     try:
         save(demos, args.out)
     except OSError as exc:  # e.g. --out names a folder that holds other files
         raise CommandError(f"cannot write {args.out}: {exc}") from exc
     print(f"wrote {args.out} ({time.perf_counter() - t0:.1f} s)")
-    print(format_summary(demos, MODE_NAMES))
+    if args.world is not None:
+        print(f"world {args.world}: modes {', '.join(f'{n} ({k})' for n, k in zip(names, spec.kinds))}; stroke "
+              f"{spec.stroke_hz:.2f} Hz, {spec.stroke_amp_m * 1e3:.0f} mm; knife delay {spec.knife_delay_s:.2f} s")
+    print(format_summary(demos, names))
     return 0
 
 

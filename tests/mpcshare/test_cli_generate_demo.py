@@ -86,3 +86,13 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     page = (out / "report.html").read_text()
     assert "<img" in page and 'src="data:image/png;base64,' in page
     assert 'src="analysis/' not in page and 'src="sim/' not in page  # every plot embedded
+
+
+def test_generate_a_world_of_the_family(tmp_path, capsys) -> None:
+    from sim.world_family import world_demonstrations
+
+    out = tmp_path / "w.npz"
+    assert main(["generate", "--world", "5", "--trials", "2", "--trial-seconds", "5", "--out", str(out)]) == 0
+    assert "world 5: modes cutting (stroke)" in capsys.readouterr().out
+    expected, _ = world_demonstrations(5, 2, 5.0)
+    np.testing.assert_allclose(load(out).trials[1].act, expected.trials[1].act)
