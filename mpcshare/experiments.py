@@ -4,7 +4,9 @@ Each *run* is a strategy of :class:`mpcshare.control.controller.SharedController
 ``reactive``, ``gate``, ``blend``, the gate with the MPC ``gate_mpc``, the upper bound
 ``oracle_preview``: ``reactive`` given the wearer's true intent as its preview, and the replayed
 hand-over schedules ``random_handover`` (the placebo: the gate's share and hand-overs at random
-times, several draws) and ``oracle_handover`` (the error-minimising schedule, an upper bound));
+times, the mean over 5 draws) and ``oracle_handover`` (the best closed-loop replay of error-minimising
+schedules at several hand-over costs, or of the pure runs: an upper bound never worse than the better party));
+``line_ratio`` (:mod:`mpcshare.line_ratio`) is added to every run's metrics;
 each is simulated on the
 same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
 default the preset ``hemiparetic_mild``) and the same seed, by
@@ -26,7 +28,8 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
-from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedule, random_handover_schedules
+from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedules, random_handover_schedules
+from mpcshare.line_ratio import add_line_ratios
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
@@ -68,7 +71,7 @@ DEFAULT_RUNS: tuple[StrategyRun, ...] = (
     StrategyRun("blend", "blend"),
     StrategyRun("gate_mpc", "gate", use_mpc=True),
     StrategyRun("oracle_preview", "reactive", oracle=True),
-    StrategyRun("random_handover", "schedule", schedule="random", draws=3),
+    StrategyRun("random_handover", "schedule", schedule="random", draws=5),
     StrategyRun("oracle_handover", "schedule", schedule="oracle"),
 )
 
@@ -245,20 +248,29 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     pooled: dict[str, dict[str, float]] = {}
     per_trial: dict[str, dict[str, dict[str, float]]] = {}
     files: dict[str, list[str]] = {}
-    cache: dict[tuple[str, int], Any] = {}  # episodes the scheduled runs are computed from
+    cache: dict[tuple[str, int], tuple[Any, dict[str, Any]]] = {}  # episodes the scheduled runs are computed from
 
     def simulate(run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
         episode, m = simulate_episode(bundle, demos, by_id[tid], run, options, beta=beta, duration_s=duration_s,
                                       seed=seed, wearer=wearer, mode_names=mode_names,
                                       make_controller=make_controller)
         if run.name in _SOURCES:
-            cache[(run.name, tid)] = episode
+            cache[(run.name, tid)] = (episode, m)
         return episode, m
 
-    def source(name: str, tid: int) -> Any:
+    def source(name: str, tid: int) -> tuple[Any, dict[str, Any]]:
         if (name, tid) not in cache:
             simulate(next(r for r in DEFAULT_RUNS if r.name == name), tid, {})
         return cache[(name, tid)]
+
+    def save(run: StrategyRun, tid: int, j: int, n_draws: int, episode: Any) -> None:
+        if runs_dir is None:
+            return
+        path = runs_dir / f"{run.name}_trial{tid}{f'_draw{j}' if n_draws > 1 else ''}.npz"
+        episode.save(path)
+        if mcap:
+            write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork_poses(by_id[tid], demos.obs_names))
+        files[run.name].append(str(path.relative_to(Path(out))))
 
     for run in runs:
         metrics, steps, seconds = [], [], []
@@ -266,23 +278,21 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
         for tid in (int(t) for t in trial_ids):
             t0 = time.perf_counter()
             draws = _draw_options(run, tid, seed, source)
-            trial_metrics, trial_steps = [], []
+            done = []
             for j, options in enumerate(draws):
                 episode, m = simulate(run, tid, options)
-                trial_metrics.append(m)
-                trial_steps.append(np.asarray(episode.step_time, dtype=float))
-                seconds.append(float(episode.t[-1] - episode.t[0]) + float(np.median(np.diff(episode.t))))
-                if runs_dir is not None:
-                    suffix = f"_draw{j}" if len(draws) > 1 else ""
-                    path = runs_dir / f"{run.name}_trial{tid}{suffix}.npz"
-                    episode.save(path)
-                    if mcap:
-                        write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork_poses(by_id[tid], demos.obs_names))
-                    files[run.name].append(str(path.relative_to(Path(out))))
-            metrics += trial_metrics
-            steps += trial_steps
+                save(run, tid, j, len(draws), episode)
+                done.append((episode, m))
+            if run.schedule == "oracle":  # the best replay, the pure runs' own episodes included
+                done.append(min(done + [source(n, tid) for n in SCHEDULE_SOURCES["oracle"]],
+                                key=lambda em: em[1]["tracking_rmse_m"]))
+                done = done[-1:]
+            trial_steps = [np.asarray(e.step_time, dtype=float) for e, _ in done]
+            trial_seconds = [float(e.t[-1] - e.t[0]) + float(np.median(np.diff(e.t))) for e, _ in done]
+            trial_metrics = [m for _, m in done]
+            metrics, steps, seconds = metrics + trial_metrics, steps + trial_steps, seconds + trial_seconds
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
-                {**pool_metrics(trial_metrics, trial_steps, seconds[-len(trial_metrics):]),
+                {**pool_metrics(trial_metrics, trial_steps, trial_seconds),
                  **pool_task_metrics(trial_metrics, trial_steps)}
             per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS}
             if log is not None:
@@ -290,6 +300,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
                     f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
         pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
+    add_line_ratios(pooled)
+    for tid in (str(int(t)) for t in trial_ids):
+        add_line_ratios({name: per_trial[name][tid] for name in per_trial})
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
                       wearer=describe_wearer(wearer),
@@ -299,15 +312,16 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
 _SOURCES = {name for names in SCHEDULE_SOURCES.values() for name in names}
 
 
-def _draw_options(run: StrategyRun, tid: int, seed: int, source: Callable[[str, int], Any]) -> list[dict[str, Any]]:
+def _draw_options(run: StrategyRun, tid: int, seed: int,
+                  source: Callable[[str, int], tuple[Any, Any]]) -> list[dict[str, Any]]:
     """The controller options of each episode of ``run`` on trial ``tid``: one empty dict, or one
     ``{"schedule": ...}`` per draw of a scheduled run (:mod:`mpcshare.handover_runs`)."""
     if run.schedule is None:
         return [{}]
     if run.schedule == "random":
-        schedules = random_handover_schedules(source("gate", tid), run.draws, [seed, tid])
+        schedules = random_handover_schedules(source("gate", tid)[0], run.draws, [seed, tid])
     elif run.schedule == "oracle":
-        schedules = [oracle_handover_schedule(source("voluntary", tid), source("reactive", tid))]
+        schedules = oracle_handover_schedules(source("voluntary", tid)[0], source("reactive", tid)[0])
     else:
         raise ValueError(f"unknown schedule {run.schedule!r} of run {run.name!r}; valid choices: "
                          f"{', '.join(SCHEDULE_SOURCES)}")

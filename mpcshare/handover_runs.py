@@ -5,9 +5,15 @@
   same steps on, hand-overs and first state, and interior segments ≥ the dwell
   d = ⌈``min_dwell_s`` / Δ⌉ steps (or the gate's own shortest interior segment, if shorter:
   the gate's overrides switch without dwell), seeded by (seed, trial, draw).
-* ``oracle_handover`` (the upper bound): :func:`mpcshare.control.schedule.oracle_schedule` on
-  the per-step tracking errors e_k = ‖p_k − p*_k‖ of the ``voluntary`` and ``reactive``
-  episodes on the trial, with dwell d.
+* ``oracle_handover`` (the upper bound, never worse than the better party): the candidates of
+  :func:`oracle_handover_schedules` — :func:`mpcshare.control.schedule.oracle_schedule` on the
+  per-step tracking errors e_k = ‖p_k − p*_k‖ of the ``voluntary`` and ``reactive`` episodes on
+  the trial, with dwell d, at the switch costs λ_c = c · (1/Δ) · mean(e_v² + e_r²)/2 for c in
+  :data:`ORACLE_SWITCH_COSTS_S` (a hand-over costs c seconds of the parties' mean squared error:
+  the wearer's pick-up and the ramp that the pure runs' errors leave out) — are each replayed in
+  the closed loop, and the run keeps, per trial, the episode with the lowest tracking RMS among
+  those replays *and the pure runs' own episodes* (the all-wearer and all-robot schedules). So
+  per trial, and pooled (√ of weighted mean squares), it is never worse than the better party.
 
 Both are replayed by the controller's ``schedule`` strategy, read ``handover_s``/2 ahead so
 that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.control.schedule.StepSchedule`).
@@ -24,9 +30,12 @@ import numpy as np
 from mpcshare.control.schedule import ScheduleStats, StepSchedule, oracle_schedule, random_schedule, schedule_stats
 from mpcshare.control.types import ControllerConfig
 
-__all__ = ["SCHEDULE_SOURCES", "dwell_steps", "oracle_handover_schedule", "random_handover_schedules",
+__all__ = ["ORACLE_SWITCH_COSTS_S", "SCHEDULE_SOURCES", "dwell_steps", "oracle_handover_schedule",
+           "oracle_handover_schedules", "random_handover_schedules",
            "random_schedules_from", "schedule_record", "tracking_error"]
 
+#: Switch costs of the oracle's candidates, in seconds of the parties' mean squared error (module docstring).
+ORACLE_SWITCH_COSTS_S: tuple[float, ...] = (0.0, 0.5, 2.0, 8.0)
 #: The runs each scheduled run is computed from.
 SCHEDULE_SOURCES: dict[str, tuple[str, ...]] = {"random": ("gate",), "oracle": ("voluntary", "reactive")}
 
@@ -72,10 +81,26 @@ def random_handover_schedules(gate_episode: Any, draws: int, seed: Sequence[int]
 
 
 def oracle_handover_schedule(voluntary_episode: Any, reactive_episode: Any,
-                             config: ControllerConfig | None = None) -> StepSchedule:
-    """The error-minimising schedule with the dwell from the pure runs' episodes (module docstring)."""
+                             config: ControllerConfig | None = None, switch_cost_s: float = 0.0) -> StepSchedule:
+    """The error-minimising schedule with the dwell from the pure runs' episodes, each hand-over
+    costing ``switch_cost_s`` seconds of their mean squared error (module docstring)."""
     cfg = config or ControllerConfig()
     e0, e1 = tracking_error(voluntary_episode), tracking_error(reactive_episode)
     n = min(e0.size, e1.size)
-    on = oracle_schedule(e0[:n], e1[:n], dwell_steps(cfg.min_dwell_s, _period(reactive_episode)))
+    dt = _period(reactive_episode)
+    e0, e1 = e0[:n], e1[:n]
+    lam = switch_cost_s / dt * float(np.nanmean(e0 ** 2 + e1 ** 2) / 2) if n else 0.0
+    on = oracle_schedule(e0, e1, dwell_steps(cfg.min_dwell_s, dt), lam if np.isfinite(lam) else 0.0)
     return StepSchedule(reactive_episode.t[:n], on, cfg.handover_s / 2)
+
+
+def oracle_handover_schedules(voluntary_episode: Any, reactive_episode: Any,
+                              config: ControllerConfig | None = None,
+                              switch_costs_s: Sequence[float] = ORACLE_SWITCH_COSTS_S) -> list[StepSchedule]:
+    """The oracle's candidate schedules, one per switch cost, distinct ones only (module docstring)."""
+    out: list[StepSchedule] = []
+    for c in switch_costs_s:
+        s = oracle_handover_schedule(voluntary_episode, reactive_episode, config, c)
+        if not any(np.array_equal(s.on, o.on) for o in out):
+            out.append(s)
+    return out

@@ -90,8 +90,9 @@ def random_schedule(stats: ScheduleStats, dwell: int, seed: int | Sequence[int])
     return np.repeat(np.array(states, dtype=bool), lengths)
 
 
-def oracle_schedule(err_off: np.ndarray, err_on: np.ndarray, dwell: int) -> np.ndarray:
-    """The schedule minimising Σ_k e_{on[k]}[k]² with interior segments ≥ ``dwell`` steps.
+def oracle_schedule(err_off: np.ndarray, err_on: np.ndarray, dwell: int, switch_cost: float = 0.0) -> np.ndarray:
+    """The schedule minimising Σ_k e_{on[k]}[k]² + ``switch_cost``·(hand-overs) [m²] with interior
+    segments ≥ ``dwell`` steps.
 
     ``err_off``, ``err_on``: (N,) per-step tracking errors [m] of the wearer alone and the
     robot alone (non-finite errors count as 0: no information). Dynamic programming over
@@ -104,7 +105,9 @@ def oracle_schedule(err_off: np.ndarray, err_on: np.ndarray, dwell: int) -> np.n
         raise ValueError(f"err_off and err_on must be equal-length 1-D arrays, got {e0.shape} and {e1.shape}")
     if dwell < 1:
         raise ValueError(f"dwell must be at least 1 step, got {dwell!r}")
-    n, d = e0.size, int(dwell)
+    if not (math.isfinite(switch_cost) and switch_cost >= 0):
+        raise ValueError(f"switch_cost must be finite and >= 0 [m²], got {switch_cost!r}")
+    n, d, lam = e0.size, int(dwell), float(switch_cost)
     if n == 0:
         return np.zeros(0, dtype=bool)
     cost = np.full((2, d), math.inf)  # cost[s, r-1]
@@ -113,15 +116,15 @@ def oracle_schedule(err_off: np.ndarray, err_on: np.ndarray, dwell: int) -> np.n
     for k in range(1, n):
         new = np.full((2, d), math.inf)
         for s, e in ((0, e0[k]), (1, e1[k])):
-            new[s, 0] = cost[1 - s, d - 1] + e  # switch
+            new[s, 0] = cost[1 - s, d - 1] + e + lam  # switch
             if d > 1:
                 new[s, 1:d - 1] = cost[s, :d - 2] + e
                 stay = cost[s, d - 1] <= cost[s, d - 2]
                 stay_at_d[k, s] = stay
                 new[s, d - 1] = min(cost[s, d - 1], cost[s, d - 2]) + e
             else:  # every step may switch
-                stay_at_d[k, s] = cost[s, 0] <= cost[1 - s, 0]
-                new[s, 0] = min(cost[s, 0], cost[1 - s, 0]) + e
+                stay_at_d[k, s] = cost[s, 0] <= cost[1 - s, 0] + lam
+                new[s, 0] = min(cost[s, 0], cost[1 - s, 0] + lam) + e
         cost = new
     s, r = np.unravel_index(int(np.argmin(cost)), cost.shape)
     on = np.zeros(n, dtype=bool)

@@ -19,9 +19,10 @@ from matplotlib.figure import Figure
 from learning.atomic import atomic_open
 from mpcshare.experiments import Comparison
 
-__all__ = ["comparison_findings", "comparison_markdown", "strict_json", "write_comparison"]
+__all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "strict_json", "write_comparison"]
 
 _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
+            ("line_ratio", "line ratio", 1.0, "{:.2f}"),
             ("tracking_p95_m", "tracking p95 [mm]", 1e3, "{:.1f}"),
             ("voluntary_effort", "effort [rad]", 1.0, "{:.3f}"),
             ("reactive_share", "reactive share", 100.0, "{:.0f} %"),
@@ -33,6 +34,7 @@ _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("realtime_factor", "× real time", 1.0, "{:.1f}"))
 #: the task's figures (sim.task_metrics): on time, and sawing while cutting
 _TASK_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
+            ("line_ratio", "line ratio", 1.0, "{:.2f}"),
                  ("lag_s", "lag [ms]", 1e3, "{:.0f}"),
                  ("rms_at_lag_m", "RMS at that lag [mm]", 1e3, "{:.1f}"),
                  ("saw_amplitude_ratio", "sawing amplitude", 1.0, "{:.2f}"),
@@ -60,6 +62,9 @@ def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
         out.append(f"Accuracy: the gate's tracking RMS is {e:.0%} of `reactive`'s ({verdict}); the wearer and "
                    f"the robot push the tip in opposite directions {g['conflict_share']:.1%} of the time under the "
                    f"gate against {r['conflict_share']:.1%} under `reactive` (where the wearer's push is ignored).")
+    line = line_sentence(s)
+    if line:
+        out.append(line)
     if "gate" in s and "gate_mpc" in s:
         n, g = s["gate"], s["gate_mpc"]
         rel = _ratio(g["tracking_rmse_m"], n["tracking_rmse_m"])
@@ -80,8 +85,9 @@ def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
                    f"(`random_handover`), the arm tracks at {r * 1e3:.1f} mm RMS against the gate's {g * 1e3:.1f} mm: "
                    f"the gate's hand-over times are {word} chance on these trials (`mpcshare tune` tests it).")
     if "oracle_handover" in s:
-        out.append(f"Upper bound: the hand-over schedule that minimises the error (from `voluntary` and `reactive`, "
-                   f"with the same dwell; uses the future) tracks at "
+        out.append(f"Upper bound: the best closed-loop replay of the hand-over schedules that minimise the error "
+                   f"(from `voluntary` and `reactive`, with the same dwell, at several costs per hand-over; the "
+                   f"wearer or the robot alone included; uses the future) tracks at "
                    f"{s['oracle_handover']['tracking_rmse_m'] * 1e3:.1f} mm RMS with the robot leading "
                    f"{s['oracle_handover']['reactive_share']:.0%} of the time.")
     if "gate" in s and s["gate"].get("saw_amplitude_ratio") is not None:
@@ -90,6 +96,24 @@ def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
     out.append("Limits: no violation at the physics rate in any run." if not bad else
                f"Limits: VIOLATED at the physics rate in {', '.join(bad)}.")
     return out
+
+
+def line_sentence(strategies: dict[str, dict[str, Any]]) -> str | None:
+    """The line ratio of the shared runs in words (:mod:`mpcshare.line_ratio`); None without the parties."""
+    shared = {k: m["line_ratio"] for k, m in strategies.items()
+              if k not in ("voluntary", "reactive") and m.get("line_ratio") is not None
+              and not k.startswith("oracle")}
+    if not shared:
+        return None
+    parts = ", ".join(f"`{k}` {v:.2f}" for k, v in shared.items())
+    better = [k for k, v in shared.items() if v < 1.0]
+    v, r = strategies["voluntary"]["tracking_rmse_m"], strategies["reactive"]["tracking_rmse_m"]
+    alone = (f" The wearer alone tracks better than the robot alone ({v * 1e3:.1f} against {r * 1e3:.1f} mm)."
+             if v < r else "")
+    return (f"Line: tracking RMS over the straight line from `reactive` to `voluntary` at the same effort (below 1: "
+            f"better than mixing the two parties): {parts}; "
+            + (f"below the line: {', '.join(f'`{k}`' for k in better)}." if better else
+               "NONE is below the line: no run beats mixing the wearer and the robot.") + alone)
 
 
 def task_sentence(name: str, m: dict[str, Any]) -> str:

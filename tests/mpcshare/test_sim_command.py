@@ -120,10 +120,18 @@ def test_sim_runs_the_placebo_and_the_oracle_hand_overs_beside_the_gate(trained,
     data, model = trained
     out = tmp_path / "handover"
     assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "3",
-                 "--runs", "gate", "random_handover", "oracle_handover"]) == 0
+                 "--runs", "voluntary", "reactive", "gate", "random_handover", "oracle_handover"]) == 0
     comp = json.loads((out / "comparison.json").read_text())
-    assert set(comp["strategies"]) == {"gate", "random_handover", "oracle_handover"}
-    assert len(comp["run_files"]["random_handover"]) == 3  # three seeded draws
+    assert set(comp["strategies"]) == {"voluntary", "reactive", "gate", "random_handover", "oracle_handover"}
+    assert len(comp["run_files"]["random_handover"]) == 5  # five seeded draws
+    s, per = comp["strategies"], comp["per_trial"]
+    # the upper bound is never worse than the better party, per trial and pooled
+    better = min(s["voluntary"]["tracking_rmse_m"], s["reactive"]["tracking_rmse_m"])
+    assert s["oracle_handover"]["tracking_rmse_m"] <= better + 1e-12
+    for tid, m in per["oracle_handover"].items():
+        assert m["tracking_rmse_m"] <= min(per[k][tid]["tracking_rmse_m"] for k in ("voluntary", "reactive")) + 1e-12
+    assert s["voluntary"]["line_ratio"] == pytest.approx(1.0) and s["reactive"]["line_ratio"] == pytest.approx(1.0)
+    assert s["gate"]["line_ratio"] is not None
     gate = Episode.load(out / comp["run_files"]["gate"][0])
     draws = [Episode.load(out / f) for f in comp["run_files"]["random_handover"]]
     for run in draws:  # the gate's share of robot control and hand-overs, at other times
@@ -131,4 +139,4 @@ def test_sim_runs_the_placebo_and_the_oracle_hand_overs_beside_the_gate(trained,
         assert np.count_nonzero(np.diff(run.alpha > 0.5)) == np.count_nonzero(np.diff(gate.alpha > 0.5))
     assert comp["strategies"]["oracle_handover"]["limit_violations"] == 0
     md = (out / "comparison.md").read_text()
-    assert "at random times" in md and "minimises the error" in md
+    assert "at random times" in md and "minimise the error" in md and "line ratio" in md

@@ -76,6 +76,23 @@ def test_oracle_schedule_is_the_optimum_on_a_small_case():
     assert np.sum(np.where(on, e1, e0) ** 2) == pytest.approx(np.sum(np.where(best, e1, e0) ** 2))
 
 
+@pytest.mark.parametrize("dwell", [1, 3])
+@pytest.mark.parametrize("switch_cost", [0.0, 0.3, 2.0])
+def test_oracle_schedule_with_a_switch_cost_is_the_optimum(dwell, switch_cost):
+    """Brute force over all 2^10 schedules: Σ e² + switch_cost · hand-overs, interior segments ≥ dwell."""
+    rng = np.random.default_rng(1)
+    e0, e1 = rng.uniform(0, 1, 10), rng.uniform(0, 1, 10)
+
+    def cost(x):
+        return float(np.sum(np.where(x, e1, e0) ** 2)) + switch_cost * schedule_stats(x).handovers
+
+    best = min(cost(np.array(bits, bool)) for bits in itertools.product([0, 1], repeat=10)
+               if (schedule_stats(np.array(bits, bool)).min_interior or 99) >= dwell)
+    assert cost(oracle_schedule(e0, e1, dwell, switch_cost)) == pytest.approx(best)
+    with pytest.raises(ValueError, match="switch_cost"):
+        oracle_schedule(e0, e1, dwell, -1.0)
+
+
 def test_arbiter_replays_a_schedule_through_the_ramp():
     times = np.arange(200) * 0.01
     on = np.repeat([False, True, False], [50, 100, 50])

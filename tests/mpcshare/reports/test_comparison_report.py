@@ -42,3 +42,12 @@ def test_who_leads_per_mode_sits_beside_the_offline_share():
     assert "| collecting | 8% | 4% |" in md.replace(" %", "%") or "| collecting | 8% | 5% |" in md.replace(" %", "%")
     no_modes = Comparison(strategies={"gate": _metrics(15.0)}, per_trial={}, trials=[2], duration_s=30.0, runs=[])
     assert "Who leads" not in comparison_markdown(no_modes, plot_name=None)
+
+
+def test_findings_state_the_line_ratio_and_when_the_wearer_alone_is_better():
+    s = {"voluntary": _metrics(13.0, voluntary_effort=0.08, line_ratio=1.0), "reactive": _metrics(16.0, line_ratio=1.0),
+         "gate": _metrics(15.0, line_ratio=1.07), "blend": _metrics(12.0, line_ratio=0.85)}
+    text = " ".join(comparison_findings(s))
+    assert "`gate` 1.07" in text and "below the line: `blend`" in text and "wearer alone tracks better" in text
+    s["blend"]["line_ratio"] = 1.01
+    assert "NONE is below the line" in " ".join(comparison_findings(s))
