@@ -24,6 +24,7 @@ prefer_offscreen_gl()
 
 from learning.data import load  # noqa: E402
 from mpcshare.bundle import load_bundle, save_bundle  # noqa: E402
+from mpcshare.control.arbitration import STRATEGIES  # noqa: E402
 from mpcshare.control.controller import SharedController  # noqa: E402
 from mpcshare.reports.episode_plot import plot_episode  # noqa: E402
 from mpcshare.training import train_bundle  # noqa: E402
@@ -39,7 +40,7 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--model", default=None, help="a bundle from `mpcshare train` / `mpcshare demo` (else train one)")
     p.add_argument("--minutes", type=float, default=4.0, help="minutes of demonstrations per subject to train on")
     p.add_argument("--seconds", type=float, default=30.0, help="seconds of the held-out trial to simulate")
-    p.add_argument("--strategy", default="gate", choices=("voluntary", "reactive", "gate", "blend"))
+    p.add_argument("--strategy", default="gate", choices=STRATEGIES)
     p.add_argument("--video", action="store_true", help="render a video (needs offscreen OpenGL)")
     args = p.parse_args(argv)
     out = Path(args.out)

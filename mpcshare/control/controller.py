@@ -61,7 +61,7 @@ from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fu
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
 from mpcshare.control.mpc_follow import MPCFollower
-from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc
+from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
 from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
 from robot.kinematics import ReachShell, TipKinematics
@@ -121,7 +121,8 @@ class SharedController:
         self.arbiter = Arbiter(strategy, beta, novelty_threshold=float(bundle.novelty_threshold),
                                on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
                                min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range,
-                               handover_s=cfg.handover_s, schedule=schedule)
+                               handover_s=cfg.handover_s, schedule=schedule,
+                               **arbitration_inputs(bundle, cfg.strategy_options))
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
         if preview is not None and not callable(getattr(preview, "sample", None)):
             raise TypeError(f"preview must be a TipTrajectory (sample(times) -> p, v, a), got {type(preview).__name__}")
@@ -306,22 +307,24 @@ class SharedController:
         p_hat, v_hat, a_hat = self.forecast.at(t_aim) if self.forecast.ready else (np.full(3, np.nan),) * 3
         self._p_pred = p_hat
         pred_ok = _finite(p_hat) and _finite(v_hat) and _finite(a_hat)
+        ff = v_hat if cfg.reactive_feedforward else None
+        u_r = reactive_velocity(p_hat, p_ref, cfg.reactive_gain, cfg.reactive_max_speed, ff) if pred_ok \
+            else np.zeros(3)
+        th = np.asarray(voluntary, dtype=float) if voluntary is not None else np.full(3, np.nan)
+        shoulder_ok = th.shape == (3,) and _finite(th)
+        u_v = self.shoulder.tip_velocity(th) if shoulder_ok else np.zeros(3)
         if fe.predicting_for_s > cfg.stale_after_s:
             why = f"no fork measurement for {fe.predicting_for_s:.2f} s: control handed to the wearer"
             faults.append(("stale_fork_sensor", why))
             alpha, beta = 0.0, 1.0
             self.arbiter.decide(t, None, available=False)
         else:
-            d = self.arbiter.decide(t, self._gate_proba, self._novelty, pred_ok, self._window_ready)
+            d = self.arbiter.decide(t, self._gate_proba, self._novelty, pred_ok, self._window_ready,
+                                    mode_proba=self._mode_proba, u_r=u_r if pred_ok else None,
+                                    u_v=u_v if shoulder_ok else None)
             alpha, beta = d.alpha, d.beta
-        ff = v_hat if cfg.reactive_feedforward else None
-        u_r = reactive_velocity(p_hat, p_ref, cfg.reactive_gain, cfg.reactive_max_speed, ff) if pred_ok \
-            else np.zeros(3)
         self._acc_ff = alpha * a_hat if pred_ok and cfg.reactive_feedforward else np.zeros(3)
-        th = np.asarray(voluntary, dtype=float) if voluntary is not None else np.full(3, np.nan)
-        u_v = np.zeros(3)
-        if th.shape == (3,) and _finite(th):
-            u_v = self.shoulder.tip_velocity(th)
+        if shoulder_ok:
             u = fuse(alpha, u_r, beta, u_v)
         else:
             faults.append(("invalid_shoulder", "shoulder signal NaN, missing or not (3,): reference held"))

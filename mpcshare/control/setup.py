@@ -8,7 +8,7 @@ the loop.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from learning.preprocessing.resample import decimation_factor
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["BundleLayout", "check_bundle", "make_mpc"]
+__all__ = ["BundleLayout", "arbitration_inputs", "check_bundle", "make_mpc"]
 
 DEFAULT_TIP = ("knife_x", "knife_y", "knife_z")
 DEFAULT_FORK = ("fork_x", "fork_y", "fork_z")
@@ -97,6 +97,19 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
         raise ValueError(f"bundle.predictor stream returns shape {out.shape}, expected ({d_u},) (act channels)")
     return BundleLayout(d_o, d_u, K, L, tip, fork, np.asarray(pre.act.mean_, dtype=float),
                         np.asarray(pre.act.scale_, dtype=float))
+
+
+def arbitration_inputs(bundle: ModelBundle, options: dict[str, float] | None = None) -> dict[str, Any]:
+    """What the Arbiter's strategies read of a bundle: ``mode_stats`` (the bundle's per-mode figures,
+    ``bundle.metrics["mode_stats"]``, None when absent), ``transmat`` (the mode model's (K, K)
+    transition matrix per model tick, None when it has none), ``model_dt`` [s] and ``options`` (the
+    bundle's chosen rule settings, ``bundle.metrics["rule_settings"]``, updated with ``options``)."""
+    metrics = getattr(bundle, "metrics", None) or {}
+    transmat = getattr(bundle.modes, "transmat_", None)
+    chosen = dict(metrics.get("rule_settings") or {})
+    chosen.update(options or {})
+    return {"mode_stats": metrics.get("mode_stats"), "model_dt": 1.0 / float(bundle.model_hz), "options": chosen,
+            "transmat": None if transmat is None else np.asarray(transmat, dtype=float)}
 
 
 def make_mpc(params, dt: float):

@@ -67,7 +67,8 @@ class ControllerConfig:
     forecast (else the smoothed reference extrapolated at constant velocity); forecast_fade_s [s]:
     cross-fade between successive forecasts (None: one model period; 0: none, measured best);
     smoother_target (:data:`SMOOTHER_TARGETS`) and smoother_lead_s [s]; handover_s [s]: the
-    gate's α ramp between the robot and the wearer (see ``Arbiter``).
+    gate's α ramp between the robot and the wearer (see ``Arbiter``); strategy_options: settings
+    of the strategy's rule that override the bundle's choice (``mpcshare.control.strategies.gate``).
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
@@ -102,6 +103,7 @@ class ControllerConfig:
     forecast_fade_s: float | None = 0.0
     smoother_lead_s: float = 0.05
     handover_s: float = 0.5
+    strategy_options: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:

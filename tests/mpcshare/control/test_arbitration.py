@@ -11,7 +11,7 @@ from mpcshare.control.arbitration import STRATEGIES, Arbiter, fuse, reactive_vel
 
 
 def test_gate_rule_alpha_and_beta():
-    arb = Arbiter("gate", beta=0.3, min_dwell_s=0.0)
+    arb = Arbiter("paper_gate", beta=0.3, min_dwell_s=0.0)
     d = arb.decide(0.0, 0.9)
     assert (d.alpha, d.beta) == (1.0, 0.3)
     d = arb.decide(0.1, 0.1)
@@ -41,27 +41,27 @@ def test_blend_ramp_and_beta():
 
 def test_hysteresis_does_not_chatter():
     """A probability oscillating around 0.5 every tick leaves α where it was."""
-    arb = Arbiter("gate", beta=0.5, on_threshold=0.6, off_threshold=0.4, min_dwell_s=0.0)
+    arb = Arbiter("paper_gate", beta=0.5, on_threshold=0.6, off_threshold=0.4, min_dwell_s=0.0)
     alphas = [arb.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert set(alphas) == {0.0} and arb.handovers == []
     arb.decide(10.0, 0.95)  # the robot leads, then the same oscillation: it keeps leading
     alphas = [arb.decide(10.1 + 0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert set(alphas) == {1.0} and len(arb.handovers) == 1
     # without hysteresis (thresholds equal) and without dwell it toggles every tick: the test can fail
-    raw = Arbiter("gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.0)
+    raw = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.0)
     toggles = [raw.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert len(raw.handovers) == 100 and len(set(toggles)) == 2
 
 
 def test_dwell_time_limits_switch_rate():
-    arb = Arbiter("gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.5)
+    arb = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.5)
     for k in range(100):  # 10 s of a gate flipping between 0.1 and 0.9 every 0.1 s
         arb.decide(0.1 * k, 0.9 if k % 2 == 0 else 0.1)
     times = [h.t for h in arb.handovers]
     assert len(times) >= 2 and np.all(np.diff(times) >= 0.5 - 1e-12)
 
 
-@pytest.mark.parametrize("strategy", ["gate", "blend"])
+@pytest.mark.parametrize("strategy", ["paper_gate", "gate", "blend"])
 def test_overrides_force_alpha_zero_at_once(strategy):
     arb = Arbiter(strategy, beta=0.5, novelty_threshold=10.0, min_dwell_s=5.0)
     assert arb.decide(0.0, 1.0).alpha == 1.0
@@ -75,14 +75,15 @@ def test_overrides_force_alpha_zero_at_once(strategy):
 
 
 def test_misuse_raises_clear_errors():
-    with pytest.raises(ValueError, match="valid choices: voluntary, reactive, gate, blend"):
+    with pytest.raises(ValueError, match="valid choices: voluntary, reactive, mix25, mix50, mix75, gate, paper_gate, "
+                       "blend$"):
         Arbiter("paper")
     for b in (-0.1, 1.5, float("nan")):
         with pytest.raises(ValueError, match="beta must be in"):
-            Arbiter("gate", beta=b)
+            Arbiter("paper_gate", beta=b)
     with pytest.raises(ValueError, match="off_threshold"):
-        Arbiter("gate", on_threshold=0.3, off_threshold=0.6)
-    assert STRATEGIES == ("voluntary", "reactive", "gate", "blend")
+        Arbiter("paper_gate", on_threshold=0.3, off_threshold=0.6)
+    assert STRATEGIES == ("voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "paper_gate", "blend")
 
 
 def test_reactive_velocity_and_fusion():
@@ -95,7 +96,7 @@ def test_reactive_velocity_and_fusion():
 
 
 def test_gate_hands_over_along_a_ramp_and_overrides_act_at_once():
-    arb = Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.5)
+    arb = Arbiter("paper_gate", beta=0.5, min_dwell_s=0.0, handover_s=0.5)
     alphas = [arb.decide(0.01 * k, 0.95).alpha for k in range(60)]
     assert alphas[0] == 0.0 and alphas[10] == pytest.approx(0.2) and alphas[50] == 1.0
     d = arb.decide(0.6, 0.95)
@@ -104,4 +105,4 @@ def test_gate_hands_over_along_a_ramp_and_overrides_act_at_once():
     assert d.alpha == pytest.approx(0.98) and d.beta == pytest.approx(1 - 0.98 * 0.5)
     assert arb.decide(0.62, 0.1, prediction_finite=False).alpha == 0.0  # no prediction: at once
     with pytest.raises(ValueError, match="handover_s"):
-        Arbiter("gate", handover_s=-1.0)
+        Arbiter("paper_gate", handover_s=-1.0)

@@ -299,7 +299,7 @@ def test_from_a_saved_bundle_folder(tmp_path):
 
 def test_construction_misuse():
     _, bundle = demos_and_bundle(0)
-    with pytest.raises(ValueError, match="valid choices: voluntary, reactive, gate, blend"):
+    with pytest.raises(ValueError, match="valid choices: voluntary, reactive, mix25, mix50, mix75, gate, paper_gate"):
         SharedController.from_bundle(bundle, strategy="nope", use_mpc=False)
     with pytest.raises(ValueError, match="beta must be in"):
         SharedController.from_bundle(bundle, beta=1.2, use_mpc=False)

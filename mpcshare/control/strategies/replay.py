@@ -1,0 +1,40 @@
+"""``schedule``: the replay of a given hand-over schedule (not a controller, not a user's choice):
+α follows ``schedule(t)`` ∈ {0, 1} along the hand-over ramp with the gate's β; no overrides
+(as ``reactive``, û_r = 0 while π̂ has no finite output). It replays the placebo
+``random_handover`` and the upper bound ``oracle_handover``."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from mpcshare.control.strategies.base import ArbiterView, StepInputs, StrategyContext, StrategySpec, Target
+
+__all__ = ["SCHEDULE", "Replay", "SPECS"]
+
+SCHEDULE = "schedule"
+
+
+class Replay:
+    """α target = 1 where ``schedule(t)`` ≥ 0.5, else 0."""
+
+    overrides = False
+
+    def __init__(self, schedule: Callable[[float], float]) -> None:
+        self.schedule = schedule
+
+    def reset(self) -> None:
+        """No state."""
+
+    def decide(self, t: float, inputs: StepInputs, arbiter: ArbiterView) -> Target:
+        return Target(1.0 if self.schedule(t) >= 0.5 else 0.0, "given schedule", ramp=True)
+
+
+def make(ctx: StrategyContext) -> Replay:
+    """The replay of ``ctx.schedule`` (which must be given)."""
+    if ctx.schedule is None:
+        raise ValueError(f"strategy {SCHEDULE!r} needs a schedule (t -> alpha target)")
+    return Replay(ctx.schedule)
+
+
+SPECS = (StrategySpec(SCHEDULE, "The replay of a given hand-over schedule (placebo and oracle runs).",
+                      tunable=False, color="C7", factory=make, user=False, order=99),)

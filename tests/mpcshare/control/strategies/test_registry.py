@@ -1,0 +1,40 @@
+"""The strategy registry: names, specs, one module each, the Arbiter reads it."""
+
+from __future__ import annotations
+
+import matplotlib.colors
+import pytest
+
+from mpcshare.control.arbitration import STRATEGIES, Arbiter, check_strategy
+from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, StrategySpec, user_strategies
+
+
+def test_the_registry_holds_the_named_strategies_in_order():
+    assert list(REGISTRY) == ["voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "paper_gate", "blend",
+                              "schedule"]
+    assert DEFAULT_STRATEGY == "gate" and STRATEGIES == user_strategies() == tuple(list(REGISTRY)[:-1])
+    assert {n for n, s in REGISTRY.items() if s.tunable} == {"gate", "paper_gate", "blend"}
+    for name, spec in REGISTRY.items():
+        assert isinstance(spec, StrategySpec) and spec.name == name
+        assert spec.description.endswith(".") and spec.description.count(". ") == 0, spec.description
+        assert matplotlib.colors.is_color_like(spec.color)
+    assert len({s.color for s in REGISTRY.values()}) == len(REGISTRY)  # each its own colour in the plots
+    with pytest.raises(TypeError):
+        REGISTRY["x"] = REGISTRY["gate"]  # read-only
+
+
+def test_check_strategy_names_the_registry():
+    for name in STRATEGIES:
+        assert check_strategy(name) == name
+    with pytest.raises(ValueError, match="valid choices: " + ", ".join(STRATEGIES)):
+        check_strategy("schedule")  # not a user's choice without a schedule
+
+
+@pytest.mark.parametrize("name,alpha", [("mix25", 0.25), ("mix50", 0.5), ("mix75", 0.75)])
+def test_mixtures_are_points_of_the_line(name, alpha):
+    """β = 1 − α whatever the user's β, whatever the gate says, no overrides, no hand-overs."""
+    arb = Arbiter(name, beta=0.9, novelty_threshold=1.0, handover_s=0.5)
+    for k, p in enumerate([0.0, 1.0, float("nan"), None]):
+        d = arb.decide(0.1 * k, p, novelty=5.0, prediction_finite=k % 2 == 0, available=k != 3)
+        assert (d.alpha, d.beta) == (alpha, pytest.approx(1.0 - alpha))
+    assert arb.handovers == []
