@@ -1,13 +1,14 @@
 """Closed-loop comparison of arbitration strategies on held-out demonstrations.
 
-Each *run* is a strategy of :class:`mpcshare.control.controller.SharedController` (``voluntary``,
-``reactive``, ``gate``, ``blend``, the gate with the MPC ``gate_mpc``, the upper bound
-``oracle_preview``: ``reactive`` given the wearer's true intent as its preview, and the replayed
-hand-over schedules ``random_handover`` (the placebo: the gate's share and hand-overs at random
-times, the mean over 5 draws) and ``oracle_handover`` (the best closed-loop replay of error-minimising
-schedules at several hand-over costs, or of the pure runs: an upper bound never worse than the better party));
-``line_ratio`` (:mod:`mpcshare.line_ratio`) is added to every run's metrics;
-each is simulated on the
+Each *run* is a row of the run table :mod:`mpcshare.run_table` (every strategy of the registry
+:data:`mpcshare.control.strategies.REGISTRY`: ``voluntary``, ``reactive``, the constant mixtures
+``mix25``/``mix50``/``mix75``, ``gate``, ``paper_gate``, ``blend``; and ``gate_mpc``, the upper
+bound ``oracle_preview``: ``reactive`` given the wearer's true intent as its preview, and the
+replayed hand-over schedules ``random_handover``, the placebo: the gate's share and hand-overs
+at random times, the mean over 5 draws, and ``oracle_handover``, the best closed-loop replay of
+error-minimising schedules at several hand-over costs or of the pure runs: an upper bound never
+worse than the better party); ``line_ratio`` (:mod:`mpcshare.line_ratio`) is added to every
+run's metrics, pooled and per trial. Each is simulated on the
 same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
 default the preset ``hemiparetic_mild``) and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
@@ -30,6 +31,7 @@ import numpy as np
 from learning.data import Demonstrations
 from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedules, random_handover_schedules
 from mpcshare.line_ratio import add_line_ratios
+from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
@@ -46,34 +48,6 @@ __all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
                                 "step_p99_ms", "realtime_factor")
-
-
-@dataclass(frozen=True)
-class StrategyRun:
-    """One simulated configuration: a name for the tables, the arbitration strategy, MPC on/off,
-    and ``oracle``: the controller is given the wearer's true intent as its preview instead of
-    the predictor's forecast (an upper bound, not realisable). ``schedule``: ``"random"`` or
-    ``"oracle"``: the run replays a hand-over schedule computed from the gate's, or the pure
-    runs', episodes on the same trial (:mod:`mpcshare.handover_runs`), ``draws`` times."""
-
-    name: str
-    strategy: str
-    use_mpc: bool = False
-    oracle: bool = False
-    schedule: str | None = None
-    draws: int = 1
-
-
-DEFAULT_RUNS: tuple[StrategyRun, ...] = (
-    StrategyRun("voluntary", "voluntary"),
-    StrategyRun("reactive", "reactive"),
-    StrategyRun("gate", "gate"),
-    StrategyRun("blend", "blend"),
-    StrategyRun("gate_mpc", "gate", use_mpc=True),
-    StrategyRun("oracle_preview", "reactive", oracle=True),
-    StrategyRun("random_handover", "schedule", schedule="random", draws=5),
-    StrategyRun("oracle_handover", "schedule", schedule="oracle"),
-)
 
 
 @dataclass
@@ -319,7 +293,7 @@ def _draw_options(run: StrategyRun, tid: int, seed: int,
     if run.schedule is None:
         return [{}]
     if run.schedule == "random":
-        schedules = random_handover_schedules(source("gate", tid)[0], run.draws, [seed, tid])
+        schedules = random_handover_schedules(source(SCHEDULE_SOURCES["random"][0], tid)[0], run.draws, [seed, tid])
     elif run.schedule == "oracle":
         schedules = oracle_handover_schedules(source("voluntary", tid)[0], source("reactive", tid)[0])
     else:

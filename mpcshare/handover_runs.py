@@ -28,6 +28,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from mpcshare.control.schedule import ScheduleStats, StepSchedule, oracle_schedule, random_schedule, schedule_stats
+from mpcshare.control.strategies import DEFAULT_STRATEGY
 from mpcshare.control.types import ControllerConfig
 
 __all__ = ["ORACLE_SWITCH_COSTS_S", "SCHEDULE_SOURCES", "dwell_steps", "oracle_handover_schedule",
@@ -37,7 +38,7 @@ __all__ = ["ORACLE_SWITCH_COSTS_S", "SCHEDULE_SOURCES", "dwell_steps", "oracle_h
 #: Switch costs of the oracle's candidates, in seconds of the parties' mean squared error (module docstring).
 ORACLE_SWITCH_COSTS_S: tuple[float, ...] = (0.0, 0.5, 2.0, 8.0)
 #: The runs each scheduled run is computed from.
-SCHEDULE_SOURCES: dict[str, tuple[str, ...]] = {"random": ("gate",), "oracle": ("voluntary", "reactive")}
+SCHEDULE_SOURCES: dict[str, tuple[str, ...]] = {"random": (DEFAULT_STRATEGY,), "oracle": ("voluntary", "reactive")}
 
 
 def _period(episode: Any) -> float:

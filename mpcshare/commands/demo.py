@@ -31,6 +31,7 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.data import format_summary
 from mpcshare.commands.sim import add_wearer_argument
+from mpcshare.run_table import RUN_NAMES
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
 
@@ -144,7 +145,7 @@ def _demo(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     ids = bundle.heldout_trials[:args.sim_trials]
-    _stage(6, f"closed loop in MuJoCo: 5 strategies x {len(ids)} held-out trial(s) x {args.sim_duration:g} s")
+    _stage(6, f"closed loop in MuJoCo: {len(RUN_NAMES)} runs x {len(ids)} held-out trial(s) x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")
     wearer = wearer_preset(args.wearer)
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,

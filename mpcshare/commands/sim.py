@@ -2,9 +2,9 @@
 
 ``mpcshare sim --model MODEL_DIR [--data DATA] --out DIR`` loads a bundle, takes the
 held-out trials (of ``--data``, default: the data set the bundle was trained on,
-as recorded by ``mpcshare train``), simulates each strategy (``voluntary``,
-``reactive``, ``gate``, ``blend``, the gate with the MPC, the ``oracle_preview`` upper bound, the placebo
-``random_handover`` and the upper bound ``oracle_handover``) on each
+as recorded by ``mpcshare train``), simulates each run of the run table
+(:mod:`mpcshare.run_table`: every registered strategy, the gate with the MPC, the ``oracle_preview``
+upper bound, the placebo ``random_handover`` and the upper bound ``oracle_handover``) on each
 trial in MuJoCo
 beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
 ``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
@@ -27,6 +27,7 @@ from mpcshare.commands.base import (
     positive_int,
     prepare_output_folder,
 )
+from mpcshare.run_table import RUN_NAMES
 from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
@@ -35,8 +36,6 @@ if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torc
 
 __all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "run_comparison"]
 
-_RUN_NAMES = ("voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview", "random_handover",
-              "oracle_handover")
 
 
 def add_wearer_argument(p: argparse.ArgumentParser) -> None:
@@ -52,9 +51,10 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
                    help="simulate at most this many held-out trials (default: all)")
     p.add_argument("--duration", type=positive_float, default=None,
                    help="simulate only the first DURATION seconds of each trial (default: whole trials)")
-    p.add_argument("--runs", nargs="+", choices=_RUN_NAMES, default=list(_RUN_NAMES),
-                   help="strategies to simulate (default: all eight; random_handover replays the gate's share and "
-                        "hand-overs at random times, oracle_handover the error-minimising schedule)")
+    p.add_argument("--runs", nargs="+", choices=RUN_NAMES, default=list(RUN_NAMES),
+                   help="strategies to simulate (default: all; the strategies of the registry, gate_mpc, "
+                        "oracle_preview, random_handover: the gate's share and hand-overs at random times, 5 draws, "
+                        "oracle_handover: the best replay of error-minimising schedules, an upper bound)")
     p.add_argument("--beta", type=float, default=0.5, help="β while the robot acts (default 0.5)")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
     p.add_argument("--video", action="store_true", help="render the gate on the first trial (offscreen OpenGL)")

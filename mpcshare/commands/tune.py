@@ -2,7 +2,8 @@
 
 ``mpcshare tune DATA --out DIR`` trains one bundle per percentile (the HMM and quotients
 fitted once), simulates every setting and the baselines (``voluntary``, ``reactive``,
-``random_handover`` matched to each setting, ``oracle_preview``) on held-out trials × seeds
+``random_handover`` matched to each setting, the mean of 5 draws per pair, ``oracle_preview``) on
+held-out trials × seeds (defaults: 10 pairs, tests Holm-corrected across settings)
 (:mod:`mpcshare.tuning`), and writes ``tune.json``, ``tune.md`` and ``pareto.png``. Episodes
 run in a local process pool (``--workers``) or on Ray (``--backend ray``, the optional extra
 ``pip install -e .[ray]``); an interrupted sweep started again with the same arguments resumes.
@@ -18,11 +19,17 @@ from mpcshare.commands import base
 from mpcshare.commands.base import Command, CommandError, load_or_fail, prepare_output_folder
 from mpcshare.commands.data import DATA_HELP
 from mpcshare.commands.sim import add_wearer_argument
+from mpcshare.run_table import RANDOM_DRAWS, TUNABLE
 from sim.demonstrator import MODE_NAMES
 
 __all__ = ["TUNE_COMMAND"]
 
-_STRATEGIES = ("gate", "blend")
+#: Defaults: 5 held-out trials x 2 paired seeds = 10 pairs per setting, so that one-sided p < 0.01
+#: is reachable after Holm's correction across the 6 settings (exact Wilcoxon floor 0.5^10 ≈ 0.001);
+#: 2 percentiles x 1 β x 3 strategies; per pair 2 + 2 x (1 + 3) = 10 episodes and 6 x 5 placebo draws.
+DEFAULT_PERCENTILES = (100.0, 70.0)
+DEFAULT_BETAS = (0.5,)
+DEFAULT_TRIALS, DEFAULT_SEEDS = 5, 2
 
 
 def _percentile(text: str) -> float:
@@ -52,14 +59,22 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("data", help=DATA_HELP)
     p.add_argument("--out", required=True, help="folder for tune.json, tune.md, pareto.png, the bundles and episodes")
-    p.add_argument("--percentiles", type=_percentile, nargs="+", default=[100.0, 90.0, 80.0, 70.0, 60.0, 50.0],
-                   help="K = these percentiles of the within-mode quotients, one bundle each (default 100 .. 50)")
-    p.add_argument("--betas", type=_beta, nargs="+", default=[0.0, 0.5, 1.0], help="β values (default 0 0.5 1)")
-    p.add_argument("--strategies", nargs="+", choices=_STRATEGIES, default=list(_STRATEGIES),
-                   help="strategies swept (default gate blend); each gets a matched random_handover")
-    p.add_argument("--trials", type=base.positive_int, default=4, help="held-out trials (default 4)")
+    p.add_argument("--percentiles", type=_percentile, nargs="+", default=list(DEFAULT_PERCENTILES),
+                   help="K = these percentiles of the within-mode quotients, one bundle each (default "
+                        f"{' '.join(f'{v:g}' for v in DEFAULT_PERCENTILES)})")
+    p.add_argument("--betas", type=_beta, nargs="+", default=list(DEFAULT_BETAS),
+                   help=f"β values (default {' '.join(f'{v:g}' for v in DEFAULT_BETAS)})")
+    p.add_argument("--strategies", nargs="+", choices=TUNABLE, default=list(TUNABLE),
+                   help=f"strategies swept (default {' '.join(TUNABLE)}: the registry's tunable ones); each gets a "
+                        "matched random_handover")
+    p.add_argument("--trials", type=base.positive_int, default=DEFAULT_TRIALS,
+                   help=f"held-out trials (default {DEFAULT_TRIALS}; trials x seeds = the pairs of each test)")
     p.add_argument("--duration", type=base.positive_float, default=30.0, help="seconds per trial (default 30)")
-    p.add_argument("--seeds", type=base.positive_int, default=1, help="paired seeds 0..N-1 (default 1)")
+    p.add_argument("--seeds", type=base.positive_int, default=DEFAULT_SEEDS,
+                   help=f"paired seeds 0..N-1 (default {DEFAULT_SEEDS}: {DEFAULT_TRIALS * DEFAULT_SEEDS} pairs, "
+                        "so that p < 0.01 is reachable after Holm's correction)")
+    p.add_argument("--draws", type=base.positive_int, default=RANDOM_DRAWS,
+                   help=f"random_handover draws per pair, their mean is the placebo (default {RANDOM_DRAWS})")
     p.add_argument("--workers", type=base.positive_int, default=1, help="local worker processes (default 1)")
     p.add_argument("--backend", choices=["local", "ray"], default="local",
                    help="local process pool, or a Ray cluster (optional extra: pip install -e .[ray])")
@@ -94,7 +109,7 @@ def _run(args: argparse.Namespace) -> int:
                        betas=sorted(set(args.betas)), strategies=list(dict.fromkeys(args.strategies)),
                        n_trials=args.trials, seeds=seeds, duration_s=args.duration, wearer=args.wearer,
                        config=TrainConfig(max_epochs=args.epochs), backend=args.backend, workers=args.workers,
-                       address=args.address, progress=not args.quiet, mode_names=MODE_NAMES)
+                       address=args.address, progress=not args.quiet, mode_names=MODE_NAMES, draws=args.draws)
     except RayMissing as exc:
         return _usage_error(str(exc))
     except ValueError as exc:
@@ -102,7 +117,7 @@ def _run(args: argparse.Namespace) -> int:
             return _usage_error(str(exc))
         raise CommandError(str(exc)) from None
     result = build_result(run["rows"], trials=run["trials"], seeds=seeds, duration_s=args.duration,
-                          wearer=args.wearer, bundles=run["bundles"])
+                          wearer=args.wearer, bundles=run["bundles"], draws=args.draws)
     write_tune(result, out)
     for line in chance_sentences(result):
         print(line)

@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 
 from learning.atomic import atomic_open
 from mpcshare.experiments import Comparison
+from mpcshare.run_table import RUN_COLORS
 
 __all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "strict_json", "write_comparison"]
 
@@ -186,11 +187,16 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
 
 def _plot(comp: Comparison, path: Path) -> None:
     names = list(comp.strategies)
-    keys = (("tracking_rmse_m", "tracking RMS [mm]", 1e3), ("voluntary_effort", "effort: mean ‖θ‖ [rad]", 1.0),
-            ("conflict_share", "conflicts [%]", 100.0), ("reactive_share", "reactive share [%]", 100.0))
-    fig = Figure(figsize=(11, 3.2), constrained_layout=True)
+    keys = (("tracking_rmse_m", "tracking RMS [mm]", 1e3), ("line_ratio", "line ratio (< 1: beats mixing)", 1.0),
+            ("voluntary_effort", "effort: mean ‖θ‖ [rad]", 1.0), ("conflict_share", "conflicts [%]", 100.0),
+            ("reactive_share", "reactive share [%]", 100.0))
+    colors = [RUN_COLORS.get(n, "#4C72B0") for n in names]
+    fig = Figure(figsize=(14, 3.4), constrained_layout=True)
     for ax, (key, label, scale) in zip(fig.subplots(1, len(keys)), keys):
-        ax.bar(range(len(names)), [comp.strategies[n][key] * scale for n in names], color="#4C72B0")
+        vals = [np.nan if comp.strategies[n].get(key) is None else comp.strategies[n][key] * scale for n in names]
+        ax.bar(range(len(names)), vals, color=colors)
+        if key == "line_ratio":
+            ax.axhline(1.0, color="0.4", ls="--", lw=0.8)
         ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
         ax.set_title(label, fontsize=9)
     fig.savefig(path, dpi=110)

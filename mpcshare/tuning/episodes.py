@@ -1,7 +1,8 @@
 """The episodes of a closed-loop sweep: what each one is (:class:`EpisodeTask`), the plan of a
 sweep (:func:`plan_tasks`), and one episode run in any process (:func:`run_task`).
 
-A sweep over percentiles p (one bundle per K_p), β and strategies S ⊆ {gate, blend} runs on
+A sweep over percentiles p (one bundle per K_p), β and strategies S ⊆ the registry's tunable ones
+(:data:`mpcshare.run_table.TUNABLE`: ``gate``, ``paper_gate``, ``blend``) runs on
 held-out trials × paired seeds (for each seed every setting sees the same trial, torso sway
 and wearer noise: ``run_episode(seed=seed)``):
 
@@ -9,11 +10,13 @@ and wearer noise: ``run_episode(seed=seed)``):
   ``reactive`` (per K: the predictor differs) and ``oracle_preview`` (once: the true intent);
 * phase 2 — ``random_handover`` matched to each setting (``matched_to`` = S), from the
   setting's schedule on the same trial and seed (:func:`mpcshare.handover_runs.schedule_record`),
-  one draw seeded by (seed, trial, p, β, S).
+  ``draws`` draws (default :data:`mpcshare.run_table.RANDOM_DRAWS`), draw j seeded by (seed, trial,
+  p, β, S, j); the pair's placebo figure is the mean over its draws (:mod:`mpcshare.tuning.stats`).
 
 A row is a JSON-able dict: ``percentile``, ``beta``, ``strategy``, ``matched_to``, ``trial``,
-``seed``, the metrics of :mod:`sim.metrics` and :mod:`sim.task_metrics`; rows of a setting also
-hold its ``schedule`` record. :data:`TIMING_KEYS` depend on wall time, nothing else does.
+``seed``, ``draw`` (0 but for the placebo's draws), the metrics of :mod:`sim.metrics` and
+:mod:`sim.task_metrics`; rows of a setting also hold its ``schedule`` record. :data:`TIMING_KEYS`
+depend on wall time, nothing else does.
 """
 
 from __future__ import annotations
@@ -22,15 +25,16 @@ import functools
 from dataclasses import asdict, dataclass
 from typing import Any, Sequence
 
+from mpcshare.run_table import RANDOM_DRAWS, TUNABLE, strategy_code
+
 __all__ = ["BASELINES", "SETTING_STRATEGIES", "TIMING_KEYS", "EpisodeTask", "plan_tasks", "random_tasks",
            "run_task", "task_key"]
 
-#: Strategies that can be swept (each gets a matched ``random_handover``).
-SETTING_STRATEGIES: tuple[str, ...] = ("gate", "blend")
+#: Strategies that can be swept (each gets a matched ``random_handover``): the registry's tunable ones.
+SETTING_STRATEGIES: tuple[str, ...] = TUNABLE
 BASELINES: tuple[str, ...] = ("voluntary", "reactive", "oracle_preview", "random_handover")
 #: Row keys that depend on wall time (the same seeds give the same rows except these).
 TIMING_KEYS: tuple[str, ...] = ("step_p50_ms", "step_p99_ms", "realtime_factor")
-_CODES = {"gate": 1, "blend": 2}
 
 
 @dataclass(frozen=True)
@@ -50,12 +54,14 @@ class EpisodeTask:
     mode_names: tuple[str, ...] | None = None
     matched_to: str | None = None
     schedule: tuple[tuple[str, Any], ...] | None = None  # the matched setting's schedule record (items)
+    draw: int = 0  # the placebo's draw
 
 
 def task_key(row_or_task: Any) -> str:
-    """The identity of an episode in the sweep: strategy, matched_to, percentile, β, trial, seed."""
+    """The identity of an episode in the sweep: strategy, matched_to, percentile, β, trial, seed, draw."""
     get = row_or_task.get if isinstance(row_or_task, dict) else functools.partial(getattr, row_or_task)
-    return "|".join(str(get(k)) for k in ("strategy", "matched_to", "percentile", "beta", "trial", "seed"))
+    return "|".join(str(get(k, 0) if k == "draw" else get(k))
+                    for k in ("strategy", "matched_to", "percentile", "beta", "trial", "seed", "draw"))
 
 
 def plan_tasks(percentiles: Sequence[float], betas: Sequence[float], strategies: Sequence[str],
@@ -79,15 +85,18 @@ def plan_tasks(percentiles: Sequence[float], betas: Sequence[float], strategies:
     return tasks
 
 
-def random_tasks(setting_rows: Sequence[dict[str, Any]], tasks: Sequence[EpisodeTask]) -> list[EpisodeTask]:
-    """Phase 2: one ``random_handover`` per row of a setting, matched to it (module docstring)."""
+def random_tasks(setting_rows: Sequence[dict[str, Any]], tasks: Sequence[EpisodeTask],
+                 draws: int = RANDOM_DRAWS) -> list[EpisodeTask]:
+    """Phase 2: ``draws`` ``random_handover`` episodes per row of a setting, matched to it (module docstring)."""
+    if draws < 1:
+        raise ValueError(f"draws must be >= 1, got {draws!r}")
     by_key = {task_key(t): t for t in tasks}
     out = []
     for row in setting_rows:
         t = by_key[task_key(row)]
-        out.append(EpisodeTask("random_handover", t.percentile, t.beta, t.trial, t.seed, t.bundle_dir, t.data_path,
-                               t.duration_s, t.wearer, t.mode_names, matched_to=t.strategy,
-                               schedule=tuple(sorted(row["schedule"].items()))))
+        out += [EpisodeTask("random_handover", t.percentile, t.beta, t.trial, t.seed, t.bundle_dir, t.data_path,
+                            t.duration_s, t.wearer, t.mode_names, matched_to=t.strategy,
+                            schedule=tuple(sorted(row["schedule"].items())), draw=j) for j in range(draws)]
     return out
 
 
@@ -125,8 +134,8 @@ def run_task(task: EpisodeTask) -> dict[str, Any]:
         elif task.strategy == "random_handover":
             run = StrategyRun(task.strategy, "schedule")
             seed = [task.seed, task.trial, round(1000 * (task.percentile or 0)), round(1000 * (task.beta or 0)),
-                    _CODES[task.matched_to or "gate"]]
-            options["schedule"] = random_schedules_from(dict(task.schedule or ()), 1, seed)[0]
+                    strategy_code(task.matched_to or "gate")]
+            options["schedule"] = random_schedules_from(dict(task.schedule or ()), task.draw + 1, seed)[task.draw]
         beta = 0.5 if task.beta is None else task.beta
         episode, metrics = simulate_episode(_bundle(task.bundle_dir), demos, trial, run, options, beta=beta,
                                             duration_s=task.duration_s, seed=task.seed,
@@ -134,7 +143,7 @@ def run_task(task: EpisodeTask) -> dict[str, Any]:
     finally:
         torch.set_num_threads(threads)
     row = {k: v for k, v in asdict(task).items()
-           if k in ("percentile", "beta", "strategy", "matched_to", "trial", "seed")}
+           if k in ("percentile", "beta", "strategy", "matched_to", "trial", "seed", "draw")}
     row.update(metrics)
     if task.strategy in SETTING_STRATEGIES:
         row["schedule"] = schedule_record(episode)

@@ -3,8 +3,11 @@
 ``tune.json``: ``rows`` (one per episode: ``percentile``, ``beta``, ``strategy``,
 ``matched_to``, ``trial``, ``seed``, the metrics of ``comparison.json`` and the task metrics,
 and for gate/blend rows their ``schedule``), ``summary`` (setting → means with 95 %
-bootstrap CIs over trials × seeds), ``tests`` (gate/blend setting → ``vs_random_handover``:
-``p_value``, ``effect_m``, ``effect_ci95_m``, …), ``pareto`` (setting names),
+bootstrap CIs over trials × seeds, and ``line_ratio``: the mean RMS over the voluntary–reactive
+line at the mean effort, :mod:`mpcshare.line_ratio`), ``tests`` (setting of a tunable strategy →
+``vs_random_handover``: ``p_value``, ``p_holm`` (Holm-corrected across the settings),
+``effect_m``, ``effect_ci95_m``, ``draws_per_pair``, …), ``multiple_testing`` (the correction,
+its family size and level), ``draws`` (placebo draws per pair), ``pareto`` (setting names),
 ``recommended`` (the setting and its ``criterion``), ``trials``, ``seeds``, ``duration_s``,
 ``wearer``, ``bundles``, ``timing_keys`` (the row keys that depend on wall time).
 """
@@ -17,6 +20,7 @@ from typing import Any
 
 from learning.atomic import atomic_open
 from mpcshare.reports.comparison import strict_json
+from mpcshare.run_table import RUN_COLORS
 from mpcshare.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
 
 __all__ = ["baseline_sentence", "build_result", "chance_sentences", "tune_markdown", "write_tune"]
@@ -28,8 +32,12 @@ def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
 
     summary = summarise(rows)
     tests = gate_vs_random(rows)
-    return {"rows": rows, "summary": summary, "tests": tests, "pareto": pareto(summary),
-            "recommended": recommend(summary, tests), "timing_keys": list(TIMING_KEYS), **info}
+    m = sum(t["vs_random_handover"]["p_value"] is not None for t in tests.values())
+    correction = {"method": "Holm", "family": "the swept settings' tests against their matched random_handover",
+                  "m": m, "alpha": ALPHA_LEVEL}
+    return {"rows": rows, "summary": summary, "tests": tests, "multiple_testing": correction,
+            "pareto": pareto(summary), "recommended": recommend(summary, tests),
+            "timing_keys": list(TIMING_KEYS), **info}
 
 
 def _mm(x: Any) -> str:
@@ -47,11 +55,13 @@ def chance_sentences(result: dict[str, Any]) -> list[str]:
         v = t["vs_random_handover"]
         ci = v["effect_ci95_m"]
         ci_txt = f" (95 % CI {_mm(ci[0])} to {_mm(ci[1])} mm)" if ci else ""
+        holm = "" if v.get("p_holm") is None else f" (Holm-corrected across {v.get('m_settings')} settings: " \
+            f"{v['p_holm']:.3g})"
         if v["beats_random"]:
             out.append(f"{name} beats random hand-overs at the same share and count: {_mm(v['effect_m'])} mm lower "
-                       f"tracking RMS{ci_txt}, p = {v['p_value']:.3g} over {v['n_pairs']} trial x seed pairs.")
+                       f"tracking RMS{ci_txt}, p = {v['p_value']:.3g}{holm} over {v['n_pairs']} trial x seed pairs.")
         else:
-            p = "no test (no pair differs)" if v["p_value"] is None else f"p = {v['p_value']:.3g}"
+            p = "no test (no pair differs)" if v["p_value"] is None else f"p = {v['p_value']:.3g}{holm}"
             if v["p_value"] is not None and v["n_pairs"] and v["p_value"] <= 0.5 ** v["n_pairs"] * (1 + 1e-9):
                 p += f" (the smallest p that {v['n_pairs']} pairs allow: a claim needs more trials or --seeds)"
             forced = (f" In {v['n_forced']} of its {v['n_pairs']} episodes it handed over at most once, so the "
@@ -89,29 +99,36 @@ def baseline_sentence(result: dict[str, Any]) -> str | None:
 
 def tune_markdown(result: dict[str, Any]) -> str:
     """``tune.md``: the table, the Pareto set, the tests in words and the recommendation."""
+    mt = result.get("multiple_testing") or {}
     lines = ["# Closed-loop sweep (`mpcshare tune`)", "",
              f"Held-out trials {result.get('trials')}, seeds {result.get('seeds')}, "
              f"{result.get('duration_s') or 'whole'} s each, wearer {result.get('wearer')}. "
-             "Means over trials x seeds with 95 % bootstrap CIs.", "",
-             "| setting | n | tracking RMS [mm] (CI) | effort [rad] (CI) | robot share | hand-overs "
-             "| vs random: effect [mm] | p |", "|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "Means over trials x seeds with 95 % bootstrap CIs. Line ratio: the tracking RMS over the straight "
+             "line from `reactive` (same percentile) to `voluntary` at the same effort (below 1: better than "
+             "mixing the two parties). The placebo of each pair is the mean of "
+             f"{result.get('draws', '–')} random_handover draws; p is one-sided, paired, and p (Holm) corrected "
+             f"by {mt.get('method', 'Holm')}'s method across the {mt.get('m', '–')} settings tested.", "",
+             "| setting | n | tracking RMS [mm] (CI) | line ratio | effort [rad] (CI) | robot share | hand-overs "
+             "| vs random: effect [mm] | p | p (Holm) |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for name, s in result["summary"].items():
         r, e = s["tracking_rmse_m"], s["voluntary_effort"]
         rci = f" ({_mm(r['ci95'][0])}–{_mm(r['ci95'][1])})" if r["ci95"] else ""
         eci = f" ({_num(e['ci95'][0])}–{_num(e['ci95'][1])})" if e["ci95"] else ""
         t = result["tests"].get(name, {}).get("vs_random_handover")
-        eff, p = (_mm(t["effect_m"]), _num(t["p_value"], ".3g")) if t else ("", "")
-        lines.append(f"| {name} | {s['n']} | {_mm(r['mean'])}{rci} | {_num(e['mean'])}{eci} "
-                     f"| {_num(s['reactive_share']['mean'], '.2f')} | {_num(s['handovers']['mean'], '.1f')} "
-                     f"| {eff} | {p} |")
+        eff, p, ph = (_mm(t["effect_m"]), _num(t["p_value"], ".3g"), _num(t.get("p_holm"), ".3g")) if t \
+            else ("", "", "")
+        lines.append(f"| {name} | {s['n']} | {_mm(r['mean'])}{rci} | {_num(s.get('line_ratio'), '.2f')} "
+                     f"| {_num(e['mean'])}{eci} | {_num(s['reactive_share']['mean'], '.2f')} "
+                     f"| {_num(s['handovers']['mean'], '.1f')} | {eff} | {p} | {ph} |")
     lines += ["", "**Pareto set** (realisable settings and baselines that no other beats on both error and "
               "effort; the upper bound and the placebo left out): "
               + ", ".join(result["pareto"]) + ".", "", "## Does the gate hand over at the right moments?", ""]
-    lines += [f"- {s}" for s in chance_sentences(result)] or ["- No gate or blend setting in this sweep."]
+    lines += [f"- {s}" for s in chance_sentences(result)] or ["- No swept setting in this sweep."]
     rec = result["recommended"]
     if rec:
         lines += ["", "## Recommendation", "",
-                  f"**{rec['setting']}**: tracking RMS {_mm(rec['tracking_rmse_m'])} mm, effort "
+                  f"**{rec['setting']}**: tracking RMS {_mm(rec['tracking_rmse_m'])} mm, line ratio "
+                  f"{_num(result['summary'][rec['setting']].get('line_ratio'), '.2f')}, effort "
                   f"{_num(rec['voluntary_effort'])} rad"
                   + ("." if rec["beats_random"] else "; no setting beats chance, so this is only the lowest error.")
                   + f" Criterion: {rec['criterion']}.", "", baseline_sentence(result) or "", ""]
@@ -124,8 +141,7 @@ def _plot(result: dict[str, Any], path: Path) -> None:
 
     fig = Figure(figsize=(7, 5), layout="constrained")
     ax = fig.add_subplot()
-    colors = {"gate": "C0", "blend": "C1", "random_handover": "C7", "voluntary": "C3", "reactive": "C2",
-              "oracle_preview": "C4"}
+    colors = RUN_COLORS
     pts = {n: (s["tracking_rmse_m"]["mean"], s["voluntary_effort"]["mean"], s["strategy"])
            for n, s in result["summary"].items()
            if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None}
@@ -135,7 +151,9 @@ def _plot(result: dict[str, Any], path: Path) -> None:
         ax.scatter(1e3 * err, eff, color=colors.get(strat, "k"), marker=marker, zorder=3,
                    **(edged if marker == "o" else {}))
         if name in result["pareto"] or strat in ("voluntary", "oracle_preview"):  # the rest by colour and legend
-            ax.annotate(name, (1e3 * err, eff), fontsize=6, xytext=(3, 3), textcoords="offset points")
+            lr = result["summary"][name].get("line_ratio")
+            label = name if lr is None or strat in ("voluntary", "reactive") else f"{name} ({lr:.2f})"
+            ax.annotate(label, (1e3 * err, eff), fontsize=6, xytext=(3, 3), textcoords="offset points")
     vol = [v for v in pts.values() if v[2] == "voluntary"]
     for err, eff, _ in (v for v in pts.values() if v[2] == "reactive"):
         for ve, vf, _ in vol:
@@ -147,7 +165,8 @@ def _plot(result: dict[str, Any], path: Path) -> None:
                for k in shown], shown, fontsize=7, loc="best")
     ax.set_xlabel("tracking RMS [mm]")
     ax.set_ylabel("voluntary effort [rad]")
-    ax.set_title("effort against error (dashed: voluntary to reactive; edged and named: Pareto set)", fontsize=9)
+    ax.set_title("effort against error (dashed: the voluntary-reactive line; edged and named: Pareto set, with its "
+                 "line ratio)", fontsize=9)
     fig.savefig(path, dpi=120)
 
 

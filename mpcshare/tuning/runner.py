@@ -22,6 +22,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
+from mpcshare.run_table import RANDOM_DRAWS
 from mpcshare.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
 
 __all__ = ["BACKENDS", "RayMissing", "open_backend", "run_tune"]
@@ -128,8 +129,9 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
              strategies: Sequence[str], n_trials: int, seeds: Sequence[int], duration_s: float | None,
              wearer: str, config: Any = None, backend: str = "local", workers: int = 1,
              address: str | None = None, progress: bool = True, mode_names: Sequence[str] | None = None,
-             log: Callable[[str], None] | None = print) -> dict[str, Any]:
-    """Run the sweep (module docstring); returns ``{"rows": [...], "trials": [...], "bundles": {...}}``.
+             log: Callable[[str], None] | None = print, draws: int = RANDOM_DRAWS) -> dict[str, Any]:
+    """Run the sweep (module docstring; ``draws`` placebo episodes per setting episode); returns
+    ``{"rows": [...], "trials": [...], "bundles": {...}}``.
 
     Raises ValueError when the data has fewer held-out trials than ``n_trials``.
     """
@@ -141,7 +143,7 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     config = config or TrainConfig()
     signature = {"data": str(Path(data_path).resolve()), "percentiles": list(percentiles), "betas": list(betas),
                  "strategies": list(strategies), "trials": n_trials, "seeds": list(seeds),
-                 "duration_s": duration_s, "wearer": wearer, "config": config.to_dict()}
+                 "duration_s": duration_s, "wearer": wearer, "config": config.to_dict(), "draws": draws}
     demos = load(data_path)
     _, held = split_by_trial(demos, config.heldout_fraction, seed=config.seed)  # the split training makes
     heldout = [int(t) for t in held.trial_ids]
@@ -153,7 +155,7 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     bundles = _bundles(demos, config, percentiles, out, progress)
     tasks = plan_tasks(percentiles, betas, strategies, trials, seeds, bundles, str(Path(data_path).resolve()),
                        duration_s, wearer, mode_names)
-    n_total = len(tasks) + sum(t.strategy in strategies for t in tasks)  # phase 2: one per setting episode
+    n_total = len(tasks) + draws * sum(t.strategy in strategies for t in tasks)  # phase 2: draws per setting episode
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -171,7 +173,7 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     try:
         run(tasks)
         settings = [store.rows[task_key(t)] for t in tasks if t.strategy in strategies]
-        phase2 = random_tasks(settings, tasks)
+        phase2 = random_tasks(settings, tasks, draws)
         run(phase2)
     finally:
         runner.close()

@@ -16,7 +16,7 @@ from mpcshare.tuning.stats import gate_vs_random, pareto, recommend, summarise
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 SWEEP = ["--percentiles", "90", "70", "--betas", "0", "1", "--strategies", "gate", "--trials", "1",
-         "--duration", "2", "--seeds", "2", "--epochs", "3", "--quiet"]
+         "--duration", "2", "--seeds", "2", "--draws", "2", "--epochs", "3", "--quiet"]
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +40,11 @@ def _comparable(rows):
 def test_tiny_sweep_writes_the_three_files_with_the_documented_keys(swept):
     result = json.loads((swept / "tune.json").read_text())
     assert {"rows", "summary", "tests", "recommended", "pareto"} <= set(result)
-    # 2 seeds x 1 trial x (voluntary + oracle_preview + 2 reactive + 2x2 gate + 2x2 random_handover)
-    assert len(result["rows"]) == 2 * (2 + 2 + 4 + 4)
+    # 2 seeds x 1 trial x (voluntary + oracle_preview + 2 reactive + 2x2 gate + 2x2x2 random_handover draws)
+    assert len(result["rows"]) == 2 * (2 + 2 + 4 + 8)
+    assert result["multiple_testing"]["method"] == "Holm" and result["multiple_testing"]["m"] >= 1
+    assert result["summary"]["voluntary"]["line_ratio"] == pytest.approx(1.0)
+    assert all(result["summary"][n]["line_ratio"] is not None for n in result["tests"])
     for r in result["rows"]:
         assert {"percentile", "beta", "strategy", "trial", "seed", "tracking_rmse_m", "voluntary_effort",
                 "saw_amplitude_ratio", "lag_s"} <= set(r)
@@ -51,11 +54,12 @@ def test_tiny_sweep_writes_the_three_files_with_the_documented_keys(swept):
     for t in result["tests"].values():
         (key,) = t
         assert "random" in key and {"p_value", "effect_m", "effect_ci95_m"} <= set(t[key])
-        assert t[key]["n_pairs"] == 2
+        assert t[key]["n_pairs"] == 2 and t[key]["draws_per_pair"] == [2] and "p_holm" in t[key]
     assert "criterion" in result["recommended"] and result["recommended"]["setting"] in result["tests"]
     assert result["summary"]["voluntary"]["tracking_rmse_m"]["ci95"] is not None
     md = (swept / "tune.md").read_text()
     assert "Pareto set" in md and "Recommendation" in md and ("beats" in md or "does not beat chance" in md)
+    assert "line ratio" in md and "Holm" in md
     assert (swept / "pareto.png").stat().st_size > 1000
     bundle = json.loads((swept / "bundles" / "p90" / "bundle.json").read_text())
     assert result["trials"] == bundle["heldout_trials"][:1]  # held-out trials of the bundles
@@ -121,6 +125,27 @@ def test_gate_against_random_is_a_paired_one_sided_test():
     assert rec["setting"] == "gate p90 b0.5" and rec["beats_random"] is False and "criterion" in rec
 
 
+def test_holm_and_the_placebo_as_the_mean_of_its_draws():
+    from mpcshare.tuning.stats import holm
+
+    assert holm([0.01, 0.04, 0.03, None]) == pytest.approx([0.03, 0.06, 0.06, None], nan_ok=True)
+    rng = np.random.default_rng(2)
+    gate_err = rng.uniform(0.01, 0.03, 10)
+    rows = []
+    for i, g in enumerate(gate_err):  # two draws per pair: one 1 mm worse than the gate, one 3 mm
+        rows += [_row("gate", i % 2, i // 2, g)]
+        rows += [dict(_row("random_handover", i % 2, i // 2, g + d, "gate"), draw=j)
+                 for j, d in enumerate((1e-3, 3e-3))]
+    rows += [_row("blend", i % 2, i // 2, g + 1e-3) for i, g in enumerate(gate_err)]
+    rows += [_row("random_handover", i % 2, i // 2, g, "blend") for i, g in enumerate(gate_err)]
+    tests = gate_vs_random(rows)
+    t = tests["gate p90 b0.5"]["vs_random_handover"]
+    assert t["effect_m"] == pytest.approx(2e-3) and t["draws_per_pair"] == [1, 2]
+    assert t["p_value"] == pytest.approx(0.5 ** 10) and t["p_holm"] == pytest.approx(2 * 0.5 ** 10)
+    assert t["p_holm"] < 0.01 and t["beats_random"]
+    assert not tests["blend p90 b0.5"]["vs_random_handover"]["beats_random"]
+
+
 def test_pareto_keeps_the_settings_nothing_beats_on_both():
     rows = [_row("voluntary", 0, 0, 0.030, effort=0.5), _row("reactive", 0, 0, 0.010, effort=0.05),
             _row("gate", 0, 0, 0.020, effort=0.2), _row("blend", 0, 0, 0.012, effort=0.04)]
@@ -136,9 +161,11 @@ def test_plan_pairs_every_setting_with_the_same_trials_and_seeds():
     settings = [t for t in tasks if t.strategy in ("gate", "blend")]
     rows = [{"strategy": t.strategy, "matched_to": None, "percentile": t.percentile, "beta": t.beta,
              "trial": t.trial, "seed": t.seed, "schedule": {"steps": 10}} for t in settings]
-    rand = random_tasks(rows, tasks)
+    rand = random_tasks(rows, tasks, 1)
     assert [(t.matched_to, t.percentile, t.beta, t.trial, t.seed) for t in rand] == \
         [(t.strategy, t.percentile, t.beta, t.trial, t.seed) for t in settings]
+    five = random_tasks(rows, tasks)  # the default: 5 draws per setting episode, each its own task
+    assert len(five) == 5 * len(settings) and len({task_key(t) for t in five}) == len(five)
 
 
 @pytest.mark.parametrize("args, needle", [

@@ -1,0 +1,167 @@
+"""Shared control on many worlds: the randomised family and the project's data kinds (issue 28).
+
+For each world — ``family:<seed>`` (:mod:`sim.world_family`) and the data kinds of
+``benchmarks/bench_task.py`` (``default``, ``other_seed``, ``other_structure``) — train a bundle
+with the defaults a user gets (:class:`mpcshare.training.config.TrainConfig`; ``--quick``: at most
+20 LSTM epochs), then simulate on its held-out *whole* trials (``--quick``: the first 30 s of 2)
+with the default wearer, for each of ``--seeds`` sim seeds: ``voluntary``, ``reactive``, the
+constant mixtures ``mix25``/``mix50``/``mix75``, ``paper_gate``, ``gate``, ``blend``,
+``random_handover`` (matched to ``gate``, mean of 5 draws) and ``oracle_handover`` (best replay,
+an upper bound). Per world it prints one JSON line (``"world"``): per run the tracking RMS [mm],
+the effort [rad], the line ratio (:mod:`mpcshare.line_ratio`), the stroke-band correlation while
+cutting, the robot's share and the limit violations; ``best_mix`` (the constant α with the lowest
+RMS); one-sided paired Wilcoxon p-values over (trial, seed) pairs of ``gate`` against
+``random_handover``, ``paper_gate`` and the best mixture; and what the oracle guarantees. At the
+end one JSON object: every world, and the distribution over the family's worlds and over all
+(median, min, max, share ≤ 0.9 and ≤ 0.8 of the line ratios; effort against ``voluntary``).
+
+Worlds run in parallel processes (``--workers``; each single-threaded). Sizes: family worlds
+12 trials × 60 s (``--quick``: 8 × 40 s), 25 % of the trials held out (the default split).
+
+Usage: ``python benchmarks/bench_family.py [--worlds 0 1 2 ...] [--kinds default other_seed
+other_structure] [--workers 2] [--seeds 1] [--quick]``; ``--worlds`` with no value and
+``--kinds`` with no value leave that part out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import stats as st
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+MIXES = ("mix25", "mix50", "mix75")
+RUNS = ("voluntary", "reactive", *MIXES, "paper_gate", "gate", "blend", "random_handover", "oracle_handover")
+FIGURES = {"tracking_rmse_m": ("rms_mm", 1e3), "voluntary_effort": ("effort_rad", 1.0),
+           "line_ratio": ("line_ratio", 1.0), "saw_correlation": ("stroke_correlation", 1.0),
+           "reactive_share": ("robot_share", 1.0), "limit_violations": ("limit_violations", 1)}
+
+
+def _data(world: str, quick: bool) -> tuple[Any, tuple[str, ...], dict[str, Any]]:
+    """(demonstrations, mode names, description) of ``family:<seed>`` or a bench_task data kind."""
+    if world.startswith("family:"):
+        from sim.world_family import world_demonstrations
+
+        demos, spec = world_demonstrations(int(world.split(":")[1]), n_trials=8 if quick else 12,
+                                           trial_s=40.0 if quick else 60.0)
+        info = {"kinds": list(spec.kinds), "stroke_hz": spec.stroke_hz, "stroke_amp_mm": 1e3 * spec.stroke_amp_m,
+                "knife_delay_s": spec.knife_delay_s, "act_noise_mm": 1e3 * spec.act_noise_m}
+        return demos, spec.mode_names, info
+    from bench_task import make_data
+
+    from sim.demonstrator import MODE_NAMES
+
+    return make_data(world), MODE_NAMES, {}
+
+
+def _one_sided(a: list[float], b: list[float]) -> dict[str, Any]:
+    """Wilcoxon signed-rank of H1: a < b, paired (exact for small n); p None without a differing pair."""
+    d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
+    p = float(st.wilcoxon(d, alternative="greater").pvalue) if d.size and np.any(d != 0) else None
+    return {"p": p, "n_pairs": int(d.size), "mean_difference_mm": float(1e3 * d.mean()) if d.size else None}
+
+
+def run_world(world: str, quick: bool, seeds: int) -> dict[str, Any]:
+    """Train on the world, simulate every run on its held-out trials, summarise (module docstring)."""
+    import torch
+
+    torch.set_num_threads(1)
+    from mpcshare.experiments import compare_strategies
+    from mpcshare.run_table import DEFAULT_RUNS
+    from mpcshare.training import train_bundle
+    from mpcshare.training.config import TrainConfig
+
+    t0 = time.perf_counter()
+    demos, mode_names, info = _data(world, quick)
+    bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
+    t_train = time.perf_counter() - t0
+    trials = list(bundle.heldout_trials[:2] if quick else bundle.heldout_trials)
+    runs = [r for r in DEFAULT_RUNS if r.name in RUNS]
+    per_pair: dict[str, list[float]] = {r: [] for r in RUNS}
+    pooled: dict[str, dict[str, Any]] = {}
+    for seed in range(seeds):
+        comp = compare_strategies(bundle, demos, trials, runs=runs, duration_s=30.0 if quick else None, seed=seed,
+                                  log=None, mode_names=mode_names)
+        for name in RUNS:
+            per_pair[name] += [comp.per_trial[name][str(t)]["tracking_rmse_m"] for t in trials]
+        if seed == 0:
+            pooled = comp.strategies
+    out = {name: {k2: (None if pooled[name].get(k) is None else pooled[name][k] * s) for k, (k2, s) in FIGURES.items()}
+           for name in RUNS}
+    best_mix = min(MIXES, key=lambda m: pooled[m]["tracking_rmse_m"])
+    better = min(pooled["voluntary"]["tracking_rmse_m"], pooled["reactive"]["tracking_rmse_m"])
+    return {"world": world, "data": info, "trials": trials, "seeds": seeds, "quick": quick, "runs": out,
+            "best_mix": best_mix, "p_values": {
+                "gate_below_random_handover": _one_sided(per_pair["gate"], per_pair["random_handover"]),
+                "gate_below_paper_gate": _one_sided(per_pair["gate"], per_pair["paper_gate"]),
+                "gate_below_best_mix": _one_sided(per_pair["gate"], per_pair[best_mix])},
+            "oracle_over_better_party": pooled["oracle_handover"]["tracking_rmse_m"] / better,
+            "gate_effort_over_voluntary": pooled["gate"]["voluntary_effort"] / pooled["voluntary"]["voluntary_effort"],
+            "train_s": t_train, "seconds": time.perf_counter() - t0,
+            "figures_of": "seed 0 pooled over the trials; p-values over (trial, seed) pairs"}
+
+
+def distribution(results: list[dict[str, Any]]) -> dict[str, Any]:
+    """Median, min, max and the shares ≤ 0.9 and ≤ 0.8 of the line ratios over ``results``."""
+    out: dict[str, Any] = {"n_worlds": len(results)}
+    for name in ("gate", "paper_gate", "blend", "best_mix", "random_handover", "oracle_handover"):
+        v = np.array([r["runs"][r["best_mix"] if name == "best_mix" else name]["line_ratio"] for r in results
+                      if r["runs"][r["best_mix"] if name == "best_mix" else name]["line_ratio"] is not None])
+        if v.size:
+            out[f"{name}_line_ratio"] = {"median": float(np.median(v)), "min": float(v.min()),
+                                         "max": float(v.max()), "share_le_0.9": float(np.mean(v <= 0.9)),
+                                         "share_le_0.8": float(np.mean(v <= 0.8))}
+    e = np.array([r["gate_effort_over_voluntary"] for r in results])
+    o = np.array([r["oracle_over_better_party"] for r in results])
+    if e.size:
+        out["gate_effort_over_voluntary"] = {"median": float(np.median(e)), "max": float(e.max())}
+        out["oracle_over_better_party_max"] = float(o.max())
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--worlds", type=int, nargs="*", default=None, help="family seeds (default 0..9; quick 0..2)")
+    p.add_argument("--kinds", nargs="*", default=["default", "other_seed", "other_structure"],
+                   choices=["default", "other_seed", "other_structure"])
+    p.add_argument("--workers", type=int, default=2, help="worlds in parallel processes (default 2)")
+    p.add_argument("--seeds", type=int, default=1, help="sim seeds per trial (pairs = held-out trials x seeds)")
+    p.add_argument("--quick", action="store_true", help="smaller worlds, at most 20 epochs, 2 trials x 30 s")
+    p.add_argument("--out", help="also write the final JSON object to this file")
+    a = p.parse_args(argv)
+    seeds = list(range(3 if a.quick else 10)) if a.worlds is None else a.worlds
+    worlds = [f"family:{s}" for s in seeds] + list(a.kinds)
+    t0 = time.perf_counter()
+    results = []
+    ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
+    with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=ctx) as pool:
+        futures = {pool.submit(run_world, w, a.quick, a.seeds): w for w in worlds}
+        for fut in as_completed(futures):
+            r = fut.result()
+            results.append(r)
+            print(json.dumps(r, default=float), flush=True)
+    results.sort(key=lambda r: worlds.index(r["world"]))
+    family = [r for r in results if r["world"].startswith("family:")]
+    final = {"worlds": results, "distribution": {"family": distribution(family), "all": distribution(results)},
+             "settings": {"quick": a.quick, "seeds": a.seeds, "workers": a.workers,
+                          "train": "TrainConfig() defaults" + (", max_epochs 20" if a.quick else ""),
+                          "sim": "2 held-out trials x 30 s" if a.quick else "every held-out trial, whole"},
+             "seconds": time.perf_counter() - t0}
+    text = json.dumps(final, indent=1, default=float)
+    if a.out:
+        Path(a.out).write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
