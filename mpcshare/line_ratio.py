@@ -8,12 +8,16 @@ a shared strategy is worth having where it lies *below* it. At a strategy's effo
     line_ratio = ε_s / ε_line(e_s)
 
 so ``line_ratio`` < 1 is better than mixing the parties at the same effort, and the two
-parties themselves are at 1. **Outside the segment's effort range** the line is held at its
-end: a strategy with less effort than ``reactive`` is compared with ``reactive``'s RMS, one
-with more effort than ``voluntary`` with ``voluntary``'s (the parties' own figures; no
-extrapolation, which could reach zero or negative RMS). Where the parties' efforts are equal
-(|e_v − e_r| ≤ 1e-12) the line is the better party's RMS, min(ε_r, ε_v). None where a figure
-is missing or not finite, or ε_line ≤ 0.
+parties themselves are at 1. **Outside the segment's effort range** it is never extrapolated
+(which could reach zero or negative RMS): a strategy with *less* effort than both parties is
+compared with the RMS of the party of least effort (the line held at that end); one with *more*
+effort than both with the better party's RMS, min(ε_r, ε_v) (either party needs no more effort
+than it does). Usually ``reactive`` is the end of least effort and ``voluntary`` the better one,
+so this is the line held at its ends; where one party is better on both (e.g. the robot so
+poor that the wearer corrects it harder than leading alone) a run beyond both efforts is still
+compared with the better party, not with the worse end. Where the parties' efforts are equal
+(|e_v − e_r| ≤ 1e-12) the line is min(ε_r, ε_v). None where a figure is missing or not finite,
+or ε_line ≤ 0.
 """
 
 from __future__ import annotations
@@ -21,11 +25,8 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping
 
-__all__ = ["LINE_RATIO_DOC", "add_line_ratios", "line_ratio", "line_rms"]
+__all__ = ["add_line_ratios", "line_ratio", "line_rms"]
 
-LINE_RATIO_DOC = ("line ratio: tracking RMS over the straight line from `reactive` to `voluntary` in (effort, RMS) "
-                  "at the same effort, held at the line's ends outside its effort range (< 1: better than mixing "
-                  "the two parties)")
 
 
 def _finite(*xs: Any) -> bool:
@@ -38,6 +39,8 @@ def line_rms(effort: float, voluntary: tuple[float, float], reactive: tuple[floa
     if not _finite(effort, e_v, r_v, e_r, r_r):
         return None
     if abs(e_v - e_r) <= 1e-12:
+        return float(min(r_v, r_r))
+    if effort >= max(e_v, e_r):
         return float(min(r_v, r_r))
     t = min(max((effort - e_r) / (e_v - e_r), 0.0), 1.0)
     return float(r_r + t * (r_v - r_r))

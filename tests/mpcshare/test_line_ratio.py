@@ -16,6 +16,11 @@ def test_the_line_between_the_parties_and_its_ends():
     assert line_rms(0.0, VOL, REAC) == pytest.approx(0.010)  # less effort than reactive: held at reactive
     assert line_rms(0.2, VOL, REAC) == pytest.approx(0.008)  # more than voluntary: held at voluntary
     assert line_rms(0.03, (0.02, 0.008), (0.02, 0.010)) == pytest.approx(0.008)  # equal efforts: the better
+    # one party better on both (here the wearer: less effort and less error than the robot)
+    dominant, poor = (0.08, 0.003), (0.11, 0.036)
+    assert line_rms(0.095, dominant, poor) == pytest.approx(0.0195)  # on the segment: the line itself
+    assert line_rms(0.12, dominant, poor) == pytest.approx(0.003)  # beyond both efforts: the better party
+    assert line_rms(0.05, dominant, poor) == pytest.approx(0.003)  # below both: the end of least effort
     assert line_ratio(0.0045, 0.035, VOL, REAC) == pytest.approx(0.5)
     assert line_ratio(None, 0.035, VOL, REAC) is None
     assert line_ratio(0.01, float("nan"), VOL, REAC) is None
