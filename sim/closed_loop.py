@@ -7,7 +7,8 @@ Per control step k (t_k = k·T, T = 10 ms):
 2. the fork (mocap) is put at the demonstration's fork pose of sample k;
 3. the wearer (any :class:`sim.wearer_protocol.Wearer`; by default :mod:`sim.wearer`: their
    plan and the delayed tip error against the intent) gives the shoulder angles; the α of
-   the previous step's command is their cue of who leads (NaN before the first command or after a step without one);
+   the previous step's command is their cue of who leads (NaN before the first command or
+   after a step without one);
 4. ``controller.step(t_k, obs_k, voluntary, q, v, base_pose)`` (timed);
    a command that is not finite or not of shape (3,) makes the servo hold (status
    ``invalid_command``), an exception inside ``step`` likewise (``controller_error``):
