@@ -45,6 +45,7 @@ from mpcshare.bundle.files import (
     standardizer_to_json,
     write_json,
 )
+from mpcshare.errors import MpcshareError
 
 if TYPE_CHECKING:  # pragma: no cover - imported lazily (torch and sklearn are slow to import)
     from learning.gates.gate import ModeGates
@@ -62,7 +63,7 @@ BUNDLE_FILES: tuple[str, ...] = ("bundle.json", "metrics.json", "preprocessor.js
                                  "modes.joblib", "gates.joblib")
 
 
-class BundleError(ValueError):
+class BundleError(MpcshareError, ValueError):
     """A bundle that cannot be used; the message starts with the file that is wrong."""
 
     def __init__(self, path: str | os.PathLike, message: str) -> None:

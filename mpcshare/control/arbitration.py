@@ -42,6 +42,8 @@ from typing import Callable
 
 import numpy as np
 
+from mpcshare.errors import ControllerSetupError
+
 __all__ = ["SCHEDULE", "STRATEGIES", "Arbiter", "Decision", "Handover", "fuse", "reactive_velocity"]
 
 STRATEGIES: tuple[str, ...] = ("voluntary", "reactive", "gate", "blend")
@@ -73,10 +75,10 @@ def check_strategy(strategy: str, scheduled: bool = False) -> str:
     :data:`SCHEDULE` is valid too, and the only valid one)."""
     if scheduled:
         if strategy != SCHEDULE:
-            raise ValueError(f"a schedule is replayed by strategy {SCHEDULE!r}, got {strategy!r}")
+            raise ControllerSetupError(f"a schedule is replayed by strategy {SCHEDULE!r}, got {strategy!r}")
         return strategy
     if strategy not in STRATEGIES:
-        raise ValueError(f"unknown strategy {strategy!r}; valid choices: {', '.join(STRATEGIES)}")
+        raise ControllerSetupError(f"unknown strategy {strategy!r}; valid choices: {', '.join(STRATEGIES)}")
     return strategy
 
 
@@ -84,7 +86,7 @@ def check_beta(beta: float) -> float:
     """Return β as float or raise ValueError when it is not in [0, 1]."""
     b = float(beta)
     if not (math.isfinite(b) and 0.0 <= b <= 1.0):
-        raise ValueError(f"beta must be in [0, 1], got {beta!r}")
+        raise ControllerSetupError(f"beta must be in [0, 1], got {beta!r}")
     return b
 
 
@@ -108,26 +110,27 @@ class Arbiter:
                  blend_range: tuple[float, float] = (0.5, 0.9), handover_s: float = 0.0,
                  schedule: Callable[[float], float] | None = None) -> None:
         if (strategy == SCHEDULE) != (schedule is not None):
-            raise ValueError(f"strategy {SCHEDULE!r} needs a schedule and only it takes one, got strategy "
-                             f"{strategy!r} with schedule={schedule!r}")
+            raise ControllerSetupError(f"strategy {SCHEDULE!r} needs a schedule and only it takes one, got strategy "
+                                       f"{strategy!r} with schedule={schedule!r}")
         self.strategy = check_strategy(strategy, scheduled=schedule is not None)
         self.schedule = schedule
         self.beta = check_beta(beta)
         if not (0.0 <= off_threshold <= on_threshold <= 1.0):
-            raise ValueError(f"need 0 ≤ off_threshold ≤ on_threshold ≤ 1, got {off_threshold!r}, {on_threshold!r}")
+            raise ControllerSetupError(f"need 0 ≤ off_threshold ≤ on_threshold ≤ 1, got {off_threshold!r}, "
+                                       f"{on_threshold!r}")
         if not (math.isfinite(min_dwell_s) and min_dwell_s >= 0):
-            raise ValueError(f"min_dwell_s must be finite and ≥ 0, got {min_dwell_s!r}")
+            raise ControllerSetupError(f"min_dwell_s must be finite and ≥ 0, got {min_dwell_s!r}")
         p0, p1 = (float(x) for x in blend_range)
         if not 0.0 <= p0 < p1 <= 1.0:
-            raise ValueError(f"blend_range must satisfy 0 ≤ p0 < p1 ≤ 1, got {blend_range!r}")
+            raise ControllerSetupError(f"blend_range must satisfy 0 ≤ p0 < p1 ≤ 1, got {blend_range!r}")
         if math.isnan(novelty_threshold):
-            raise ValueError("novelty_threshold must not be NaN (use inf to disable)")
+            raise ControllerSetupError("novelty_threshold must not be NaN (use inf to disable)")
         self.novelty_threshold = float(novelty_threshold)
         self.on_threshold, self.off_threshold = float(on_threshold), float(off_threshold)
         self.min_dwell_s = float(min_dwell_s)
         self.blend_range = (p0, p1)
         if not (math.isfinite(handover_s) and handover_s >= 0):
-            raise ValueError(f"handover_s must be finite and ≥ 0, got {handover_s!r}")
+            raise ControllerSetupError(f"handover_s must be finite and ≥ 0, got {handover_s!r}")
         self.handover_s = float(handover_s)
         self.reset()
 

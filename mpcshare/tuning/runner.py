@@ -22,6 +22,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
+from mpcshare.errors import MpcshareError
 from mpcshare.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
 
 __all__ = ["BACKENDS", "RayMissing", "open_backend", "run_tune"]
@@ -29,7 +30,7 @@ __all__ = ["BACKENDS", "RayMissing", "open_backend", "run_tune"]
 BACKENDS: tuple[str, ...] = ("local", "ray")
 
 
-class RayMissing(ImportError):
+class RayMissing(MpcshareError, ImportError):
     """``--backend ray`` without Ray installed."""
 
 
