@@ -32,7 +32,7 @@ from mpcshare.commands.base import (
 from mpcshare.commands.data import format_summary
 from mpcshare.commands.sim import add_wearer_argument
 from mpcshare.training.config import TrainConfig
-from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
+from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 
 __all__ = ["DEMO_COMMAND"]
 
@@ -41,8 +41,10 @@ _STAGES = 6
 
 def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="mpcshare-out", help="output folder (default ./mpcshare-out)")
-    p.add_argument("--subjects", type=positive_int, default=3, help="subjects in the default data (default 3)")
-    p.add_argument("--minutes", type=positive_float, default=10.0, help="minutes per subject (default 10)")
+    p.add_argument("--subjects", type=positive_int, default=DEFAULT_SUBJECTS,
+                   help=f"subjects in the default data (default {DEFAULT_SUBJECTS})")
+    p.add_argument("--minutes", type=positive_float, default=DEFAULT_MINUTES,
+                   help=f"minutes per subject (default {DEFAULT_MINUTES:g})")
     p.add_argument("--data-seed", type=int, default=0, help="seed of the default data (default 0)")
     p.add_argument("--percentile", type=percentile, default=TrainConfig.percentile,
                    help=f"K at this percentile of the within-mode quotients (default {TrainConfig.percentile:g})")

@@ -27,6 +27,7 @@ from mpcshare.commands.base import (
     positive_int,
     prepare_output_folder,
 )
+from mpcshare.control.types import DEFAULT_BETA
 from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
@@ -55,7 +56,8 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--runs", nargs="+", choices=_RUN_NAMES, default=list(_RUN_NAMES),
                    help="strategies to simulate (default: all eight; random_handover replays the gate's share and "
                         "hand-overs at random times, oracle_handover the error-minimising schedule)")
-    p.add_argument("--beta", type=float, default=0.5, help="β while the robot acts (default 0.5)")
+    p.add_argument("--beta", type=float, default=DEFAULT_BETA,
+                   help=f"β while the robot acts (default {DEFAULT_BETA:g})")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
     p.add_argument("--video", action="store_true", help="render the gate on the first trial (offscreen OpenGL)")
     add_wearer_argument(p)

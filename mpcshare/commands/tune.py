@@ -48,12 +48,13 @@ def _beta(text: str) -> float:
 
 
 def _add_arguments(p: argparse.ArgumentParser) -> None:
-    from mpcshare.training.config import TrainConfig
+    from mpcshare.training.config import DEFAULT_PERCENTILES, TrainConfig
 
     p.add_argument("data", help=DATA_HELP)
     p.add_argument("--out", required=True, help="folder for tune.json, tune.md, pareto.png, the bundles and episodes")
-    p.add_argument("--percentiles", type=_percentile, nargs="+", default=[100.0, 90.0, 80.0, 70.0, 60.0, 50.0],
-                   help="K = these percentiles of the within-mode quotients, one bundle each (default 100 .. 50)")
+    p.add_argument("--percentiles", type=_percentile, nargs="+", default=list(DEFAULT_PERCENTILES),
+                   help=f"K = these percentiles of the within-mode quotients, one bundle each "
+                        f"(default {' '.join(f'{p:g}' for p in DEFAULT_PERCENTILES)})")
     p.add_argument("--betas", type=_beta, nargs="+", default=[0.0, 0.5, 1.0], help="β values (default 0 0.5 1)")
     p.add_argument("--strategies", nargs="+", choices=_STRATEGIES, default=list(_STRATEGIES),
                    help="strategies swept (default gate blend); each gets a matched random_handover")

@@ -42,6 +42,7 @@ from typing import Callable
 
 import numpy as np
 
+from mpcshare.control.types import DEFAULT_BETA, ControllerConfig
 from mpcshare.errors import ControllerSetupError
 
 __all__ = ["SCHEDULE", "STRATEGIES", "Arbiter", "Decision", "Handover", "fuse", "reactive_velocity"]
@@ -93,6 +94,8 @@ def check_beta(beta: float) -> float:
 class Arbiter:
     """α, β per step for one strategy (module docstring), with the hand-over log.
 
+    The defaults of the settings are :class:`~mpcshare.control.types.ControllerConfig`'s.
+
     Args:
         strategy: one of :data:`STRATEGIES`.
         beta: the user's β ∈ [0, 1] (weight of the wearer while the robot leads).
@@ -105,9 +108,12 @@ class Arbiter:
             (0: at once); β follows as 1 − α·(1 − β_user). The overrides still act at once.
     """
 
-    def __init__(self, strategy: str = "gate", beta: float = 0.5, *, novelty_threshold: float = math.inf,
-                 on_threshold: float = 0.6, off_threshold: float = 0.4, min_dwell_s: float = 0.5,
-                 blend_range: tuple[float, float] = (0.5, 0.9), handover_s: float = 0.0,
+    def __init__(self, strategy: str = "gate", beta: float = DEFAULT_BETA, *, novelty_threshold: float = math.inf,
+                 on_threshold: float = ControllerConfig.on_threshold,
+                 off_threshold: float = ControllerConfig.off_threshold,
+                 min_dwell_s: float = ControllerConfig.min_dwell_s,
+                 blend_range: tuple[float, float] = ControllerConfig.blend_range,
+                 handover_s: float = ControllerConfig.handover_s,
                  schedule: Callable[[float], float] | None = None) -> None:
         if (strategy == SCHEDULE) != (schedule is not None):
             raise ControllerSetupError(f"strategy {SCHEDULE!r} needs a schedule and only it takes one, got strategy "

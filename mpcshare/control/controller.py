@@ -62,7 +62,7 @@ from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
 from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc
-from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
+from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
 from mpcshare.errors import ControllerTypeError
 from robot.kinematics import ReachShell, TipKinematics
@@ -95,7 +95,7 @@ class SharedController:
     default_base_pose = DEFAULT_BASE_POSE
 
     def __init__(self, bundle: ModelBundle, *, robot: SuperLimbParams | None = None, strategy: str = "gate",
-                 beta: float = 0.5, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
+                 beta: float = DEFAULT_BETA, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
                  config: ControllerConfig | None = None, preview: TipTrajectory | None = None,
@@ -136,7 +136,7 @@ class SharedController:
 
     @classmethod
     def from_bundle(cls, folder_or_bundle: str | Path | ModelBundle, robot: SuperLimbParams | None = None,
-                    strategy: str = "gate", beta: float = 0.5, use_mpc: bool = False,
+                    strategy: str = "gate", beta: float = DEFAULT_BETA, use_mpc: bool = False,
                     shoulder: ShoulderMap | None = None,
                     **options) -> SharedController:
         """Controller from a bundle folder (``mpcshare.bundle.load_bundle``) or a loaded bundle.

@@ -11,7 +11,11 @@ from mpcshare.control.workspace import DEFAULT_WORKSPACE, WorkspaceBox
 from mpcshare.errors import ControllerSetupError
 from robot.qp import QPConfig
 
-__all__ = ["SMOOTHER_TARGETS", "STATUSES", "ControlCommand", "ControllerConfig"]
+__all__ = ["DEFAULT_BETA", "SMOOTHER_TARGETS", "STATUSES", "ControlCommand", "ControllerConfig"]
+
+#: The user's β ∈ [0, 1] (the wearer's weight while the robot leads) when none is given:
+#: ``SharedController``, ``Arbiter``, the experiments and ``mpcshare sim --beta`` read it here.
+DEFAULT_BETA: float = 0.5
 
 #: What the reference smoother aims at: the reference's position (moved ``smoother_lead_s``
 #: ahead along the fused velocity), or its whole state (position, velocity, acceleration).
