@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
-from learning.atomic import default_dir_mode
+from learning.atomic import default_dir_mode, write_json
 from learning.preprocessing.preprocess import Preprocessor
 from mpcshare.bundle.files import (
     file_sha256,
@@ -43,7 +43,6 @@ from mpcshare.bundle.files import (
     library_versions,
     standardizer_from_json,
     standardizer_to_json,
-    write_json,
 )
 from mpcshare.errors import MpcshareError
 
@@ -175,12 +174,13 @@ def _write_files(bundle: ModelBundle, tmp: Path) -> None:
         "predictor_config": bundle.predictor.get_config(),
         "config": bundle.config, "library_versions": library_versions(),
     }
-    write_json(info, tmp / "bundle.json")
-    write_json(bundle.metrics, tmp / "metrics.json")
+    write_json(info, tmp / "bundle.json", non_finite="raise", fsync=False)
+    write_json(bundle.metrics, tmp / "metrics.json", non_finite="raise", fsync=False)
     write_json({"obs": standardizer_to_json(bundle.preprocessor.obs),
                 "act": standardizer_to_json(bundle.preprocessor.act),
                 "target_hz": float(bundle.preprocessor.target_hz),
-                "window_s": float(bundle.preprocessor.window_s)}, tmp / "preprocessor.json")
+                "window_s": float(bundle.preprocessor.window_s)}, tmp / "preprocessor.json", non_finite="raise",
+               fsync=False)
     torch.save(bundle.predictor.state_dict(), tmp / "predictor.pt")
     joblib.dump(bundle.modes, tmp / "modes.joblib")
     joblib.dump(bundle.gates, tmp / "gates.joblib")
@@ -189,7 +189,7 @@ def _write_files(bundle: ModelBundle, tmp: Path) -> None:
         path = tmp / name
         fsync_path(path)
         files[name] = {"bytes": path.stat().st_size, "sha256": file_sha256(path)}
-    write_json({"format_version": FORMAT_VERSION, "files": files}, tmp / MANIFEST)
+    write_json({"format_version": FORMAT_VERSION, "files": files}, tmp / MANIFEST, non_finite="raise", fsync=False)
     fsync_path(tmp / MANIFEST)
     os.chmod(tmp, default_dir_mode())
     fsync_path(tmp)

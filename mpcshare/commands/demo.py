@@ -18,7 +18,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from learning.atomic import atomic_open
+from learning.atomic import atomic_open, write_json
 from learning.data import save
 from mpcshare.commands.analysis import add_analysis_arguments, print_headline, run_analysis
 from mpcshare.commands.base import (
@@ -70,7 +70,7 @@ def _stage(k: int, text: str) -> None:
 def _demo(args: argparse.Namespace) -> int:
     from mpcshare.bundle import load_bundle, save_bundle
     from mpcshare.experiments import compare_strategies, render_clip
-    from mpcshare.reports.analysis import plot_demonstrations, write_json_atomic
+    from mpcshare.reports.analysis import plot_demonstrations
     from mpcshare.reports.claims import mixture_advice
     from mpcshare.reports.comparison import write_comparison
     from mpcshare.reports.demo import write_demo_report
@@ -96,7 +96,7 @@ def _demo(args: argparse.Namespace) -> int:
     _stage(2, "summarising and plotting the data")
     summary = demos.summary()
     summary["mode_names"] = list(MODE_NAMES)
-    write_json_atomic(summary, out / "data_summary.json")
+    write_json(summary, out / "data_summary.json", non_finite="raise")
     summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, MODE_NAMES)
                   + "\n```\n\n![a trial](data_trial.png)\n")
     with atomic_open(out / "data_summary.md") as f:

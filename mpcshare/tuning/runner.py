@@ -22,6 +22,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
+from learning.atomic import write_json
 from mpcshare.errors import MpcshareError
 from mpcshare.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
 
@@ -104,7 +105,7 @@ class _Store:
                 self.rows[task_key(row)] = row
         else:
             self.path.write_text("")
-            args.write_text(json.dumps(signature, indent=1))
+            write_json(signature, args, indent=1)
 
     def add(self, row: dict[str, Any]) -> None:
         self.rows[task_key(row)] = row
