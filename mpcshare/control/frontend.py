@@ -15,7 +15,7 @@ Per control step (one raw sample of the fork, ``rate_hz``):
    standardiser, then the causal window of ``window_s`` RMS-normalised as
    ``learning.preprocessing.preprocess.causal_windows(..., rms=True)`` builds it:
    ``w_t = [o_t, o_{t−1}, …, o_{t−L+1}] / √L``.
-4. The :class:`learning.modes_online.ModeFilter` stepped on every standardised
+4. The :class:`learning.modes.ModeFilter` stepped on every standardised
    model-rate sample; novelty = −log p(o_t | o_<t) (``inf`` when the sample is
    impossible under every mode).
 
