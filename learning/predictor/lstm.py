@@ -103,7 +103,7 @@ def _masked_mse(out: torch.Tensor, y: torch.Tensor, w: torch.Tensor) -> torch.Te
 
 
 class ReactivePredictor(BaseEstimator):
-    """LSTM reactive predictor (module docstring).
+    """LSTM reactive predictor (module docstring); defaults in :mod:`learning.predictor.defaults`, with reasons.
 
     Args:
         hidden_size: LSTM units (paper: 28).
@@ -123,9 +123,6 @@ class ReactivePredictor(BaseEstimator):
             (0: the current action only, as Song & Asada's predictor).
         device: ``"cpu"`` (default), ``"cuda"`` or ``"auto"`` (CUDA when present).
 
-    The defaults are :mod:`learning.predictor.defaults` (with their reasons), the same as
-    ``mpcshare.training.TrainConfig``'s.
-
     Fitted attributes: ``input_dim_``, ``output_dim_``, ``net_`` (the torch module, on
     ``device_``), ``history_`` ({"train_loss", "val_loss"} per epoch), ``best_epoch_``,
     ``n_epochs_``, ``fit_time_s_``, ``val_trials_`` (indices used for validation, or
@@ -136,8 +133,8 @@ class ReactivePredictor(BaseEstimator):
                  chunk_len: int = D.CHUNK_LEN, burn_in: int = D.BURN_IN, learning_rate: float = D.LEARNING_RATE,
                  weight_decay: float = 0.0, grad_clip: float = 1.0, max_epochs: int = D.MAX_EPOCHS,
                  patience: int = D.PATIENCE, lr_patience: int = 5, val_fraction: float = D.VAL_FRACTION,
-                 num_threads: int | None = D.NUM_THREADS, seed: int = 0,
-                 device: str = "cpu", horizons: int = 0) -> None:
+                 num_threads: int | None = D.NUM_THREADS, seed: int = 0, device: str = "cpu",
+                 horizons: int = 0) -> None:
         self.hidden_size = hidden_size
         self.batch_size = batch_size
         self.chunk_len = chunk_len

@@ -280,6 +280,18 @@ def _check_names(path: Path, kind: str, have: Sequence[str], expect: Sequence[st
                                 f"{list(have)}, the data has {expect}")
 
 
+def _read_preprocessor(ppath: Path) -> Preprocessor:
+    """The two standardizers of ``preprocessor.json``, or a :class:`BundleError` naming the file."""
+    try:
+        p = _read_json(ppath)
+        return Preprocessor(obs=standardizer_from_json(p["obs"]), act=standardizer_from_json(p["act"]),
+                            target_hz=float(p["target_hz"]), window_s=float(p["window_s"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        if isinstance(exc, BundleError):
+            raise
+        raise BundleError(ppath, f"not a valid preprocessor ({exc!r})") from None
+
+
 def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | None = None,
                 expect_act_names: Sequence[str] | None = None) -> ModelBundle:
     """Read a bundle written by :func:`save_bundle`.
@@ -314,15 +326,7 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
     metrics = _read_json(root / "metrics.json")
 
     ppath = root / "preprocessor.json"
-    try:
-        p = _read_json(ppath)
-        pre = Preprocessor(obs=standardizer_from_json(p["obs"]), act=standardizer_from_json(p["act"]),
-                           target_hz=float(p["target_hz"]), window_s=float(p["window_s"]))
-    except (KeyError, TypeError, ValueError) as exc:
-        if isinstance(exc, BundleError):
-            raise
-        raise BundleError(ppath, f"not a valid preprocessor ({exc!r})") from None
-
+    pre = _read_preprocessor(ppath)
     loaded: dict[str, Any] = {}
     for name, cls in (("modes.joblib", TaskModes), ("gates.joblib", ModeGates)):
         try:
