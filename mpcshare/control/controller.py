@@ -87,9 +87,8 @@ def _finite(x: np.ndarray) -> bool:
 class SharedController:
     """Shared control of the SuperLimb's knife tip from a trained bundle (module docstring).
 
-    Build with :meth:`from_bundle`. Misuse at construction raises ``mpcshare.errors.ControllerSetupError``
-    (a ValueError; ``ControllerTypeError``, also a TypeError, for an argument of the wrong kind) naming what
-    is wrong (channels, strategy, β, shapes of the learned parts).
+    Build with :meth:`from_bundle`. Misuse at construction raises ``mpcshare.errors.ControllerSetupError`` (a
+    ValueError; ``ControllerTypeError``: also a TypeError) naming what is wrong (channels, strategy, β, shapes …).
     """
 
     default_base_pose = DEFAULT_BASE_POSE
@@ -108,8 +107,7 @@ class SharedController:
         self.shoulder = shoulder if shoulder is not None else ShoulderMap()
         self.params = robot if robot is not None else SuperLimbParams()
         if not isinstance(self.params, SuperLimbParams):
-            raise ControllerTypeError(f"robot must be a robot.superlimb.SuperLimbParams or None, "
-                                      f"got {type(robot).__name__}")
+            raise ControllerTypeError(f"robot must be a SuperLimbParams or None, got {type(robot).__name__}")
         self.dt = 1.0 / float(bundle.rate_hz)
         qp_cfg = cfg.qp if abs(cfg.qp.dt - self.dt) < 1e-12 else QPConfig(**{**cfg.qp.__dict__, "dt": self.dt})
         self.qp = QPController.for_superlimb(self.params, qp_cfg)
@@ -127,8 +125,7 @@ class SharedController:
                                handover_s=cfg.handover_s, schedule=schedule)
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
         if preview is not None and not callable(getattr(preview, "sample", None)):
-            raise ControllerTypeError(f"preview must be a TipTrajectory (sample(times) -> p, v, a), "
-                                      f"got {type(preview).__name__}")
+            raise ControllerTypeError(f"preview must be a TipTrajectory (sample(times)), got {type(preview).__name__}")
         self.oracle = preview is not None
         self.forecast: TipTrajectory = preview if preview is not None else \
             ForecastTrack(1.0 / float(bundle.model_hz), cfg.forecast_fade_s)
