@@ -5,7 +5,6 @@ from __future__ import annotations
 import ast
 import importlib
 from pathlib import Path
-from types import SimpleNamespace
 
 import pytest
 
@@ -58,18 +57,17 @@ def test_the_roots_are_distinct_and_errors_keep_their_builtin_bases():
     assert issubclass(ControllerTypeError, TypeError) and issubclass(ControllerTypeError, ControllerSetupError)
 
 
-def test_shared_controller_construction_misuse_raises_the_family():
+@pytest.mark.parametrize("options,error,match", [
+    ({"strategy": "nope"}, ControllerSetupError, "valid choices"),
+    ({"beta": 1.2}, ControllerSetupError, "beta must be in"),
+    ({"tip_channels": ("x",)}, ControllerSetupError, "must name 3 channels"),
+    ({"preview": object()}, ControllerTypeError, "preview must be"),
+])
+def test_shared_controller_construction_misuse_raises_the_family(options, error, match):
     from mpcshare.control.controller import SharedController
     from tests.mpcshare.control.controller_doubles import demos_and_bundle
 
     _, bundle = demos_and_bundle(0)
-    with pytest.raises(ControllerSetupError, match="valid choices"):
-        SharedController.from_bundle(bundle, strategy="nope", use_mpc=False)
-    with pytest.raises(ControllerSetupError, match="beta must be in"):
-        SharedController.from_bundle(bundle, beta=1.2, use_mpc=False)
-    with pytest.raises(ControllerSetupError, match="lacks field"):
-        SharedController.from_bundle(SimpleNamespace(obs_names=()), use_mpc=False)
-    with pytest.raises(ControllerTypeError, match="preview must be"):
-        SharedController.from_bundle(bundle, preview=object(), use_mpc=False)
-    with pytest.raises(MpcshareError):
-        SharedController.from_bundle(bundle, tip_channels=("x",), use_mpc=False)
+    with pytest.raises(error, match=match) as caught:
+        SharedController.from_bundle(bundle, use_mpc=False, **options)
+    assert isinstance(caught.value, MpcshareError) and isinstance(caught.value, (ValueError, TypeError))
