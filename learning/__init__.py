@@ -11,8 +11,10 @@
 - :mod:`learning.gates` — per-mode calibrated gates ``ModeGates`` and their scores.
 - :mod:`learning.predictor` — the LSTM reactive predictor ``ReactivePredictor``, its NumPy
   ``PredictorStream``, the ridge baseline, RMSE per channel group, sequence sets.
-- :mod:`learning.atomic`, :mod:`learning.torch_threads` — atomic writes; torch's thread count
-  scoped to a call.
+- :mod:`learning.atomic`, :mod:`learning.torch_threads` — atomic writes and the project's JSON
+  writer; torch's thread count scoped to a call.
+- :mod:`learning.errors` — :class:`~learning.errors.LearningError`, the root of the errors
+  ``learning`` raises.
 
 Imports only numpy, scipy, scikit-learn, threadpoolctl, hmmlearn, numba, torch and tqdm.
 """

@@ -1,4 +1,4 @@
-"""Atomic file writes: a temporary file in the target's folder, then a rename.
+"""Atomic file writes: a temporary file in the target's folder, then a rename; the project's JSON writer.
 
 A reader never sees a half-written file, and a failed write leaves the previous
 file (if any) untouched. The temporary file is created with ``os.open(...,
@@ -8,19 +8,28 @@ itself: the result has the permissions an ordinary ``open(path, "w")`` or
 ``mkdir`` would give, and the umask is never changed (changing it to read it
 would race with other threads). :mod:`tempfile` cannot be used for this: it
 creates files 0600 and folders 0700.
+
+:func:`write_json` is the one function that writes the project's JSON files (reports,
+comparisons, tune results, bundle files): atomic, strict JSON (no NaN), a final newline.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import secrets
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import IO
+from typing import IO, Any, Callable
 
-__all__ = ["atomic_open", "default_dir_mode", "default_file_mode", "make_temp_dir"]
+__all__ = ["NON_FINITE", "atomic_open", "default_dir_mode", "default_file_mode", "json_safe", "make_temp_dir",
+           "write_json"]
+
+#: what :func:`write_json` does with NaN and ±∞: write null, or refuse (ValueError)
+NON_FINITE: tuple[str, ...] = ("null", "raise")
 
 _ATTEMPTS = 100  # random names tried before giving up (a clash is ~2⁻⁴⁸ each)
 
@@ -107,3 +116,31 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", *, fsync: bool = True
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def json_safe(x: Any) -> Any:
+    """``x`` with every non-finite float (in dicts, lists and tuples, recursively) as None: strict JSON."""
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+def write_json(obj: Any, path: str | os.PathLike, *, indent: int | None = 2, non_finite: str = "null",
+               default: Callable[[Any], Any] | None = None, fsync: bool = True) -> None:
+    """Write ``obj`` to ``path`` as JSON with a final newline, atomically (:func:`atomic_open`).
+
+    ``non_finite`` (:data:`NON_FINITE`): ``"null"`` writes NaN and ±∞ floats as null (the
+    reports: an undefined figure), ``"raise"`` refuses them with a ValueError and leaves
+    ``path`` as it was (files whose numbers must all be there, e.g. a model bundle's).
+    ``default``: as :func:`json.dump`'s, for objects JSON does not know (None: TypeError).
+    """
+    if non_finite not in NON_FINITE:
+        raise ValueError(f"write_json: non_finite must be one of {NON_FINITE}, got {non_finite!r}")
+    data = json_safe(obj) if non_finite == "null" else obj
+    text = json.dumps(data, indent=indent, allow_nan=False, default=default)  # fails before the file is touched
+    with atomic_open(path, "w", fsync=fsync) as f:
+        f.write(text + "\n")

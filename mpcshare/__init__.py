@@ -6,10 +6,14 @@
   ``import mpcshare`` does not import torch or scikit-learn) and their files;
 - :mod:`mpcshare.training` — training a bundle, its settings, held-out evaluation, the K sweep;
 - :mod:`mpcshare.reports` — the analysis, comparison and demo reports and their plots;
-- :mod:`mpcshare.experiments` — closed-loop comparisons of strategies on held-out trials;
+- :mod:`mpcshare.experiments` — closed-loop comparisons of strategies on held-out trials, with
+  :mod:`mpcshare.handover_runs` (the replayed hand-over schedules) and :mod:`mpcshare.tuning`
+  (the ``tune`` sweep of K × β × strategy, local or on Ray);
+- :mod:`mpcshare.errors` — :class:`~mpcshare.errors.MpcshareError` and ``PROJECT_ERRORS``, the
+  roots of every error the project raises;
 - :mod:`mpcshare.cli` and :mod:`mpcshare.commands` — the ``mpcshare`` command line (registry
   :data:`mpcshare.cli.COMMANDS`; subcommands ``generate``, ``inspect``, ``analyze``, ``train``,
-  ``sim``, ``demo``).
+  ``sim``, ``tune``, ``demo``, ``import``).
 
 The MPC is the robot's (:mod:`robot.mpc`), the learning is :mod:`learning`'s and the world is
 :mod:`sim`'s. ``python -m mpcshare`` runs the command line. Design: ``docs/design.md``.

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
+from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedules, random_handover_schedules
 from mpcshare.line_ratio import add_line_ratios
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
@@ -188,7 +189,7 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
 
 def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Sequence[int], *,
                        runs: Sequence[StrategyRun] = DEFAULT_RUNS, duration_s: float | None = None,
-                       out: str | Path | None = None, seed: int = 0, beta: float = 0.5,
+                       out: str | Path | None = None, seed: int = 0, beta: float = DEFAULT_BETA,
                        make_controller: Callable[..., Any] | None = None,
                        log: Callable[[str], None] | None = print,
                        mode_names: Sequence[str] | None = None, mcap: bool = False,
@@ -318,7 +319,7 @@ def describe_wearer(wearer: WearerConfig | None) -> dict[str, Any]:
 
 
 def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
-                strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = 0.5,
+                strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = DEFAULT_BETA,
                 make_controller: Callable[..., Any] | None = None,
                 wearer: WearerConfig | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).

@@ -1,9 +1,21 @@
-"""Typed exceptions raised when the controller is misconfigured (never inside the loop)."""
+"""Typed exceptions raised when the controller is misconfigured (never inside the loop).
+
+:class:`RobotError` is the root of the errors ``robot`` raises on purpose: ``robot`` imports
+no other package of the project (tests/test_layering.py), so it has its own root, like
+``learning.errors.LearningError`` and ``sim.errors.SimError``; ``mpcshare.errors.PROJECT_ERRORS``
+catches all of them (docs/design.md, "Errors").
+"""
 
 from __future__ import annotations
 
+__all__ = ["ControllerConfigError", "FrameNotFoundError", "RobotError", "UnsupportedModelError"]
 
-class ControllerConfigError(ValueError):
+
+class RobotError(Exception):
+    """Root of the robot stack's errors (descriptions, QP, MPC)."""
+
+
+class ControllerConfigError(RobotError, ValueError):
     """Invalid controller configuration: shapes, limits, gains, solver name."""
 
 

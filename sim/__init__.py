@@ -1,13 +1,19 @@
 """Simulation: the world around the controller.
 
-- :mod:`sim.demonstrator` — synthetic bimanual-eating demonstrations.
+- :mod:`sim.demonstrator` — synthetic bimanual-eating demonstrations (the default data);
+  :mod:`sim.regime_free` and :mod:`sim.hidden_regime` — data without hidden modes and with
+  weakly cued ones, for calibrating the analysis.
 - :mod:`sim.scene` — the MuJoCo scene (swaying torso with the SuperLimb, table, plate, food, fork).
 - :mod:`sim.servo` — the joint servo at the physics rate, limits held in MuJoCo.
-- :mod:`sim.wearer` — the simulated wearer (their own plan when leading, delayed corrections);
-  :mod:`sim.wearer_presets` — its presets from the literature (unimpaired, mild and severe hemiparesis).
+- :mod:`sim.wearer_protocol` — what the closed loop needs from a wearer (:class:`~sim.wearer_protocol.Wearer`,
+  a factory of one); :mod:`sim.wearer` — the simulated wearer (their own plan when leading, delayed
+  corrections); :mod:`sim.wearer_presets` — its presets from the literature (unimpaired, mild and
+  severe hemiparesis).
 - :mod:`sim.closed_loop` — ``run_episode``; :mod:`sim.episode` — its record and run file;
-  :mod:`sim.metrics` — episode metrics.
+  :mod:`sim.metrics` — episode metrics; :mod:`sim.task_metrics` — lag, sawing and the share per mode;
+  :mod:`sim.run_mcap` — a run as MCAP for Foxglove.
 - :mod:`sim.render` — offscreen video.
+- :mod:`sim.errors` — :class:`~sim.errors.SimError`, the root of the errors ``sim`` raises.
 
 ``sim`` imports ``learning`` and ``robot``, never ``mpcshare``: the command line
 that runs it (``mpcshare generate``, ``mpcshare sim``, ``mpcshare demo``) lives in

@@ -5,9 +5,10 @@ Per control step k (t_k = k·T, T = 10 ms):
 1. the torso is put at its sway pose, ``mj_step1`` gives the kinematics of the
    state (q, v); the knife tip p(t_k) and the base pose ``T_plate_torso`` are read;
 2. the fork (mocap) is put at the demonstration's fork pose of sample k;
-3. the wearer (:mod:`sim.wearer`) turns their plan and the delayed tip error against the
-   intent into shoulder angles; the α of the previous step's command is their cue of who
-   leads (NaN before the first command or after a step without one);
+3. the wearer (any :class:`sim.wearer_protocol.Wearer`; by default :mod:`sim.wearer`: their
+   plan and the delayed tip error against the intent) gives the shoulder angles; the α of
+   the previous step's command is their cue of who leads (NaN before the first command or
+   after a step without one);
 4. ``controller.step(t_k, obs_k, voluntary, q, v, base_pose)`` (timed);
    a command that is not finite or not of shape (3,) makes the servo hold (status
    ``invalid_command``), an exception inside ``step`` likewise (``controller_error``):
@@ -43,8 +44,8 @@ from robot.kinematics import ArmGeometry, nearest_reachable_q
 from sim.episode import Episode
 from sim.scene import EatingScene, SceneConfig
 from sim.servo import JointServo, ServoConfig
-from sim.wearer import SimulatedWearer, WearerConfig
-from sim.wearer_presets import wearer_preset_name
+from sim.wearer_presets import DEFAULT_WEARER
+from sim.wearer_protocol import Wearer, WearerFactory, make_wearer
 
 __all__ = ["FORK_CHANNELS", "LIMIT_TOL", "TIP_CHANNELS", "TORQUE_TOL", "Controller", "Episode", "run_episode"]
 
@@ -92,13 +93,11 @@ class _Loop:
     :meth:`physics_period` (item 5); hooks (video, progress) run after each period.
     """
 
-    def __init__(self, controller: Controller, trial: Trial, sc: SceneConfig, wc: WearerConfig,
-                 servo: ServoConfig | None, seed: int, n_ctrl: int, fork_cols: list[int], intent_raw: np.ndarray,
-                 record: bool) -> None:
-        self.controller, self.trial, self.sc, self.wc, self.fork_cols = controller, trial, sc, wc, fork_cols
+    def __init__(self, controller: Controller, trial: Trial, sc: SceneConfig, person: Wearer,
+                 servo: ServoConfig | None, seed: int, n_ctrl: int, fork_cols: list[int], record: bool) -> None:
+        self.controller, self.trial, self.sc, self.person, self.fork_cols = controller, trial, sc, person, fork_cols
         self.n_ctrl, self.record = n_ctrl, record
         self.world = EatingScene(sc, seed=seed)
-        self.person = SimulatedWearer(intent_raw, 1.0 / sc.control_period, wc, seed=seed)
         geom = ArmGeometry.from_params(sc.params)
         q0 = nearest_reachable_q(geom, self.world.plate_to_torso(self.world.base_pose(0.0),
                                                                   self.person.intent[0][None])[0])
@@ -194,7 +193,7 @@ class _Loop:
                 max(w["tau"], float(et.max()))
 
     def info(self, seed: int, wall: float, cpu: float) -> dict[str, Any]:
-        sc, wc, srv, w = self.sc, self.wc, self.servo, self.worst
+        sc, srv, w = self.sc, self.servo, self.worst
         return {
             "trial_id": self.trial.trial_id, "seed": seed, "duration_s": self.n_ctrl * sc.control_period,
             "control_period_s": sc.control_period, "physics_dt_s": sc.timestep, "wall_time_s": wall,
@@ -202,8 +201,7 @@ class _Loop:
             "limit_violations": self.violations, "max_q_excess_rad": w["q"], "max_v_excess_rad_s": w["v"],
             "max_tau_excess_nm": w["tau"], "servo_qp_steps": srv.qp_steps,
             "servo_fallback_steps": srv.fallback_steps, "brake_infeasible_steps": srv.brake_infeasible,
-            "shoulder_gain": wc.shoulder.gain, "shoulder_deadband_rad": wc.shoulder.deadband_rad,
-            "wearer_deadband_m": wc.deadband_m, "wearer_preset": wearer_preset_name(wc),
+            **self.person.info(),
             "video": None, "render_message": None,
         }
 
@@ -211,7 +209,7 @@ class _Loop:
         o = self.out
         t = np.arange(self.n_ctrl) * self.sc.control_period
         return Episode(self.rec_t, self.rec_q, self.rec_v, self.rec_tau, t, self.alpha, self.beta, self.mode,
-                       o["tip"], o["tip_reference"], self.person.intent.copy(), o["voluntary"],
+                       o["tip"], o["tip_reference"], self.person.intent[:self.n_ctrl].copy(), o["voluntary"],
                        self.status.astype(str), self.step_time, self.base_poses, self.novelty, info)
 
 
@@ -245,7 +243,7 @@ def _check_inputs(controller: Controller, trial: Trial, sc: SceneConfig, obs_nam
 
 
 def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | None = None,
-                wearer: WearerConfig | None = None, duration_s: float | None = None, seed: int = 0,
+                wearer: Wearer | WearerFactory | None = None, duration_s: float | None = None, seed: int = 0,
                 record: bool = True, render: str | Path | None = None, progress: bool = False,
                 obs_names: list[str] | None = None, act_names: list[str] | None = None,
                 servo: ServoConfig | None = None) -> Episode:
@@ -256,8 +254,10 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         trial: raw 100 Hz demonstration; ``trial.obs`` rows are given to the controller as
             they are; the knife channels (``knife_x/y/z`` in ``act_names``, default the
             generator's) are the intent, the fork pose channels drive the fork.
-        scene, wearer, servo: settings (defaults if None; the wearer's default is the preset
-            ``sim.wearer_presets.DEFAULT_WEARER_PRESET``, ``WearerConfig()``).
+        scene, servo: settings (defaults if None).
+        wearer: a :class:`sim.wearer_protocol.Wearer`, or a factory of one called on the trial's
+            knife tip (a :class:`sim.wearer.WearerConfig` is one); default
+            ``sim.wearer_presets.DEFAULT_WEARER`` (the preset ``DEFAULT_WEARER_PRESET``).
         duration_s: simulated time [s] (default: the whole trial).
         seed: torso sway phases and the wearer's noise.
         record: keep the physics-rate arrays (False: empty arrays, metrics still work).
@@ -267,11 +267,11 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     from sim.demonstrator import ACT_NAMES, OBS_NAMES
 
     sc = scene or SceneConfig()
-    wc = wearer or WearerConfig()
     obs_names = list(OBS_NAMES) if obs_names is None else list(obs_names)
     act_names = list(ACT_NAMES) if act_names is None else list(act_names)
     fork_cols, intent_raw, n_ctrl = _check_inputs(controller, trial, sc, obs_names, act_names, duration_s)
-    loop = _Loop(controller, trial, sc, wc, servo, seed, n_ctrl, fork_cols, intent_raw, record)
+    person = make_wearer(DEFAULT_WEARER if wearer is None else wearer, intent_raw, 1.0 / sc.control_period, seed)
+    loop = _Loop(controller, trial, sc, person, servo, seed, n_ctrl, fork_cols, record)
     if callable(getattr(controller, "reset", None)):
         controller.reset()
     renderer = bar = None

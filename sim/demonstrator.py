@@ -50,6 +50,8 @@ from scipy import signal
 from learning.data import Demonstrations, Trial
 
 __all__ = [
+    "DEFAULT_MINUTES",
+    "DEFAULT_SUBJECTS",
     "MODE_NAMES",
     "OBS_NAMES",
     "ACT_NAMES",
@@ -66,6 +68,9 @@ _POSE_FORCE = ("x", "y", "z", "roll", "pitch", "yaw", "fx", "fy", "fz")
 OBS_NAMES: tuple[str, ...] = tuple(f"fork_{c}" for c in _POSE_FORCE)
 ACT_NAMES: tuple[str, ...] = tuple(f"knife_{c}" for c in _POSE_FORCE)
 VOL_NAMES: tuple[str, ...] = ("shoulder_elevation", "shoulder_protraction", "shoulder_abduction")
+#: the default data set's size: subjects, and minutes per subject (``mpcshare generate`` and ``demo`` read them)
+DEFAULT_SUBJECTS: int = 3
+DEFAULT_MINUTES: float = 10.0
 
 # Embedded transition matrix between *different* modes (rows: from, cols: to);
 # the usual cycle is repositioning → cutting → collecting → removing → repositioning,
@@ -335,7 +340,7 @@ def generate_trial(rng: np.random.Generator, n_samples: int, style: SubjectStyle
                  mode=labels.astype(int), voluntary=shoulder)
 
 
-def generate_demonstrations(n_subjects: int = 3, minutes: float = 10.0, seed: int = 0,
+def generate_demonstrations(n_subjects: int = DEFAULT_SUBJECTS, minutes: float = DEFAULT_MINUTES, seed: int = 0,
                             config: GeneratorConfig | None = None) -> Demonstrations:
     """Synthetic eating demonstrations: ``minutes`` per subject, split into trials.
 

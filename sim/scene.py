@@ -6,7 +6,7 @@ Frames (all right-handed, metres):
   forward, y to the wearer's left, z up;
 * **torso** (a mocap body) = the model world frame of :mod:`robot.superlimb`
   (the Pinocchio model's ``world``); the arm's subtree
-  (:func:`robot.superlimb.mjcf_arm_body`) is mounted in it on the right side;
+  (:func:`robot.model_files.mjcf_arm_body`) is mounted in it on the right side;
 * **plate**: origin at the plate's centre on its top surface, z up, x away from
   the wearer (fixed in the world at ``SceneConfig.plate_position``).
 
@@ -66,8 +66,8 @@ class SceneConfig:
         params: the SuperLimb (mount on the right side of the chest).
         plate_position: plate frame origin in the world (= torso at rest): 0.40 m in
             front of the sternum, 0.10 m to the right (the knife side), 0.21 m above
-            the seat; chosen so that every knife tip of the default demonstrations
-            is reachable with a 3 cm margin (tests/sim/test_reach.py).
+            the seat; chosen so that the knife tips of the default demonstrations
+            are reachable, also with the torso swayed (tests/robot/test_kinematics.py).
         plate_radius, plate_height: plate geometry.
         table_height: table top above the seat (below the plate).
         breathing_hz, breathing_amplitude_m: breathing sway (x, y, z) of the torso.

@@ -62,6 +62,7 @@ import numpy as np
 from scipy import signal
 
 from robot.shoulder import ShoulderMap
+from sim.errors import WearerConfigError
 
 __all__ = ["SimulatedWearer", "WearerConfig", "rhythmic_plan", "smooth_intent"]
 
@@ -103,17 +104,21 @@ class WearerConfig:
                      "noise_signal_dependent"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"WearerConfig.{name} must be finite and >= 0, got {v!r}")
+                raise WearerConfigError(f"WearerConfig.{name} must be finite and >= 0, got {v!r}")
         for name in ("bandwidth_hz", "rhythmic_bandwidth_hz", "max_speed_mps", "intent_cutoff_hz"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"WearerConfig.{name} must be finite and > 0, got {v!r}")
+                raise WearerConfigError(f"WearerConfig.{name} must be finite and > 0, got {v!r}")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able settings (the shoulder map as its gain and dead zone); compare configs with this."""
         d = asdict(self)
         d["shoulder"] = {"gain": float(self.shoulder.gain), "deadband_rad": float(self.shoulder.deadband_rad)}
         return d
+
+    def __call__(self, intent: np.ndarray, rate_hz: float, *, seed: int = 0) -> SimulatedWearer:
+        """The wearer with these settings (a :class:`sim.wearer_protocol.WearerFactory`)."""
+        return SimulatedWearer(intent, rate_hz, self, seed=seed)
 
 
 def smooth_intent(positions: np.ndarray, rate_hz: float, cutoff_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -146,6 +151,8 @@ def rhythmic_plan(positions: np.ndarray, rate_hz: float, bandwidth_hz: float) ->
 class SimulatedWearer:
     """One wearer following one intent trajectory (T, 3) [m] sampled at ``rate_hz`` (the control rate).
 
+    Follows :class:`sim.wearer_protocol.Wearer`; the class and its config are wearer factories.
+
     :meth:`step` is called once per control step with the perceived knife tip (and the
     controller's α of the previous step as the cue) and returns the shoulder angles (3,)
     [rad] (module docstring).
@@ -156,11 +163,11 @@ class SimulatedWearer:
         self.config = c = config or WearerConfig()
         intent = np.asarray(intent, dtype=float)
         if intent.ndim != 2 or intent.shape[1] != 3 or intent.shape[0] < 1:
-            raise ValueError(f"intent must be (T, 3) knife-tip positions, got shape {intent.shape}")
+            raise WearerConfigError(f"intent must be (T, 3) knife-tip positions, got shape {intent.shape}")
         if not np.isfinite(intent).all():
-            raise ValueError("intent has non-finite knife-tip positions; fill or drop them first")
+            raise WearerConfigError("intent has non-finite knife-tip positions; fill or drop them first")
         if not rate_hz > 0:
-            raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
+            raise WearerConfigError(f"rate_hz must be > 0, got {rate_hz}")
         self.rate_hz = float(rate_hz)
         self.intent, self.intent_velocity = smooth_intent(intent, rate_hz, c.intent_cutoff_hz)
         self.plan, self.plan_velocity = rhythmic_plan(self.intent, rate_hz, c.rhythmic_bandwidth_hz)
@@ -182,6 +189,14 @@ class SimulatedWearer:
         self.engagement = 0.0
         self.wearer_leads = True
         self.perceived_alpha = float("nan")
+
+    def info(self) -> dict[str, Any]:
+        """The episode's record of this wearer: the shoulder map, the dead band and the preset's name (or None)."""
+        from sim.wearer_presets import wearer_preset_name  # the presets are built from this module
+
+        c = self.config
+        return {"shoulder_gain": c.shoulder.gain, "shoulder_deadband_rad": c.shoulder.deadband_rad,
+                "wearer_deadband_m": c.deadband_m, "wearer_preset": wearer_preset_name(c)}
 
     def _perceive_cue(self, alpha_cue: float | None) -> None:
         """Push the cue into the delay line; the one given d steps ago decides who leads (if finite)."""

@@ -78,9 +78,10 @@ from __future__ import annotations
 from types import MappingProxyType
 from typing import Mapping
 
+from sim.errors import WearerConfigError
 from sim.wearer import WearerConfig
 
-__all__ = ["DEFAULT_WEARER_PRESET", "WEARER_PRESETS", "wearer_preset", "wearer_preset_name"]
+__all__ = ["DEFAULT_WEARER", "DEFAULT_WEARER_PRESET", "WEARER_PRESETS", "wearer_preset", "wearer_preset_name"]
 
 DEFAULT_WEARER_PRESET = "hemiparetic_mild"
 
@@ -97,13 +98,17 @@ WEARER_PRESETS: Mapping[str, WearerConfig] = MappingProxyType({
                                        noise_signal_dependent=0.25),
 })
 
+#: the default wearer of a closed-loop episode (``sim.closed_loop.run_episode``): a wearer factory
+DEFAULT_WEARER: WearerConfig = WEARER_PRESETS[DEFAULT_WEARER_PRESET]
+
 
 def wearer_preset(name: str) -> WearerConfig:
-    """The settings of preset ``name`` (a key of :data:`WEARER_PRESETS`), or a ValueError naming the choices."""
+    """The settings of preset ``name`` (a key of :data:`WEARER_PRESETS`), or a
+    :class:`sim.errors.WearerConfigError` (a ValueError) naming the choices."""
     try:
         return WEARER_PRESETS[name]
     except (KeyError, TypeError):
-        raise ValueError(f'wearer preset "{name}" not in {list(WEARER_PRESETS)}') from None
+        raise WearerConfigError(f'wearer preset "{name}" not in {list(WEARER_PRESETS)}') from None
 
 
 def wearer_preset_name(config: WearerConfig) -> str | None:

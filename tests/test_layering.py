@@ -107,3 +107,41 @@ def test_the_checker_sees_a_violation(tmp_path, monkeypatch):
             test_each_package_imports_only_what_its_row_allows("learning")
     finally:
         planted.unlink()
+
+
+def _design_rows() -> dict[str, tuple[str, str]]:
+    """folder → (what lives there, may import) of the table in docs/design.md, "Layout and layering"."""
+    text = (ROOT / "docs" / "design.md").read_text()
+    section = text[text.index("## Layout and layering"):]
+    section = section[:section.index("\n## ", 1)]
+    rows = {}
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 3 and cells[0].startswith("`") and cells[0].endswith("/`"):
+            rows[cells[0].strip("`/")] = (cells[1], cells[2])
+    return rows
+
+
+def test_the_design_table_states_these_rules():
+    """docs/design.md's "may import" column names exactly the packages and libraries above (in backticks),
+    and each package's row names every subpackage (``name/``)."""
+    import re
+
+    rows = _design_rows()
+    assert set(FIRST_PARTY) <= set(rows), f"the design table has no row for {set(FIRST_PARTY) - set(rows)}"
+    bad = []
+    for package in FIRST_PARTY:
+        what, may = rows[package]
+        named = set(re.findall(r"`([A-Za-z_][\w.]*)`", may))
+        if named & set(FIRST_PARTY) != MAY_IMPORT[package]:
+            bad.append(f"{package}: the table's packages {sorted(named & set(FIRST_PARTY))}, "
+                       f"the test's {sorted(MAY_IMPORT[package])}")
+        if package in THIRD_PARTY and named - set(FIRST_PARTY) != THIRD_PARTY[package]:
+            bad.append(f"{package}: the table's libraries {sorted(named - set(FIRST_PARTY))}, "
+                       f"the test's {sorted(THIRD_PARTY[package])}")
+        if package not in THIRD_PARTY and "any library" not in may:
+            bad.append(f"{package}: the test allows any library; the table says {may!r}")
+        for sub in sorted(p.parent.name for p in (ROOT / package).glob("*/__init__.py")):
+            if f"`{sub}/`" not in what:
+                bad.append(f"{package}: subpackage {sub}/ not named in its row")
+    assert not bad, "\n".join(bad)

@@ -7,11 +7,12 @@ import math
 from dataclasses import dataclass
 
 from learning.analysis.reference import REFERENCES
+from learning.errors import LearningError
 
 __all__ = ["AnalysisConfig", "AnalysisError", "HELP_EFFECT", "MIN_EFFECT", "SIGNIFICANCE"]
 
 
-class AnalysisError(ValueError):
+class AnalysisError(LearningError, ValueError):
     """The data cannot be analysed with these settings (the message says which and why)."""
 
 SIGNIFICANCE = 1e-3  # p-value below which the report claims that modes lower the quotients

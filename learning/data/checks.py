@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from learning.errors import LearningError
+
 if TYPE_CHECKING:  # pragma: no cover
     from .model import Trial
 
@@ -46,7 +48,7 @@ CHANNEL_PREFIX = {"obs": "obs_", "act": "act_", "voluntary": "vol_"}
 NAME_FIELD = {"obs": "obs_names", "act": "act_names", "voluntary": "vol_names"}
 
 
-class DataFormatError(ValueError):
+class DataFormatError(LearningError, ValueError):
     """A data set that cannot be used; the message names file, field and row."""
 
     def __init__(self, message: str, *, path: str | None = None, field: str | None = None,

@@ -51,6 +51,7 @@ from sklearn.utils.validation import check_is_fitted
 from torch import nn
 from tqdm.auto import tqdm
 
+from learning.predictor import defaults as D
 from learning.predictor.sequences import check_sequence_set, chunk_sequences, pad_sequences, shifted_targets
 from learning.predictor.stream import PredictorStream
 from learning.torch_threads import torch_threads
@@ -102,7 +103,7 @@ def _masked_mse(out: torch.Tensor, y: torch.Tensor, w: torch.Tensor) -> torch.Te
 
 
 class ReactivePredictor(BaseEstimator):
-    """LSTM reactive predictor (module docstring).
+    """LSTM reactive predictor (module docstring); defaults in :mod:`learning.predictor.defaults`, with reasons.
 
     Args:
         hidden_size: LSTM units (paper: 28).
@@ -116,9 +117,7 @@ class ReactivePredictor(BaseEstimator):
             improvement (``ReduceLROnPlateau``); 0 = constant rate.
         val_fraction: share of trials held out for early stopping when ``fit`` gets no
             validation sequences (at least 1 trial, split with ``seed``).
-        num_threads: torch CPU threads during ``fit`` (None = torch's setting). Default 1:
-            the network is small and on a loaded 2-core machine two threads made training
-            17× slower (427 s against 24.5 s, 18k steps, 150 epochs).
+        num_threads: torch CPU threads during ``fit`` (None = torch's setting).
         seed: weight initialisation, validation split and chunk order.
         horizons: H, the number of future model steps forecast beyond the current one
             (0: the current action only, as Song & Asada's predictor).
@@ -130,11 +129,12 @@ class ReactivePredictor(BaseEstimator):
     None when validation sequences were given).
     """
 
-    def __init__(self, hidden_size: int = 28, batch_size: int = 64, chunk_len: int = 50,
-                 burn_in: int = 20, learning_rate: float = 1e-2, weight_decay: float = 0.0,
-                 grad_clip: float = 1.0, max_epochs: int = 200, patience: int = 20, lr_patience: int = 5,
-                 val_fraction: float = 0.2, num_threads: int | None = 1, seed: int = 0,
-                 device: str = "cpu", horizons: int = 0) -> None:
+    def __init__(self, hidden_size: int = D.HIDDEN_SIZE, batch_size: int = D.BATCH_SIZE,
+                 chunk_len: int = D.CHUNK_LEN, burn_in: int = D.BURN_IN, learning_rate: float = D.LEARNING_RATE,
+                 weight_decay: float = 0.0, grad_clip: float = 1.0, max_epochs: int = D.MAX_EPOCHS,
+                 patience: int = D.PATIENCE, lr_patience: int = 5, val_fraction: float = D.VAL_FRACTION,
+                 num_threads: int | None = D.NUM_THREADS, seed: int = 0, device: str = "cpu",
+                 horizons: int = 0) -> None:
         self.hidden_size = hidden_size
         self.batch_size = batch_size
         self.chunk_len = chunk_len

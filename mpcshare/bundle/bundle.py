@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
-from learning.atomic import default_dir_mode
+from learning.atomic import default_dir_mode, write_json
 from learning.preprocessing.preprocess import Preprocessor
 from mpcshare.bundle.files import (
     file_sha256,
@@ -43,8 +43,8 @@ from mpcshare.bundle.files import (
     library_versions,
     standardizer_from_json,
     standardizer_to_json,
-    write_json,
 )
+from mpcshare.errors import MpcshareError
 
 if TYPE_CHECKING:  # pragma: no cover - imported lazily (torch and sklearn are slow to import)
     from learning.gates.gate import ModeGates
@@ -62,7 +62,7 @@ BUNDLE_FILES: tuple[str, ...] = ("bundle.json", "metrics.json", "preprocessor.js
                                  "modes.joblib", "gates.joblib")
 
 
-class BundleError(ValueError):
+class BundleError(MpcshareError, ValueError):
     """A bundle that cannot be used; the message starts with the file that is wrong."""
 
     def __init__(self, path: str | os.PathLike, message: str) -> None:
@@ -174,12 +174,13 @@ def _write_files(bundle: ModelBundle, tmp: Path) -> None:
         "predictor_config": bundle.predictor.get_config(),
         "config": bundle.config, "library_versions": library_versions(),
     }
-    write_json(info, tmp / "bundle.json")
-    write_json(bundle.metrics, tmp / "metrics.json")
+    write_json(info, tmp / "bundle.json", non_finite="raise", fsync=False)
+    write_json(bundle.metrics, tmp / "metrics.json", non_finite="raise", fsync=False)
     write_json({"obs": standardizer_to_json(bundle.preprocessor.obs),
                 "act": standardizer_to_json(bundle.preprocessor.act),
                 "target_hz": float(bundle.preprocessor.target_hz),
-                "window_s": float(bundle.preprocessor.window_s)}, tmp / "preprocessor.json")
+                "window_s": float(bundle.preprocessor.window_s)}, tmp / "preprocessor.json", non_finite="raise",
+               fsync=False)
     torch.save(bundle.predictor.state_dict(), tmp / "predictor.pt")
     joblib.dump(bundle.modes, tmp / "modes.joblib")
     joblib.dump(bundle.gates, tmp / "gates.joblib")
@@ -188,7 +189,7 @@ def _write_files(bundle: ModelBundle, tmp: Path) -> None:
         path = tmp / name
         fsync_path(path)
         files[name] = {"bytes": path.stat().st_size, "sha256": file_sha256(path)}
-    write_json({"format_version": FORMAT_VERSION, "files": files}, tmp / MANIFEST)
+    write_json({"format_version": FORMAT_VERSION, "files": files}, tmp / MANIFEST, non_finite="raise", fsync=False)
     fsync_path(tmp / MANIFEST)
     os.chmod(tmp, default_dir_mode())
     fsync_path(tmp)
@@ -279,6 +280,18 @@ def _check_names(path: Path, kind: str, have: Sequence[str], expect: Sequence[st
                                 f"{list(have)}, the data has {expect}")
 
 
+def _read_preprocessor(ppath: Path) -> Preprocessor:
+    """The two standardizers of ``preprocessor.json``, or a :class:`BundleError` naming the file."""
+    try:
+        p = _read_json(ppath)
+        return Preprocessor(obs=standardizer_from_json(p["obs"]), act=standardizer_from_json(p["act"]),
+                            target_hz=float(p["target_hz"]), window_s=float(p["window_s"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        if isinstance(exc, BundleError):
+            raise
+        raise BundleError(ppath, f"not a valid preprocessor ({exc!r})") from None
+
+
 def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | None = None,
                 expect_act_names: Sequence[str] | None = None) -> ModelBundle:
     """Read a bundle written by :func:`save_bundle`.
@@ -313,15 +326,7 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
     metrics = _read_json(root / "metrics.json")
 
     ppath = root / "preprocessor.json"
-    try:
-        p = _read_json(ppath)
-        pre = Preprocessor(obs=standardizer_from_json(p["obs"]), act=standardizer_from_json(p["act"]),
-                           target_hz=float(p["target_hz"]), window_s=float(p["window_s"]))
-    except (KeyError, TypeError, ValueError) as exc:
-        if isinstance(exc, BundleError):
-            raise
-        raise BundleError(ppath, f"not a valid preprocessor ({exc!r})") from None
-
+    pre = _read_preprocessor(ppath)
     loaded: dict[str, Any] = {}
     for name, cls in (("modes.joblib", TaskModes), ("gates.joblib", ModeGates)):
         try:

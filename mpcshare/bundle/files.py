@@ -2,13 +2,13 @@
 
 Used by :mod:`mpcshare.bundle` to write and read a model bundle: +∞ as JSON ``null``,
 fitted standardizers as exact JSON numbers (no pickle), the library versions recorded
-in ``bundle.json``, SHA-256 checksums of the manifest, JSON writing and fsync.
+in ``bundle.json``, SHA-256 checksums of the manifest and fsync (JSON is written by
+:func:`learning.atomic.write_json`).
 """
 
 from __future__ import annotations
 
 import hashlib
-import json
 import math
 import os
 from pathlib import Path
@@ -19,7 +19,7 @@ import numpy as np
 from learning.preprocessing.preprocess import Standardizer
 
 __all__ = ["json_number", "from_json_number", "standardizer_to_json", "standardizer_from_json",
-           "library_versions", "file_sha256", "write_json", "fsync_path"]
+           "library_versions", "file_sha256", "fsync_path"]
 
 
 def json_number(x: float) -> float | None:
@@ -74,13 +74,6 @@ def file_sha256(path: Path) -> str:
         for chunk in iter(lambda: f.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()
-
-
-def write_json(obj: Any, path: Path) -> None:
-    """Write ``obj`` as indented JSON (NaN and ±∞ refused) with a final newline."""
-    with open(path, "w", encoding="utf-8") as f:
-        json.dump(obj, f, indent=2, allow_nan=False)
-        f.write("\n")
 
 
 def fsync_path(path: Path) -> None:

@@ -19,12 +19,13 @@ from pathlib import Path
 from typing import Callable
 
 from learning.data import DataFormatError, Demonstrations, load
+from mpcshare.errors import MpcshareError
 
 __all__ = ["Command", "CommandError", "positive_int", "positive_float", "nonnegative_float", "percentile",
            "prepare_output_folder", "load_or_fail"]
 
 
-class CommandError(RuntimeError):
+class CommandError(MpcshareError, RuntimeError):
     """A subcommand cannot go on; the message is printed and the exit status is 1."""
 
 

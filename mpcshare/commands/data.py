@@ -11,7 +11,7 @@ from typing import Sequence
 
 from learning.data import Demonstrations, save
 from mpcshare.commands.base import Command, CommandError, load_or_fail, positive_float, positive_int
-from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
+from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 from sim.world_family import world_demonstrations
 
 __all__ = ["INSPECT_COMMAND", "GENERATE_COMMAND", "format_summary", "DATA_HELP"]
@@ -65,8 +65,10 @@ def _inspect(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------- generate
 
 def _generate_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--subjects", type=positive_int, default=3, help="number of subjects (default 3)")
-    p.add_argument("--minutes", type=positive_float, default=10.0, help="minutes per subject (default 10)")
+    p.add_argument("--subjects", type=positive_int, default=DEFAULT_SUBJECTS,
+                   help=f"number of subjects (default {DEFAULT_SUBJECTS})")
+    p.add_argument("--minutes", type=positive_float, default=DEFAULT_MINUTES,
+                   help=f"minutes per subject (default {DEFAULT_MINUTES:g})")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--rate", type=positive_float, default=100.0, help="sample rate [Hz] (default 100)")
     p.add_argument("--single-regime", action="store_true",

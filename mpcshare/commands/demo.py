@@ -17,9 +17,10 @@ import argparse
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
-from learning.atomic import atomic_open
-from learning.data import save
+from learning.atomic import atomic_open, write_json
+from learning.data import Demonstrations, save
 from mpcshare.commands.analysis import add_analysis_arguments, print_headline, run_analysis
 from mpcshare.commands.base import (
     Command,
@@ -33,7 +34,7 @@ from mpcshare.commands.data import format_summary
 from mpcshare.commands.sim import add_wearer_argument
 from mpcshare.run_table import RUN_NAMES
 from mpcshare.training.config import TrainConfig
-from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
+from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 
 __all__ = ["DEMO_COMMAND"]
 
@@ -42,8 +43,10 @@ _STAGES = 6
 
 def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="mpcshare-out", help="output folder (default ./mpcshare-out)")
-    p.add_argument("--subjects", type=positive_int, default=3, help="subjects in the default data (default 3)")
-    p.add_argument("--minutes", type=positive_float, default=10.0, help="minutes per subject (default 10)")
+    p.add_argument("--subjects", type=positive_int, default=DEFAULT_SUBJECTS,
+                   help=f"subjects in the default data (default {DEFAULT_SUBJECTS})")
+    p.add_argument("--minutes", type=positive_float, default=DEFAULT_MINUTES,
+                   help=f"minutes per subject (default {DEFAULT_MINUTES:g})")
     p.add_argument("--data-seed", type=int, default=0, help="seed of the default data (default 0)")
     p.add_argument("--percentile", type=percentile, default=TrainConfig.percentile,
                    help=f"K at this percentile of the within-mode quotients (default {TrainConfig.percentile:g})")
@@ -66,15 +69,52 @@ def _stage(k: int, text: str) -> None:
     print(f"[{k}/{_STAGES}] {text}", flush=True)
 
 
-def _demo(args: argparse.Namespace) -> int:
+def _summarise(demos: Demonstrations, out: Path) -> tuple[dict, str]:
+    """Stage 2: ``data_summary.json``, ``data_summary.md`` and ``data_trial.png``; (summary, its Markdown)."""
+    from mpcshare.reports.analysis import plot_demonstrations
+
+    summary = demos.summary()
+    summary["mode_names"] = list(MODE_NAMES)
+    write_json(summary, out / "data_summary.json", non_finite="raise")
+    summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, MODE_NAMES)
+                  + "\n```\n\n![a trial](data_trial.png)\n")
+    with atomic_open(out / "data_summary.md") as f:
+        f.write(summary_md)
+    plot_demonstrations(demos, out / "data_trial.png", mode_names=MODE_NAMES)
+    return summary, summary_md
+
+
+def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any) -> tuple[Any, dict | None]:
+    """Stage 4: the bundle in ``out/model`` (read back as ``mpcshare sim --model`` would) and, where the
+    analysis advises the time-free mixture, the comparison of the two mode sources (else None)."""
     from mpcshare.bundle import load_bundle, save_bundle
-    from mpcshare.experiments import compare_strategies, render_clip
-    from mpcshare.reports.analysis import plot_demonstrations, write_json_atomic
     from mpcshare.reports.claims import mixture_advice
-    from mpcshare.reports.comparison import write_comparison
-    from mpcshare.reports.demo import write_demo_report
     from mpcshare.reports.mode_sources import mode_source_comparison, mode_source_sentence
     from mpcshare.training import TrainingError, train_bundle
+
+    try:
+        bundle = train_bundle(demos, config, progress=True)
+    except TrainingError as exc:
+        raise CommandError(f"cannot train on the demonstrations: {exc}") from None
+    bundle.config["data_path"] = str((out / "demos.npz").resolve())
+    save_bundle(bundle, out / "model")
+    bundle = load_bundle(out / "model")
+    mode_sources = None
+    if mixture_advice(analysis.segmentation_test.to_dict()):  # modes help, the temporal model adds nothing
+        print("training on the time-free mixture's modes too, to compare (--modes-from mixture)", flush=True)
+        try:
+            mixture = train_bundle(demos, replace(config, modes_from="mixture"), progress=False)
+        except TrainingError as exc:
+            raise CommandError(f"cannot train on the mixture's modes: {exc}") from None
+        mode_sources = mode_source_comparison({"hmm": bundle, "mixture": mixture})
+        print(mode_source_sentence(mode_sources))
+    return bundle, mode_sources
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from mpcshare.experiments import compare_strategies, render_clip
+    from mpcshare.reports.comparison import write_comparison
+    from mpcshare.reports.demo import write_demo_report
     from sim.wearer_presets import wearer_preset
 
     out = prepare_output_folder(args.out)
@@ -93,14 +133,7 @@ def _demo(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     _stage(2, "summarising and plotting the data")
-    summary = demos.summary()
-    summary["mode_names"] = list(MODE_NAMES)
-    write_json_atomic(summary, out / "data_summary.json")
-    summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, MODE_NAMES)
-                  + "\n```\n\n![a trial](data_trial.png)\n")
-    with atomic_open(out / "data_summary.md") as f:
-        f.write(summary_md)
-    plot_demonstrations(demos, out / "data_trial.png", mode_names=MODE_NAMES)
+    summary, summary_md = _summarise(demos, out)
     lap("data", t0)
 
     t0 = time.perf_counter()
@@ -112,22 +145,7 @@ def _demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
-    try:
-        bundle = train_bundle(demos, config, progress=True)
-    except TrainingError as exc:
-        raise CommandError(f"cannot train on the demonstrations: {exc}") from None
-    bundle.config["data_path"] = str((out / "demos.npz").resolve())
-    save_bundle(bundle, out / "model")
-    bundle = load_bundle(out / "model")  # what `mpcshare sim --model` would see
-    mode_sources = None
-    if mixture_advice(analysis.segmentation_test.to_dict()):  # modes help, the temporal model adds nothing
-        print("training on the time-free mixture's modes too, to compare (--modes-from mixture)", flush=True)
-        try:
-            mixture = train_bundle(demos, replace(config, modes_from="mixture"), progress=False)
-        except TrainingError as exc:
-            raise CommandError(f"cannot train on the mixture's modes: {exc}") from None
-        mode_sources = mode_source_comparison({"hmm": bundle, "mixture": mixture})
-        print(mode_source_sentence(mode_sources))
+    bundle, mode_sources = _train(demos, config, out, analysis)
     lap("training", t0)
 
     sweep = None

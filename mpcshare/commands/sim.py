@@ -27,6 +27,7 @@ from mpcshare.commands.base import (
     positive_int,
     prepare_output_folder,
 )
+from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.run_table import RUN_NAMES
 from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
@@ -55,7 +56,8 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
                    help="strategies to simulate (default: all; the strategies of the registry, gate_mpc, "
                         "oracle_preview, random_handover: the gate's share and hand-overs at random times, 5 draws, "
                         "oracle_handover: the best replay of error-minimising schedules, an upper bound)")
-    p.add_argument("--beta", type=float, default=0.5, help="β while the robot acts (default 0.5)")
+    p.add_argument("--beta", type=float, default=DEFAULT_BETA,
+                   help=f"β while the robot acts (default {DEFAULT_BETA:g})")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
     p.add_argument("--video", action="store_true", help="render the gate on the first trial (offscreen OpenGL)")
     add_wearer_argument(p)

@@ -33,6 +33,8 @@ import numpy as np
 from mpcshare.control.strategies import REGISTRY, StepInputs, StrategyContext, user_strategies
 from mpcshare.control.strategies.base import override_reason
 from mpcshare.control.strategies.replay import SCHEDULE
+from mpcshare.control.types import DEFAULT_BETA, ControllerConfig
+from mpcshare.errors import ControllerSetupError
 
 __all__ = ["SCHEDULE", "STRATEGIES", "Arbiter", "Decision", "Handover", "check_strategy", "fuse",
            "reactive_velocity"]
@@ -65,10 +67,10 @@ def check_strategy(strategy: str, scheduled: bool = False) -> str:
     ``scheduled``: :data:`SCHEDULE` is valid too, and the only valid one)."""
     if scheduled:
         if strategy != SCHEDULE:
-            raise ValueError(f"a schedule is replayed by strategy {SCHEDULE!r}, got {strategy!r}")
+            raise ControllerSetupError(f"a schedule is replayed by strategy {SCHEDULE!r}, got {strategy!r}")
         return strategy
     if strategy not in STRATEGIES:
-        raise ValueError(f"unknown strategy {strategy!r}; valid choices: {', '.join(STRATEGIES)}")
+        raise ControllerSetupError(f"unknown strategy {strategy!r}; valid choices: {', '.join(STRATEGIES)}")
     return strategy
 
 
@@ -76,12 +78,14 @@ def check_beta(beta: float) -> float:
     """Return β as float or raise ValueError when it is not in [0, 1]."""
     b = float(beta)
     if not (math.isfinite(b) and 0.0 <= b <= 1.0):
-        raise ValueError(f"beta must be in [0, 1], got {beta!r}")
+        raise ControllerSetupError(f"beta must be in [0, 1], got {beta!r}")
     return b
 
 
 class Arbiter:
     """α, β per step for one strategy of the registry (module docstring), with the hand-over log.
+
+    The defaults of the settings are :class:`~mpcshare.control.types.ControllerConfig`'s.
 
     Args:
         strategy: a name of ``mpcshare.control.strategies.REGISTRY`` (:data:`STRATEGIES`, or
@@ -99,28 +103,32 @@ class Arbiter:
             ``model_dt`` [s], its settings); see :mod:`mpcshare.control.strategies.gate`.
     """
 
-    def __init__(self, strategy: str = "gate", beta: float = 0.5, *, novelty_threshold: float = math.inf,
-                 on_threshold: float = 0.6, off_threshold: float = 0.4, min_dwell_s: float = 0.5,
-                 blend_range: tuple[float, float] = (0.5, 0.9), handover_s: float = 0.0,
+    def __init__(self, strategy: str = "gate", beta: float = DEFAULT_BETA, *, novelty_threshold: float = math.inf,
+                 on_threshold: float = ControllerConfig.on_threshold,
+                 off_threshold: float = ControllerConfig.off_threshold,
+                 min_dwell_s: float = ControllerConfig.min_dwell_s,
+                 blend_range: tuple[float, float] = ControllerConfig.blend_range,
+                 handover_s: float = ControllerConfig.handover_s,
                  schedule: Callable[[float], float] | None = None, mode_stats: dict[str, Any] | None = None,
                  transmat: np.ndarray | None = None, model_dt: float = 0.1,
                  options: dict[str, Any] | None = None) -> None:
         if (strategy == SCHEDULE) != (schedule is not None):
-            raise ValueError(f"strategy {SCHEDULE!r} needs a schedule and only it takes one, got strategy "
-                             f"{strategy!r} with schedule={schedule!r}")
+            raise ControllerSetupError(f"strategy {SCHEDULE!r} needs a schedule and only it takes one, got strategy "
+                                       f"{strategy!r} with schedule={schedule!r}")
         self.strategy = check_strategy(strategy, scheduled=schedule is not None)
         self.beta = check_beta(beta)
         if not (0.0 <= off_threshold <= on_threshold <= 1.0):
-            raise ValueError(f"need 0 ≤ off_threshold ≤ on_threshold ≤ 1, got {off_threshold!r}, {on_threshold!r}")
+            raise ControllerSetupError(f"need 0 ≤ off_threshold ≤ on_threshold ≤ 1, got {off_threshold!r}, "
+                                       f"{on_threshold!r}")
         if not (math.isfinite(min_dwell_s) and min_dwell_s >= 0):
-            raise ValueError(f"min_dwell_s must be finite and ≥ 0, got {min_dwell_s!r}")
+            raise ControllerSetupError(f"min_dwell_s must be finite and ≥ 0, got {min_dwell_s!r}")
         p0, p1 = (float(x) for x in blend_range)
         if not 0.0 <= p0 < p1 <= 1.0:
-            raise ValueError(f"blend_range must satisfy 0 ≤ p0 < p1 ≤ 1, got {blend_range!r}")
+            raise ControllerSetupError(f"blend_range must satisfy 0 ≤ p0 < p1 ≤ 1, got {blend_range!r}")
         if math.isnan(novelty_threshold):
-            raise ValueError("novelty_threshold must not be NaN (use inf to disable)")
+            raise ControllerSetupError("novelty_threshold must not be NaN (use inf to disable)")
         if not (math.isfinite(handover_s) and handover_s >= 0):
-            raise ValueError(f"handover_s must be finite and ≥ 0, got {handover_s!r}")
+            raise ControllerSetupError(f"handover_s must be finite and ≥ 0, got {handover_s!r}")
         self.novelty_threshold = float(novelty_threshold)
         self.handover_s = float(handover_s)
         self.context = StrategyContext(beta=self.beta, on_threshold=float(on_threshold),

@@ -62,8 +62,9 @@ from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
 from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
-from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
+from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
+from mpcshare.errors import ControllerTypeError
 from robot.kinematics import ReachShell, TipKinematics
 from robot.qp import QPConfig, QPController, QPStatus
 from robot.shoulder import ShoulderMap
@@ -86,14 +87,14 @@ def _finite(x: np.ndarray) -> bool:
 class SharedController:
     """Shared control of the SuperLimb's knife tip from a trained bundle (module docstring).
 
-    Build with :meth:`from_bundle`. Misuse at construction raises ValueError naming what
-    is wrong (channels, strategy, β, shapes of the learned parts).
+    Build with :meth:`from_bundle`. Misuse at construction raises ``mpcshare.errors.ControllerSetupError`` (a
+    ValueError; ``ControllerTypeError``: also a TypeError) naming what is wrong (channels, strategy, β, shapes …).
     """
 
     default_base_pose = DEFAULT_BASE_POSE
 
     def __init__(self, bundle: ModelBundle, *, robot: SuperLimbParams | None = None, strategy: str = "gate",
-                 beta: float = 0.5, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
+                 beta: float = DEFAULT_BETA, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
                  config: ControllerConfig | None = None, preview: TipTrajectory | None = None,
@@ -106,7 +107,7 @@ class SharedController:
         self.shoulder = shoulder if shoulder is not None else ShoulderMap()
         self.params = robot if robot is not None else SuperLimbParams()
         if not isinstance(self.params, SuperLimbParams):
-            raise TypeError(f"robot must be a robot.superlimb.SuperLimbParams or None, got {type(robot).__name__}")
+            raise ControllerTypeError(f"robot must be a SuperLimbParams or None, got {type(robot).__name__}")
         self.dt = 1.0 / float(bundle.rate_hz)
         qp_cfg = cfg.qp if abs(cfg.qp.dt - self.dt) < 1e-12 else QPConfig(**{**cfg.qp.__dict__, "dt": self.dt})
         self.qp = QPController.for_superlimb(self.params, qp_cfg)
@@ -125,7 +126,7 @@ class SharedController:
                                **arbitration_inputs(bundle, cfg.strategy_options))
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
         if preview is not None and not callable(getattr(preview, "sample", None)):
-            raise TypeError(f"preview must be a TipTrajectory (sample(times) -> p, v, a), got {type(preview).__name__}")
+            raise ControllerTypeError(f"preview must be a TipTrajectory (sample(times)), got {type(preview).__name__}")
         self.oracle = preview is not None
         self.forecast: TipTrajectory = preview if preview is not None else \
             ForecastTrack(1.0 / float(bundle.model_hz), cfg.forecast_fade_s)
@@ -133,7 +134,7 @@ class SharedController:
 
     @classmethod
     def from_bundle(cls, folder_or_bundle: str | Path | ModelBundle, robot: SuperLimbParams | None = None,
-                    strategy: str = "gate", beta: float = 0.5, use_mpc: bool = False,
+                    strategy: str = "gate", beta: float = DEFAULT_BETA, use_mpc: bool = False,
                     shoulder: ShoulderMap | None = None,
                     **options) -> SharedController:
         """Controller from a bundle folder (``mpcshare.bundle.load_bundle``) or a loaded bundle.

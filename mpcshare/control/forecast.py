@@ -24,6 +24,8 @@ import math
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from mpcshare.errors import ControllerSetupError
+
 __all__ = ["ForecastTrack", "KnownTrajectory", "TipTrajectory"]
 
 
@@ -84,10 +86,10 @@ class ForecastTrack(TipTrajectory):
 
     def __init__(self, step_s: float, fade_s: float | None = None) -> None:
         if not (math.isfinite(step_s) and step_s > 0):
-            raise ValueError(f"step_s must be finite and > 0, got {step_s!r}")
+            raise ControllerSetupError(f"step_s must be finite and > 0, got {step_s!r}")
         fade = step_s if fade_s is None else float(fade_s)
         if not (math.isfinite(fade) and fade >= 0):
-            raise ValueError(f"fade_s must be finite and >= 0, got {fade_s!r}")
+            raise ControllerSetupError(f"fade_s must be finite and >= 0, got {fade_s!r}")
         self.step_s, self.fade_s = float(step_s), fade
         self.reset()
 

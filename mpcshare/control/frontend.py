@@ -15,7 +15,7 @@ Per control step (one raw sample of the fork, ``rate_hz``):
    standardiser, then the causal window of ``window_s`` RMS-normalised as
    ``learning.preprocessing.preprocess.causal_windows(..., rms=True)`` builds it:
    ``w_t = [o_t, o_{t−1}, …, o_{t−L+1}] / √L``.
-4. The :class:`learning.modes_online.ModeFilter` stepped on every standardised
+4. The :class:`learning.modes.ModeFilter` stepped on every standardised
    model-rate sample; novelty = −log p(o_t | o_<t) (``inf`` when the sample is
    impossible under every mode).
 
@@ -33,6 +33,7 @@ import numpy as np
 
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import StreamingDecimator
+from mpcshare.errors import ControllerSetupError
 
 __all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd"]
 
@@ -57,11 +58,11 @@ class ForkKalman:
         accel_std = np.broadcast_to(np.asarray(accel_std, dtype=float), (d,))
         meas_std = np.broadcast_to(np.asarray(meas_std, dtype=float), (d,))
         if not (np.all(np.isfinite(accel_std)) and np.all(accel_std > 0)):
-            raise ValueError("ForkKalman: accel_std must be finite and > 0 per channel")
+            raise ControllerSetupError("ForkKalman: accel_std must be finite and > 0 per channel")
         if not (np.all(np.isfinite(meas_std)) and np.all(meas_std > 0)):
-            raise ValueError("ForkKalman: meas_std must be finite and > 0 per channel")
+            raise ControllerSetupError("ForkKalman: meas_std must be finite and > 0 per channel")
         if not (math.isfinite(dt) and dt > 0):
-            raise ValueError(f"ForkKalman: dt must be > 0, got {dt!r}")
+            raise ControllerSetupError(f"ForkKalman: dt must be > 0, got {dt!r}")
         self.n_channels, self.dt = d, float(dt)
         self.accel_var = accel_std ** 2
         self.meas_var = meas_std ** 2
@@ -191,8 +192,8 @@ class StreamingFrontEnd:
         scale = np.asarray(obs_standardizer.scale_, dtype=float)
         self.n_channels = d = scale.size
         if int(getattr(modes, "n_features_in_", d)) != d:
-            raise ValueError(f"the mode model expects {modes.n_features_in_} features, "
-                             f"the obs standardiser has {d} channels")
+            raise ControllerSetupError(f"the mode model expects {modes.n_features_in_} features, "
+                                       f"the obs standardiser has {d} channels")
         self.standardizer = obs_standardizer
         self.modes = modes
         self.rate_hz, self.model_hz, self.window_s = float(rate_hz), float(model_hz), float(window_s)

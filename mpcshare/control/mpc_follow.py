@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from mpcshare.errors import ControllerSetupError
+
 __all__ = ["MPCFollower"]
 
 Fault = tuple[str, str]
@@ -28,7 +30,7 @@ class MPCFollower:
 
     def __init__(self, mpc: Any, dt: float, deadline_s: float, every: int = 1) -> None:
         if not (hasattr(mpc, "solve") and int(getattr(mpc, "horizon", 0)) >= 2):
-            raise ValueError("mpc must have solve(q, v, p_ref, deadline_s) and a horizon of at least 2 steps")
+            raise ControllerSetupError("mpc must have solve(q, v, p_ref, deadline_s) and a horizon of at least 2 steps")
         self.mpc, self.dt, self.deadline_s, self.every = mpc, float(dt), float(deadline_s), max(int(every), 1)
         self.reset()
 

@@ -1,6 +1,7 @@
 """Construction-time checks of the controller: bundle channels, learned parts, MPC.
 
-Everything here runs once in ``SharedController.__init__`` and raises ValueError (or
+Everything here runs once in ``SharedController.__init__`` and raises
+``mpcshare.errors.ControllerSetupError`` (a ValueError; or
 RuntimeError for a missing optional part) naming what was wrong; nothing here runs in
 the loop.
 """
@@ -14,6 +15,7 @@ import numpy as np
 
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import decimation_factor
+from mpcshare.errors import ControllerSetupError
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -48,11 +50,12 @@ class BundleLayout:
 def _indices(names: tuple[str, ...], wanted: tuple[str, ...], what: str, option: str) -> np.ndarray:
     wanted = tuple(wanted)
     if len(wanted) != 3:
-        raise ValueError(f"{option} must name 3 channels (x, y, z), got {wanted!r}")
+        raise ControllerSetupError(f"{option} must name 3 channels (x, y, z), got {wanted!r}")
     missing = [w for w in wanted if w not in names]
     if missing:
-        raise ValueError(f"the bundle's {what} {list(names)} have no channel(s) {missing}; the controller needs "
-                         f"the tip position channels: pass {option}=(x, y, z names) to map them explicitly")
+        raise ControllerSetupError(f"the bundle's {what} {list(names)} have no channel(s) {missing}; the controller "
+                                   f"needs the tip position channels: pass {option}=(x, y, z names) to map them "
+                                   f"explicitly")
     return np.array([names.index(w) for w in wanted])
 
 
@@ -61,40 +64,42 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
     """Check that ``bundle`` fits the robot and is complete; return its :class:`BundleLayout`."""
     absent = [f for f in _FIELDS if not hasattr(bundle, f)]
     if absent:
-        raise ValueError(f"bundle lacks field(s) {absent} (a mpcshare.bundle.ModelBundle is expected)")
+        raise ControllerSetupError(f"bundle lacks field(s) {absent} (a mpcshare.bundle.ModelBundle is expected)")
     obs_names, act_names = tuple(bundle.obs_names), tuple(bundle.act_names)
     tip = _indices(act_names, tip_channels or DEFAULT_TIP, "act_names", "tip_channels")
     fork = _indices(obs_names, fork_channels or DEFAULT_FORK, "obs_names", "fork_channels")
     vol = tuple(getattr(bundle, "vol_names", ()) or ())
     if vol and len(vol) != 3:
-        raise ValueError(f"the bundle's vol_names {list(vol)} must be the 3 shoulder angles of the voluntary channel")
+        raise ControllerSetupError(f"the bundle's vol_names {list(vol)} must be the 3 shoulder angles of the "
+                                   f"voluntary channel")
     d_o, d_u = len(obs_names), len(act_names)
     pre = bundle.preprocessor
     for side, d in (("obs", d_o), ("act", d_u)):
         got = int(getattr(getattr(pre, side), "n_features_in_", -1))
         if got != d:
-            raise ValueError(f"bundle.preprocessor.{side} was fitted on {got} channels, {side}_names has {d}")
+            raise ControllerSetupError(f"bundle.preprocessor.{side} was fitted on {got} channels, {side}_names has {d}")
     n_in = int(getattr(bundle.modes, "n_features_in_", -1))
     if n_in != d_o:
-        raise ValueError(f"bundle.modes expects {n_in} features per sample, obs_names has {d_o}")
+        raise ControllerSetupError(f"bundle.modes expects {n_in} features per sample, obs_names has {d_o}")
     K = int(bundle.modes.model_.n_components)
     decimation_factor(bundle.rate_hz, bundle.model_hz)  # raises for a non-integer factor
     L = window_lags(float(bundle.window_s), float(bundle.model_hz))
     if not (float(bundle.novelty_threshold) == float(bundle.novelty_threshold)):
-        raise ValueError("bundle.novelty_threshold is NaN")
+        raise ControllerSetupError("bundle.novelty_threshold is NaN")
     # the learned parts must accept the controller's inputs
     try:
         p = float(bundle.gates.proba_one(np.zeros(L * d_o), 0))
     except Exception as exc:
-        raise ValueError(f"bundle.gates.proba_one(window of {L * d_o}, mode 0) failed: {exc}") from exc
+        raise ControllerSetupError(f"bundle.gates.proba_one(window of {L * d_o}, mode 0) failed: {exc}") from exc
     if not 0.0 <= p <= 1.0:
-        raise ValueError(f"bundle.gates.proba_one returned {p!r}, not a probability")
+        raise ControllerSetupError(f"bundle.gates.proba_one returned {p!r}, not a probability")
     try:
         out = np.asarray(bundle.predictor.make_stream().step(np.zeros(d_o + K)), dtype=float)
     except Exception as exc:
-        raise ValueError(f"bundle.predictor stream step on an input of {d_o}+{K} failed: {exc}") from exc
+        raise ControllerSetupError(f"bundle.predictor stream step on an input of {d_o}+{K} failed: {exc}") from exc
     if out.shape != (d_u,):
-        raise ValueError(f"bundle.predictor stream returns shape {out.shape}, expected ({d_u},) (act channels)")
+        raise ControllerSetupError(f"bundle.predictor stream returns shape {out.shape}, expected ({d_u},) "
+                                   f"(act channels)")
     return BundleLayout(d_o, d_u, K, L, tip, fork, np.asarray(pre.act.mean_, dtype=float),
                         np.asarray(pre.act.scale_, dtype=float))
 
@@ -121,5 +126,5 @@ def make_mpc(params, dt: float):
                            f"({exc}); pass use_mpc=False to run the QP on the smoothed reference") from exc
     mpc = TipMPC(params=params, dt=dt)
     if int(mpc.horizon) < 2:
-        raise ValueError(f"the MPC horizon must be ≥ 2 steps, got {mpc.horizon}")
+        raise ControllerSetupError(f"the MPC horizon must be ≥ 2 steps, got {mpc.horizon}")
     return mpc

@@ -8,9 +8,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mpcshare.control.workspace import DEFAULT_WORKSPACE, WorkspaceBox
+from mpcshare.errors import ControllerSetupError
 from robot.qp import QPConfig
 
-__all__ = ["SMOOTHER_TARGETS", "STATUSES", "ControlCommand", "ControllerConfig"]
+__all__ = ["DEFAULT_BETA", "SMOOTHER_TARGETS", "STATUSES", "ControlCommand", "ControllerConfig"]
+
+#: The user's β ∈ [0, 1] (the wearer's weight while the robot leads) when none is given:
+#: ``SharedController``, ``Arbiter``, the experiments and ``mpcshare sim --beta`` read it here.
+DEFAULT_BETA: float = 0.5
 
 #: What the reference smoother aims at: the reference's position (moved ``smoother_lead_s``
 #: ahead along the fused velocity), or its whole state (position, velocity, acceleration).
@@ -107,10 +112,11 @@ class ControllerConfig:
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:
-            raise ValueError(f"smoother_target {self.smoother_target!r} not in {list(SMOOTHER_TARGETS)}")
+            raise ControllerSetupError(f"smoother_target {self.smoother_target!r} not in {list(SMOOTHER_TARGETS)}")
         for name in ("forecast_lead_s", "smoother_lead_s", "handover_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v <= 1.0):
-                raise ValueError(f"ControllerConfig.{name} must be in [0, 1] s, got {v!r}")
+                raise ControllerSetupError(f"ControllerConfig.{name} must be in [0, 1] s, got {v!r}")
         if self.forecast_fade_s is not None and not (math.isfinite(self.forecast_fade_s) and self.forecast_fade_s >= 0):
-            raise ValueError(f"ControllerConfig.forecast_fade_s must be None or >= 0, got {self.forecast_fade_s!r}")
+            raise ControllerSetupError(f"ControllerConfig.forecast_fade_s must be None or >= 0, "
+                                       f"got {self.forecast_fade_s!r}")

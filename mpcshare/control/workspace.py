@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mpcshare.errors import ControllerSetupError
+
 __all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "WorkspaceBox", "check_base_pose"]
 
 DEFAULT_BASE_POSE = np.eye(4)
@@ -39,9 +41,10 @@ class WorkspaceBox:
     def __post_init__(self) -> None:
         lo, hi = np.asarray(self.lower, dtype=float), np.asarray(self.upper, dtype=float)
         if lo.shape != (3,) or hi.shape != (3,) or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-            raise ValueError("WorkspaceBox lower/upper must be finite (3,) [m]")
+            raise ControllerSetupError("WorkspaceBox lower/upper must be finite (3,) [m]")
         if np.any(lo >= hi):
-            raise ValueError(f"WorkspaceBox needs lower < upper on every axis, got {self.lower}, {self.upper}")
+            raise ControllerSetupError(f"WorkspaceBox needs lower < upper on every axis, "
+                                       f"got {self.lower}, {self.upper}")
 
     def clamp(self, p: np.ndarray) -> tuple[np.ndarray, bool]:
         c = np.minimum(np.maximum(p, self.lower), self.upper)

@@ -16,30 +16,23 @@ The schema of ``report.json`` is documented in ``docs/design.md``.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from learning.analysis import AnalysisResult
 from learning.analysis.report import AnalysisReport
-from learning.atomic import atomic_open
+from learning.atomic import atomic_open, write_json
 from learning.data import Demonstrations
 from learning.modes import match_modes
 from mpcshare.reports.claims import claim_sentences, mixture_advice
 
-__all__ = ["plot_demonstrations", "write_analysis_report", "write_json_atomic", "fmt", "fmt_p", "fmt_p_value"]
+__all__ = ["plot_demonstrations", "write_analysis_report", "fmt", "fmt_p", "fmt_p_value"]
 
 _MODE_COLOURS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860", "#DA8BC3", "#8C8C8C")
-
-
-def write_json_atomic(obj: Any, path: Path) -> None:
-    """Write JSON to ``path`` through a temporary file and a rename (never half-written)."""
-    with atomic_open(path, "w") as f:
-        json.dump(obj, f, indent=2, allow_nan=False)
 
 
 def _mode_bands(ax, t: np.ndarray, labels: np.ndarray, alpha: float = 0.15) -> None:
@@ -350,4 +343,4 @@ def write_analysis_report(result: AnalysisResult, out: Path, *,
     md = _markdown(result.summary, mode_names)
     with atomic_open(out / "report.md", "w") as f:
         f.write(md)
-    write_json_atomic(result.summary.to_dict(), out / "report.json")
+    write_json(result.summary.to_dict(), out / "report.json", non_finite="raise")

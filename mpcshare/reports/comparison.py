@@ -8,19 +8,17 @@ does not.
 
 from __future__ import annotations
 
-import json
-import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from learning.atomic import atomic_open
+from learning.atomic import atomic_open, write_json
 from mpcshare.experiments import Comparison
 from mpcshare.run_table import RUN_COLORS
 
-__all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "strict_json", "write_comparison"]
+__all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "write_comparison"]
 
 _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("line_ratio", "line ratio", 1.0, "{:.2f}"),
@@ -202,24 +200,12 @@ def _plot(comp: Comparison, path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def strict_json(x: Any) -> Any:
-    """``x`` with every non-finite float as None: the project writes strict JSON (docs/design.md)."""
-    if isinstance(x, dict):
-        return {k: strict_json(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [strict_json(v) for v in x]
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
-
-
 def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
     """Write comparison.json, comparison.md and comparison.png into ``out``; returns the JSON object."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     obj = comp.to_dict()
-    with atomic_open(out / "comparison.json", "w") as f:
-        json.dump(strict_json(obj), f, indent=2, allow_nan=False)
+    write_json(obj, out / "comparison.json")
     _plot(comp, out / "comparison.png")
     trial_plot = None
     shown = "gate" if comp.run_files.get("gate") else next((k for k, v in comp.run_files.items() if v), None)

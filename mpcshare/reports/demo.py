@@ -10,15 +10,14 @@ with links rewritten to those folders.
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from pathlib import Path
 from typing import Any
 
-from learning.atomic import atomic_open
+from learning.atomic import atomic_open, write_json
 from mpcshare.reports.claims import claim_sentences, mixture_advice
-from mpcshare.reports.comparison import comparison_findings, strict_json
+from mpcshare.reports.comparison import comparison_findings
 from mpcshare.reports.html import write_html_report
 from mpcshare.reports.mode_sources import mode_source_sentence
 
@@ -130,8 +129,7 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
         f.write(md)
     obj = {"format_version": 1, "data": data_summary, "analysis": analysis, "training": training,
            "sweep": sweep, "comparison": comparison, "mode_sources": mode_sources, "timings_s": timings_s}
-    with atomic_open(out / "report.json", "w") as f:
-        json.dump(strict_json(obj), f, indent=2, default=_jsonable, allow_nan=False)
+    write_json(obj, out / "report.json", default=_jsonable)
     return write_html_report(out / "report.md", out / "report.html")
 
 

@@ -11,6 +11,8 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from learning.predictor import defaults as lstm
+
 __all__ = ["DEFAULT_PERCENTILES", "MODES_FROM", "TrainConfig"]
 
 #: sources of the task modes (``TrainConfig.modes_from``, ``mpcshare train --modes-from``)
@@ -38,13 +40,10 @@ class TrainConfig:
         val_fraction: share of the training trials used for the LSTM's early stopping.
         hidden_size, batch_size, max_epochs, patience, learning_rate: LSTM settings
             (the paper's 28 hidden units, batch 64).
-        chunk_len, burn_in: training chunks of the LSTM (steps with loss, warm-up steps);
-            short chunks give more gradient steps per epoch at about the same cost
-            (measured on the default data: chunks of 25 reach a lower validation loss than
-            chunks of 100 in less time).
-        torch_threads: torch CPU threads while training the LSTM. 1 by default: the
-            network is small, and on a busy 2-core machine two threads were many times
-            slower than one (synchronisation, not arithmetic).
+        chunk_len, burn_in: training chunks of the LSTM (steps with loss, warm-up steps).
+        torch_threads: torch CPU threads while training the LSTM.
+        The LSTM's defaults (and ``val_fraction``'s) are :mod:`learning.predictor.defaults`,
+        with the reasons for them; ``ReactivePredictor`` reads the same.
         gate_kernel, gate_max_samples: gate classifier ("rbf" SVM or "nystroem") and
             the per-mode subsample it is fitted on.
         lstm_baseline: also train the LSTM on all points (baseline; doubles LSTM time).
@@ -67,15 +66,15 @@ class TrainConfig:
     hmm_restarts: int = 3
     modes_from: str = "hmm"
     heldout_fraction: float = 0.25
-    val_fraction: float = 0.2
-    hidden_size: int = 28
-    batch_size: int = 64
-    max_epochs: int = 80
-    patience: int = 10
-    learning_rate: float = 1e-2
-    chunk_len: int = 25
-    burn_in: int = 20
-    torch_threads: int = 1
+    val_fraction: float = lstm.VAL_FRACTION
+    hidden_size: int = lstm.HIDDEN_SIZE
+    batch_size: int = lstm.BATCH_SIZE
+    max_epochs: int = lstm.MAX_EPOCHS
+    patience: int = lstm.PATIENCE
+    learning_rate: float = lstm.LEARNING_RATE
+    chunk_len: int = lstm.CHUNK_LEN
+    burn_in: int = lstm.BURN_IN
+    torch_threads: int = lstm.NUM_THREADS
     gate_kernel: str = "rbf"
     gate_max_samples: int | None = 2000
     lstm_baseline: bool = False

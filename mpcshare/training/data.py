@@ -12,6 +12,7 @@ import numpy as np
 from learning.data import Demonstrations, split_by_trial
 from learning.preprocessing.preprocess import Preprocessor, Standardizer, WindowedData, causal_windows, window_lags
 from learning.preprocessing.resample import causal_downsample, decimation_factor
+from mpcshare.errors import MpcshareError
 from mpcshare.training.config import TrainConfig
 from mpcshare.training.stages import Stages
 
@@ -22,7 +23,7 @@ __all__ = ["TrainingError", "SplitData", "TrainingData", "check_training_data", 
            "reactive_labels"]
 
 
-class TrainingError(ValueError):
+class TrainingError(MpcshareError, ValueError):
     """The data cannot be used for training with these settings (the message says why)."""
 
 

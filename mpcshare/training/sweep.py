@@ -33,7 +33,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from learning.analysis.predictability import threshold_from_percentile
-from learning.atomic import atomic_open
+from learning.atomic import atomic_open, write_json
 from learning.data import Demonstrations
 from mpcshare.training.config import DEFAULT_PERCENTILES, TrainConfig
 from mpcshare.training.data import prepare_training_data, reactive_labels
@@ -276,22 +276,9 @@ def _plot(result: SweepResult, path: Path) -> None:
 
 def write_sweep(result: SweepResult, out: str | Path) -> None:
     """Write ``sweep.json``, ``sweep.md`` and ``sweep.png`` into ``out`` (each atomically)."""
-    import json
-
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
-
-    def clean(x: Any) -> Any:
-        if isinstance(x, float) and not math.isfinite(x):
-            return None
-        if isinstance(x, dict):
-            return {k: clean(v) for k, v in x.items()}
-        if isinstance(x, (list, tuple)):
-            return [clean(v) for v in x]
-        return x
-
-    with atomic_open(folder / "sweep.json", "w") as f:
-        json.dump(clean(result.rows), f, indent=2, allow_nan=False)
+    write_json(result.rows, folder / "sweep.json")
     with atomic_open(folder / "sweep.md", "w") as f:
         f.write(_markdown(result))
     _plot(result, folder / "sweep.png")

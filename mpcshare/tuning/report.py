@@ -14,12 +14,10 @@ its family size and level), ``draws`` (placebo draws per pair), ``pareto`` (sett
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
-from learning.atomic import atomic_open
-from mpcshare.reports.comparison import strict_json
+from learning.atomic import atomic_open, write_json
 from mpcshare.run_table import RUN_COLORS
 from mpcshare.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
 
@@ -173,8 +171,7 @@ def _plot(result: dict[str, Any], path: Path) -> None:
 def write_tune(result: dict[str, Any], out: str | Path) -> None:
     """Write ``tune.json``, ``tune.md`` and ``pareto.png`` into ``out``."""
     out = Path(out)
-    with atomic_open(out / "tune.json", "w") as f:
-        json.dump(strict_json(result), f, indent=1)
+    write_json(result, out / "tune.json", indent=1)
     with atomic_open(out / "tune.md", "w") as f:
         f.write(tune_markdown(result))
     _plot(result, out / "pareto.png")

@@ -22,6 +22,8 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
+from learning.atomic import write_json
+from mpcshare.errors import MpcshareError
 from mpcshare.run_table import RANDOM_DRAWS
 from mpcshare.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
 
@@ -30,7 +32,7 @@ __all__ = ["BACKENDS", "RayMissing", "open_backend", "run_tune"]
 BACKENDS: tuple[str, ...] = ("local", "ray")
 
 
-class RayMissing(ImportError):
+class RayMissing(MpcshareError, ImportError):
     """``--backend ray`` without Ray installed."""
 
 
@@ -104,7 +106,7 @@ class _Store:
                 self.rows[task_key(row)] = row
         else:
             self.path.write_text("")
-            args.write_text(json.dumps(signature, indent=1))
+            write_json(signature, args, indent=1)
 
     def add(self, row: dict[str, Any]) -> None:
         self.rows[task_key(row)] = row

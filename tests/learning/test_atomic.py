@@ -79,3 +79,25 @@ def test_kernel_applies_the_umask_and_it_is_never_changed(tmp_path, umask_077, m
     assert _mode(tmp_path / "a.txt") == 0o600
     assert _mode(tmp_path / "csv") == 0o700
     assert _mode(tmp_path / "csv" / "trial_000.csv") == 0o600
+
+
+def test_write_json_is_strict_atomic_and_ends_with_a_newline(tmp_path):
+    import json
+
+    from learning.atomic import write_json
+
+    path = tmp_path / "out.json"
+    write_json({"a": [1.0, float("nan"), (2, float("-inf"))], "b": {"c": float("inf")}}, path)
+    text = path.read_text()
+    assert text.endswith("}\n") and "NaN" not in text and "Infinity" not in text
+    assert json.loads(text) == {"a": [1.0, None, [2, None]], "b": {"c": None}}
+    with pytest.raises(ValueError):
+        write_json({"a": float("nan")}, path, non_finite="raise")
+    with pytest.raises(TypeError):
+        write_json({"a": object()}, path)
+    assert json.loads(path.read_text())["b"] == {"c": None}  # a refused write leaves the file as it was
+    assert [p.name for p in tmp_path.iterdir()] == ["out.json"]  # and no temporary file
+    write_json({"t": np.float64(2.5), "x": object()}, path, indent=None, default=lambda o: "obj")
+    assert path.read_text() == '{"t": 2.5, "x": "obj"}\n'
+    with pytest.raises(ValueError, match="non_finite"):
+        write_json({}, path, non_finite="drop")

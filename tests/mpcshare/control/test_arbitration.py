@@ -11,7 +11,7 @@ from mpcshare.control.arbitration import STRATEGIES, Arbiter, fuse, reactive_vel
 
 
 def test_gate_rule_alpha_and_beta():
-    arb = Arbiter("paper_gate", beta=0.3, min_dwell_s=0.0)
+    arb = Arbiter("paper_gate", beta=0.3, min_dwell_s=0.0, handover_s=0.0)
     d = arb.decide(0.0, 0.9)
     assert (d.alpha, d.beta) == (1.0, 0.3)
     d = arb.decide(0.1, 0.1)
@@ -41,20 +41,20 @@ def test_blend_ramp_and_beta():
 
 def test_hysteresis_does_not_chatter():
     """A probability oscillating around 0.5 every tick leaves α where it was."""
-    arb = Arbiter("paper_gate", beta=0.5, on_threshold=0.6, off_threshold=0.4, min_dwell_s=0.0)
+    arb = Arbiter("paper_gate", beta=0.5, on_threshold=0.6, off_threshold=0.4, min_dwell_s=0.0, handover_s=0.0)
     alphas = [arb.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert set(alphas) == {0.0} and arb.handovers == []
     arb.decide(10.0, 0.95)  # the robot leads, then the same oscillation: it keeps leading
     alphas = [arb.decide(10.1 + 0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert set(alphas) == {1.0} and len(arb.handovers) == 1
     # without hysteresis (thresholds equal) and without dwell it toggles every tick: the test can fail
-    raw = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.0)
+    raw = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.0, handover_s=0.0)
     toggles = [raw.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert len(raw.handovers) == 100 and len(set(toggles)) == 2
 
 
 def test_dwell_time_limits_switch_rate():
-    arb = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.5)
+    arb = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.5, handover_s=0.0)
     for k in range(100):  # 10 s of a gate flipping between 0.1 and 0.9 every 0.1 s
         arb.decide(0.1 * k, 0.9 if k % 2 == 0 else 0.1)
     times = [h.t for h in arb.handovers]
@@ -63,7 +63,7 @@ def test_dwell_time_limits_switch_rate():
 
 @pytest.mark.parametrize("strategy", ["paper_gate", "gate", "blend"])
 def test_overrides_force_alpha_zero_at_once(strategy):
-    arb = Arbiter(strategy, beta=0.5, novelty_threshold=10.0, min_dwell_s=5.0)
+    arb = Arbiter(strategy, beta=0.5, novelty_threshold=10.0, min_dwell_s=5.0, handover_s=0.0)
     assert arb.decide(0.0, 1.0).alpha == 1.0
     d = arb.decide(0.1, 1.0, novelty=11.0)  # within the dwell time, yet α = 0 at once
     assert (d.alpha, d.beta) == (0.0, 1.0) and "novelty" in d.reason

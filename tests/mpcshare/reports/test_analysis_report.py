@@ -9,16 +9,17 @@ from mpcshare.reports.analysis import (
     fmt_p,
     fmt_p_value,
     plot_demonstrations,
-    write_json_atomic,
 )
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 
 def test_json_is_atomic_and_strict(tmp_path):
+    from learning.atomic import write_json
+
     path = tmp_path / "r.json"
-    write_json_atomic({"a": 1}, path)
+    write_json({"a": 1}, path, non_finite="raise")
     with pytest.raises(ValueError):
-        write_json_atomic({"a": float("inf")}, path)  # not JSON: refused
+        write_json({"a": float("inf")}, path, non_finite="raise")  # not JSON: refused
     assert json.loads(path.read_text()) == {"a": 1}  # the old file is intact
     assert [p.name for p in tmp_path.iterdir()] == ["r.json"]  # no temporary left behind
 

@@ -1,0 +1,68 @@
+"""Docstrings name things that exist: every Sphinx-role reference to a first-party name
+(``:mod:``, ``:class:``, ``:func:``, ``:meth:``, ``:data:``, ``:attr:``, ``:exc:``) resolves, and every
+file of the repository a docstring names (``tests/….py``, ``docs/….md``, ``benchmarks/….py``,
+``examples/….py``) is there."""
+
+from __future__ import annotations
+
+import importlib
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("learning", "robot", "sim", "mpcshare")
+ROLE = re.compile(r":(?:mod|class|func|meth|data|attr|exc):`~?((?:learning|robot|sim|mpcshare)(?:\.\w+)+)`")
+FILE = re.compile(r"\b((?:tests|docs|benchmarks|examples)/[\w/.-]+\.(?:py|md))\b")
+
+
+def _resolves(name: str) -> bool:
+    """``name`` is a module, or an attribute path from the longest importable module prefix."""
+    parts = name.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        try:
+            for part in parts[i:]:
+                obj = getattr(obj, part)
+        except AttributeError:
+            return False
+        return True
+    return False
+
+
+def _sources() -> list[Path]:
+    return [p for package in PACKAGES for p in sorted((ROOT / package).rglob("*.py"))]
+
+
+def test_references_in_docstrings_resolve():
+    bad = [f"{p.relative_to(ROOT)} names {m.group(1)}"
+           for p in _sources() for m in ROLE.finditer(p.read_text()) if not _resolves(m.group(1))]
+    assert not bad, "\n".join(bad)
+
+
+def test_files_named_in_docstrings_exist():
+    bad = [f"{p.relative_to(ROOT)} names {m.group(1)}"
+           for p in _sources() for m in FILE.finditer(p.read_text()) if not (ROOT / m.group(1)).exists()]
+    assert not bad, "\n".join(bad)
+
+
+def test_the_checks_see_a_missing_name():
+    assert _resolves("sim.wearer_protocol.Wearer") and _resolves("learning.modes.ModeFilter")
+    assert not _resolves("learning.modes_online.ModeFilter") and not _resolves("robot.superlimb.mjcf_arm_body")
+    assert FILE.findall("see tests/sim/test_reach.py.") == ["tests/sim/test_reach.py"]
+
+
+def test_the_package_docstrings_list_their_modules_and_commands():
+    import mpcshare
+    import sim
+    from mpcshare.cli import COMMANDS
+
+    missing = [f"sim.{p.stem}" for p in sorted((ROOT / "sim").glob("*.py"))
+               if p.stem != "__init__" and f":mod:`sim.{p.stem}`" not in sim.__doc__]
+    missing += [f"mpcshare.{p.stem if p.suffix else p.name}" for p in sorted((ROOT / "mpcshare").iterdir())
+                if (p.suffix == ".py" and p.stem not in ("__init__", "__main__")) or (p / "__init__.py").exists()
+                if f":mod:`mpcshare.{p.stem if p.suffix else p.name}`" not in mpcshare.__doc__]
+    missing += [f"command {c.name}" for c in COMMANDS if f"``{c.name}``" not in mpcshare.__doc__]
+    assert not missing, f"not in the package docstrings: {missing}"
