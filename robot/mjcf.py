@@ -42,6 +42,8 @@ def joint_axis(joint) -> tuple[str, np.ndarray]:
             return kind, np.array(_AXES[name[-1]])
     if name in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
         axis = np.asarray(joint.extract().axis, dtype=float)
+        if not np.linalg.norm(axis) > 0:
+            raise UnsupportedModelError(f"joint axis must be non-zero, got {axis}")
         return ("hinge" if "Revolute" in name else "slide"), axis / np.linalg.norm(axis)
     raise UnsupportedModelError(f"joint type {name} is not supported; only revolute and prismatic joints "
                                 "(RX, RY, RZ, PX, PY, PZ, RevoluteUnaligned, PrismaticUnaligned)")
