@@ -9,7 +9,8 @@ own knowledge (its hand-written MJCF, the closed-form inverse, the exact reach s
 Frames: the model's world frame is the frame the arm is worn in (the wearer's torso,
 x forward, y left, z up); the **mount** (``mount_xyz`` [m], ``mount_rpy`` [rad], URDF
 roll-pitch-yaw) places the file's root in it and is applied to the model (the joints
-and frames attached to the root). Limits: position [rad], velocity [rad/s] and torque
+and frames attached to the root; Pinocchio's MJCF reader drops the root body's own pose, so
+an MJCF arm is placed by the mount alone). Limits: position [rad], velocity [rad/s] and torque
 [N·m] from the file, acceleration [rad/s²] and the braking deceleration the viable
 position limit relies on [rad/s²] given here (files have none).
 """

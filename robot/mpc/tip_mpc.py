@@ -254,7 +254,7 @@ class TipMPC:
         tips = np.vstack([nodes["tip"][:1], nodes["tip_next"]])
         if not (np.isfinite(w).all() and np.isfinite(tips).all()):
             return self._failure("nonfinite_solution", t0, q, v, iterations, qp_iterations)
-        self._guess = self._shifted(w, X[-1, 3:])
+        self._guess = self._shifted(w, X[-1, self.n:])
         n = self.n
         self._a_prev = w[:n].copy()
         first = prob.violation(nodes["g"][0], w[:n], nodes=1)  # what the arm executes now
