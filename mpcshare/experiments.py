@@ -234,8 +234,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     with them (and labels in the data) each run also gets the task figures of
     :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
     simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
-    the comparison records them and the preset's name. ``scene``: the world and its arm (default
-    the SuperLimb's, :func:`simulate_episode`).
+    the comparison records them and the preset's name. ``scene``: the arm's world (:func:`simulate_episode`).
     """
     make_controller = make_controller or _from_bundle
     known = set(demos.trial_ids)
