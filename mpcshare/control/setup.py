@@ -105,12 +105,9 @@ def make_qp(robot, config, dt: float):
     mid-range, the QP's own default)."""
     from robot.qp import QPConfig, QPController
 
-    changes = {} if abs(config.dt - dt) < 1e-12 else {"dt": dt}
-    if config.q_posture is None:
-        changes["q_posture"] = robot.q_home
-    if changes:
-        config = QPConfig(**{**config.__dict__, **changes})
-    return QPController(robot.model, robot.tip_frame_id, robot.limits, config)
+    if abs(config.dt - dt) >= 1e-12:
+        config = QPConfig(**{**config.__dict__, "dt": dt})
+    return QPController.for_robot(robot, config)
 
 
 def make_mpc(robot, dt: float):
