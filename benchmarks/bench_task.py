@@ -60,6 +60,16 @@ def make_data(kind: str) -> Demonstrations:
     raise SystemExit(f"--data-kind must be default, other_seed or other_structure, got {kind!r}")
 
 
+def bundle_and_data(bundle_dir: str | None, data: str | None, kind: str):
+    """(bundle, demos): a saved bundle and its data file, or a bundle trained on the data kind."""
+    if bundle_dir:
+        return load_bundle(bundle_dir), load(data)
+    from mpcshare.training import train_bundle
+
+    demos = make_data(kind)
+    return train_bundle(demos, progress=False), demos
+
+
 def latency_budget(bundle, demos: Demonstrations, trial_id: int, duration_s: float, strategy: str) -> dict:
     """Stage shifts in the closed loop (module docstring)."""
     trial = next(t for t in demos.trials if t.trial_id == trial_id)
@@ -142,13 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--duration", type=float, default=30.0)
     a = p.parse_args(argv)
     t0 = time.perf_counter()
-    if a.bundle:
-        bundle, demos = load_bundle(a.bundle), load(a.data)
-    else:
-        from mpcshare.training import train_bundle
-
-        demos = make_data(a.data_kind)
-        bundle = train_bundle(demos, progress=False)
+    bundle, demos = bundle_and_data(a.bundle, a.data, a.data_kind)
     trials = list(bundle.heldout_trials[:a.trials])
     result: dict = {"data": a.data_kind if not a.bundle else a.data, "trials": trials, "duration_s": a.duration,
                     "forecast_rmse": bundle.metrics.get("forecast"), "runs": {}, "targets": {}}

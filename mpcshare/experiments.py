@@ -36,6 +36,7 @@ from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
 from sim.closed_loop import run_episode
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
+from sim.scene import SceneConfig
 from sim.task_metrics import TASK_KEYS, episode_task_metrics
 from sim.wearer import WearerConfig
 from sim.wearer_presets import wearer_preset_name
@@ -171,14 +172,19 @@ def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
 def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: StrategyRun, options: dict[str, Any],
                      *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
                      mode_names: Sequence[str] | None,
-                     make_controller: Callable[..., Any] | None = None) -> tuple[Any, dict[str, Any]]:
+                     make_controller: Callable[..., Any] | None = None,
+                     scene: SceneConfig | None = None) -> tuple[Any, dict[str, Any]]:
     """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
-    its metrics: :func:`sim.metrics.episode_metrics` and the task figures of :mod:`sim.task_metrics`."""
+    its metrics: :func:`sim.metrics.episode_metrics` and the task figures of :mod:`sim.task_metrics`.
+    ``scene``: the world and its arm (default ``SceneConfig()``, the SuperLimb); the controller is
+    given the scene's arm (``robot=``)."""
     make_controller = make_controller or _from_bundle
     if run.oracle:
         options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
+    if scene is not None:
+        options = {**options, "robot": scene.robot}
     controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
-    episode = run_episode(controller, trial, duration_s=duration_s, seed=seed, wearer=wearer,
+    episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
                           obs_names=list(demos.obs_names), act_names=list(demos.act_names))
     m = episode_metrics(episode)
     true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
@@ -193,7 +199,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        make_controller: Callable[..., Any] | None = None,
                        log: Callable[[str], None] | None = print,
                        mode_names: Sequence[str] | None = None, mcap: bool = False,
-                       wearer: WearerConfig | None = None) -> Comparison:
+                       wearer: WearerConfig | None = None, scene: SceneConfig | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -206,7 +212,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     with them (and labels in the data) each run also gets the task figures of
     :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
     simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
-    the comparison records them and the preset's name.
+    the comparison records them and the preset's name. ``scene``: the arm's world (:func:`simulate_episode`).
     """
     make_controller = make_controller or _from_bundle
     known = set(demos.trial_ids)
@@ -228,7 +234,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     def simulate(run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
         episode, m = simulate_episode(bundle, demos, by_id[tid], run, options, beta=beta, duration_s=duration_s,
                                       seed=seed, wearer=wearer, mode_names=mode_names,
-                                      make_controller=make_controller)
+                                      make_controller=make_controller, scene=scene)
         if run.name in _SOURCES:
             cache[(run.name, tid)] = (episode, m)
         return episode, m
@@ -320,8 +326,8 @@ def describe_wearer(wearer: WearerConfig | None) -> dict[str, Any]:
 
 def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
                 strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = DEFAULT_BETA,
-                make_controller: Callable[..., Any] | None = None,
-                wearer: WearerConfig | None = None) -> tuple[str | None, str | None]:
+                make_controller: Callable[..., Any] | None = None, wearer: WearerConfig | None = None,
+                scene: SceneConfig | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
 
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
@@ -331,7 +337,9 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
     trial = next((tr for tr in demos.trials if tr.trial_id == int(trial_id)), None)
     if trial is None:
         raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
-    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta)
-    episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False, wearer=wearer,
+    robot = {} if scene is None else {"robot": scene.robot}
+    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta, **robot)
+    episode = run_episode(controller, trial, scene=scene, duration_s=seconds, seed=seed, render=path, record=False,
+                          wearer=wearer,
                           obs_names=list(demos.obs_names), act_names=list(demos.act_names))
     return episode.info.get("video"), episode.info.get("render_message")

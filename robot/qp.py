@@ -151,10 +151,19 @@ class QPController:
 
     # ------------------------------------------------------------------
     @classmethod
+    def for_robot(cls, robot, config: QPConfig | None = None) -> "QPController":
+        """Controller on a :class:`~robot.description.RobotDescription`'s tip frame with its limits; the
+        posture task defaults to the arm's ``q_home`` (the SuperLimb: mid-range, as the QP's own default)."""
+        cfg = config or QPConfig()
+        if cfg.q_posture is None:
+            cfg = QPConfig(**{**cfg.__dict__, "q_posture": robot.q_home})
+        return cls(robot.model, robot.tip_frame_id, robot.limits, cfg)
+
+    @classmethod
     def for_superlimb(cls, params=None, config: QPConfig | None = None) -> "QPController":
         """Controller on the SuperLimb's ``knife_tip`` with its derived limits."""
-        from .model_files import build_pinocchio_model
-        from .superlimb import TOOL_FRAME, SuperLimbParams
+        from .superlimb.model_files import build_pinocchio_model
+        from .superlimb.params import TOOL_FRAME, SuperLimbParams
 
         p = params or SuperLimbParams()
         return cls(build_pinocchio_model(p).model, TOOL_FRAME, JointLimits.from_superlimb(p), config)

@@ -10,7 +10,7 @@ Per control step k (t_k = k·T, T = 10 ms):
    the previous step's command is their cue of who leads (NaN before the first command or
    after a step without one);
 4. ``controller.step(t_k, obs_k, voluntary, q, v, base_pose)`` (timed);
-   a command that is not finite or not of shape (3,) makes the servo hold (status
+   a command that is not finite or not of the arm's joint shape (n,) makes the servo hold (status
    ``invalid_command``), an exception inside ``step`` likewise (``controller_error``):
    the loop never stops for the controller;
 5. ten physics steps: servo torque (:mod:`sim.servo`), ``mj_step2``; the realized
@@ -40,7 +40,6 @@ import mujoco
 import numpy as np
 
 from learning.data import Trial
-from robot.kinematics import ArmGeometry, nearest_reachable_q
 from sim.episode import Episode
 from sim.scene import EatingScene, SceneConfig
 from sim.servo import JointServo, ServoConfig
@@ -71,12 +70,13 @@ def _columns(names: list[str] | None, wanted: tuple[str, ...], where: str) -> li
     return [names.index(w) for w in wanted]
 
 
-def _vec3(x: Any) -> np.ndarray | None:
+def _vec(x: Any, n: int = 3) -> np.ndarray | None:
+    """``x`` as a finite (n,) float array, else None."""
     try:
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
         return None
-    return a if a.shape == (3,) and np.isfinite(a).all() else None
+    return a if a.shape == (n,) and np.isfinite(a).all() else None
 
 
 def _scalar(x: Any) -> float:
@@ -98,12 +98,13 @@ class _Loop:
         self.controller, self.trial, self.sc, self.person, self.fork_cols = controller, trial, sc, person, fork_cols
         self.n_ctrl, self.record = n_ctrl, record
         self.world = EatingScene(sc, seed=seed)
-        geom = ArmGeometry.from_params(sc.params)
-        q0 = nearest_reachable_q(geom, self.world.plate_to_torso(self.world.base_pose(0.0),
-                                                                  self.person.intent[0][None])[0])
-        self.world.set_state(q0, np.zeros(3), 0.0)
+        robot = sc.robot
+        self.n = n = robot.n
+        q0 = robot.inverse_kinematics(self.world.plate_to_torso(self.world.base_pose(0.0),
+                                                                self.person.intent[0][None])[0])
+        self.world.set_state(q0, np.zeros(n), 0.0)
         self.world.set_fork(trial.obs[0, fork_cols])
-        self.servo = JointServo(self.world.model, self.world.data, sc.params, servo)
+        self.servo = JointServo(self.world.model, self.world.data, robot, servo)
         # control-rate log
         self.out = {k: np.full((n_ctrl, 3), np.nan) for k in ("tip", "tip_reference", "voluntary")}
         self.alpha, self.beta, self.novelty = (np.full(n_ctrl, np.nan) for _ in range(3))
@@ -113,12 +114,13 @@ class _Loop:
         self.base_poses = np.zeros((n_ctrl, 4, 4))
         # physics-rate log and the limits checked on it
         n_sub, n_phys = sc.substeps, n_ctrl * sc.substeps if record else 0
-        self.rec_t, self.rec_q = np.zeros(n_phys), np.zeros((n_phys, 3))
-        self.rec_v, self.rec_tau = np.zeros((n_phys, 3)), np.zeros((n_phys, 3))
-        self._buf = (np.zeros(n_sub), np.zeros((n_sub, 3)), np.zeros((n_sub, 3)), np.zeros((n_sub, 3)))
-        self.q_lo, self.q_hi = sc.params.lower - LIMIT_TOL, sc.params.upper + LIMIT_TOL
-        self.v_lim = sc.params.velocity_limit + LIMIT_TOL
-        self.tau_lim = sc.params.torque_limit + TORQUE_TOL
+        self.rec_t, self.rec_q = np.zeros(n_phys), np.zeros((n_phys, n))
+        self.rec_v, self.rec_tau = np.zeros((n_phys, n)), np.zeros((n_phys, n))
+        self._buf = (np.zeros(n_sub), np.zeros((n_sub, n)), np.zeros((n_sub, n)), np.zeros((n_sub, n)))
+        lim = robot.limits
+        self.q_lo, self.q_hi = lim.q_min - LIMIT_TOL, lim.q_max + LIMIT_TOL
+        self.v_lim = lim.v_max + LIMIT_TOL
+        self.tau_lim = lim.tau_max + TORQUE_TOL
         self.violations, self.worst = 0, {"q": 0.0, "v": 0.0, "tau": 0.0}
 
     def control_step(self, k: int) -> None:
@@ -132,7 +134,7 @@ class _Loop:
         base = world.base_pose(t_k)
         cue = self.alpha[k - 1] if k > 0 else None  # what the controller showed at the previous step
         theta = self.person.step(k, tip, alpha_cue=cue)
-        q, v = d.qpos[:3].copy(), d.qvel[:3].copy()
+        q, v = d.qpos.copy(), d.qvel.copy()  # the arm is the whole state
         t0 = time.perf_counter()
         try:
             cmd = self.controller.step(t_k, self.trial.obs[k].copy(), theta.copy(), q, v, base)
@@ -140,7 +142,7 @@ class _Loop:
         except Exception as exc:  # noqa: BLE001  (the loop must go on: hold, and say why)
             cmd, err = None, f"controller_error: {type(exc).__name__}: {exc}"
         self.step_time[k] = time.perf_counter() - t0
-        seg = None if cmd is None else [_vec3(getattr(cmd, a, None)) for a in ("q_cmd", "v_cmd", "a_cmd")]
+        seg = None if cmd is None else [_vec(getattr(cmd, a, None), self.n) for a in ("q_cmd", "v_cmd", "a_cmd")]
         if seg is not None and all(x is not None for x in seg):
             self.servo.set_segment(seg[0], seg[1], seg[2], t_k + sc.control_period)
             self.status[k] = str(getattr(cmd, "status", "ok"))
@@ -154,7 +156,7 @@ class _Loop:
     def _log_command(self, k: int, cmd: Any) -> None:
         self.alpha[k], self.beta[k] = _scalar(getattr(cmd, "alpha", np.nan)), _scalar(getattr(cmd, "beta", np.nan))
         self.novelty[k] = _scalar(getattr(cmd, "novelty", np.nan))
-        ref = _vec3(getattr(cmd, "tip_reference", None))
+        ref = _vec(getattr(cmd, "tip_reference", None))
         if ref is not None:
             self.out["tip_reference"][k] = ref
         proba = np.asarray(getattr(cmd, "mode_proba", ()), dtype=float).reshape(-1)

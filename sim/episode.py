@@ -24,7 +24,7 @@ class Episode:
     """The record of one closed-loop run.
 
     Physics rate (1 kHz): ``t_physics`` (Np,) [s] (time after each step), ``q``,
-    ``v`` (Np, 3) realized [rad, rad/s], ``tau`` (Np, 3) applied [N·m].
+    ``v`` (Np, n) realized [rad, rad/s], ``tau`` (Np, n) applied [N·m] (n: the arm's joints).
     Control rate (100 Hz): ``t`` (Nc,) [s], ``alpha``, ``beta`` (Nc,), ``mode`` (Nc,)
     int (argmax of ``mode_proba``, −1 if none), ``tip``, ``tip_reference``,
     ``tip_intent`` (Nc, 3) [m] plate frame, ``voluntary`` (Nc, 3) [rad], ``status``

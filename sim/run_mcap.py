@@ -214,11 +214,13 @@ def write_run_mcap(episode: Episode, path: str | Path, *, fork: np.ndarray | Non
             previous = status
     keep = slice(0, None, joint_stride)
     t_phys = np.asarray(episode.t_physics, dtype=float)[keep]
+    n_joints = np.asarray(episode.q).shape[1] if np.ndim(episode.q) == 2 else len(JOINT_NAMES)
+    joint_names = list(JOINT_NAMES) if n_joints == len(JOINT_NAMES) else [f"joint_{i + 1}" for i in range(n_joints)]
     for t, q, v, tau in zip(t_phys.tolist(), np.asarray(episode.q, dtype=float)[keep].tolist(),
                             np.asarray(episode.v, dtype=float)[keep].tolist(),
                             np.asarray(episode.tau, dtype=float)[keep].tolist()):
         ns = start_ns + int(round(t * 1e9))
-        add(ns, "/arm/joint_states", {"timestamp": _stamp(ns), "name": list(JOINT_NAMES), "position": q,
+        add(ns, "/arm/joint_states", {"timestamp": _stamp(ns), "name": joint_names, "position": q,
                                       "velocity": v, "effort": tau})
     events.sort(key=lambda e: (e[0], e[1]))
 

@@ -1,12 +1,13 @@
-"""The MuJoCo eating scene: a swaying torso wearing the SuperLimb, a table, a plate, food, the fork.
+"""The MuJoCo eating scene: a swaying torso wearing an arm (the SuperLimb by default), a table, a plate, food, the fork.
 
 Frames (all right-handed, metres):
 
 * **world**: the seat under the wearer's sternum at the neutral posture, x
   forward, y to the wearer's left, z up;
-* **torso** (a mocap body) = the model world frame of :mod:`robot.superlimb`
-  (the Pinocchio model's ``world``); the arm's subtree
-  (:func:`robot.model_files.mjcf_arm_body`) is mounted in it on the right side;
+* **torso** (a mocap body) = the model world frame of the arm's
+  :class:`robot.description.RobotDescription` (the Pinocchio model's ``world``); the arm's
+  subtree (``RobotDescription.mjcf_body``) is mounted in it at the description's mount (the
+  SuperLimb: on the right side of the chest);
 * **plate**: origin at the plate's centre on its top surface, z up, x away from
   the wearer (fixed in the world at ``SceneConfig.plate_position``).
 
@@ -39,8 +40,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from robot.model_files import mjcf_actuators, mjcf_arm_body
-from robot.superlimb import TOOL_FRAME, SuperLimbParams, rpy_to_matrix
+from robot.description import RobotDescription, as_description
+from robot.superlimb import rpy_to_matrix, superlimb_description
 
 __all__ = ["EatingScene", "SceneConfig", "build_scene_xml", "pose_matrix"]
 
@@ -63,11 +64,15 @@ class SceneConfig:
     """Settings of the scene (lengths [m], frequencies [Hz], angles [rad]).
 
     Attributes:
-        params: the SuperLimb (mount on the right side of the chest).
+        robot: the arm (a :class:`robot.description.RobotDescription`; a ``SuperLimbParams`` is
+            turned into one); default the SuperLimb, mounted on the right side of the chest.
+            A mount given in the plate frame is ``plate_position`` + that position in the torso
+            frame (the torso at rest is the world; plate axes = world axes).
         plate_position: plate frame origin in the world (= torso at rest): 0.40 m in
             front of the sternum, 0.10 m to the right (the knife side), 0.21 m above
-            the seat; chosen so that the knife tips of the default demonstrations
-            are reachable, also with the torso swayed (tests/robot/test_kinematics.py).
+            the seat; chosen so that every knife tip of the default demonstrations
+            is reachable by the SuperLimb
+            (tests/robot/test_kinematics.py::test_demonstrated_knife_tips_reachable_and_on_or_above_the_plate).
         plate_radius, plate_height: plate geometry.
         table_height: table top above the seat (below the plate).
         breathing_hz, breathing_amplitude_m: breathing sway (x, y, z) of the torso.
@@ -76,7 +81,7 @@ class SceneConfig:
         control_period: controller period [s] (100 Hz), a multiple of ``timestep``.
     """
 
-    params: SuperLimbParams = field(default_factory=SuperLimbParams)
+    robot: RobotDescription = field(default_factory=superlimb_description)
     plate_position: tuple[float, float, float] = (0.40, -0.10, 0.21)
     plate_radius: float = 0.12
     plate_height: float = 0.015
@@ -90,6 +95,7 @@ class SceneConfig:
     control_period: float = 0.01
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "robot", as_description(self.robot))
         if not (self.timestep > 0 and self.control_period > 0):
             raise ValueError(f"timestep and control_period must be > 0, got {self.timestep}, {self.control_period}")
         ratio = self.control_period / self.timestep
@@ -98,6 +104,18 @@ class SceneConfig:
         for name in ("breathing_hz", "posture_hz", "plate_radius", "plate_height"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"SceneConfig.{name} must be >= 0, got {getattr(self, name)}")
+
+    @property
+    def params(self):
+        """The SuperLimb's parameters (old name; only for the SuperLimb)."""
+        params = getattr(self.robot, "params", None)
+        if params is None:
+            raise AttributeError(f"SceneConfig.params: the arm {self.robot.name!r} is not a SuperLimb; use .robot")
+        return params
+
+    def mount_in_torso(self, mount_plate: tuple[float, float, float]) -> tuple[float, float, float]:
+        """A mount position [m] given in the plate frame, in the torso frame (module docstring frames)."""
+        return tuple(float(m + p) for m, p in zip(mount_plate, self.plate_position))  # type: ignore[return-value]
 
     @property
     def substeps(self) -> int:
@@ -123,15 +141,15 @@ _FOOD = ((-0.03, 0.03), (0.04, -0.02), (0.0, -0.05), (0.05, 0.05))  # piece cent
 def build_scene_xml(config: SceneConfig | None = None) -> str:
     """The scene's MJCF (see module docstring): torso (mocap) with the arm, table, plate, food, fork (mocap)."""
     c = config or SceneConfig()
-    p = c.params
+    robot = c.robot
     px, py, pz = c.plate_position
     food = "".join(
         f'      <geom name="food{i}" type="box" size="0.012 0.012 0.008" pos="{x} {y} 0.008" rgba="0.8 0.55 0.3 1"/>\n'
         for i, (x, y) in enumerate(_FOOD))
-    arm = mjcf_arm_body(p, indent=6)
+    arm = robot.mjcf_body(indent=6)
     return f"""<mujoco model="superlimb_eating">
   <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>
-  <option timestep="{c.timestep!r}" gravity="0 0 {-p.gravity!r}" integrator="Euler">
+  <option timestep="{c.timestep!r}" gravity="0 0 {-robot.gravity!r}" integrator="Euler">
     <flag contact="disable"/>
   </option>
   <visual><global offwidth="640" offheight="480"/></visual>
@@ -161,7 +179,7 @@ def build_scene_xml(config: SceneConfig | None = None) -> str:
     </body>
   </worldbody>
   <actuator>
-{mjcf_actuators(p, indent=4)}  </actuator>
+{robot.mjcf_actuators(indent=4)}  </actuator>
 </mujoco>
 """
 
@@ -178,18 +196,20 @@ class EatingScene:
         self.model = mujoco.MjModel.from_xml_string(build_scene_xml(c))
         self.data = mujoco.MjData(self.model)
         m = self.model
-        names = c.params.joint_names
+        names = c.robot.joint_names
         jids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, n) for n in names]
         self.qadr = np.array([m.jnt_qposadr[j] for j in jids])
         self.dofadr = np.array([m.jnt_dofadr[j] for j in jids])
-        if m.nv != 3 or list(self.dofadr) != [0, 1, 2]:
-            raise RuntimeError(f"scene must have exactly the arm's 3 DOFs, got nv={m.nv}")
+        n = len(names)
+        if m.nv != n or m.nq != n or list(self.dofadr) != list(range(n)) or list(self.qadr) != list(range(n)):
+            raise RuntimeError(f"the scene's state must be exactly the arm's {n} joints {names} in the model's "
+                               f"order, got nq={m.nq}, nv={m.nv}, DOF addresses {list(self.dofadr)}")
         self.torso_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "torso")
         self.fork_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "fork")
         self.plate_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "plate")
         self.torso_mocap = int(m.body_mocapid[self.torso_body])
         self.fork_mocap = int(m.body_mocapid[self.fork_body])
-        self.tip_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, TOOL_FRAME)
+        self.tip_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, c.robot.tip_frame)
         self.plate_p = np.array(c.plate_position, dtype=float)  # plate frame = world axes, shifted
         self.phases = np.random.default_rng(seed).uniform(0.0, 2.0 * math.pi, 2)
         self._ph0, self._ph1 = float(self.phases[0]), float(self.phases[1])

@@ -40,8 +40,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from robot.description import RobotDescription, as_description
 from robot.solvers import make_backend
-from robot.superlimb import SuperLimbParams
 
 __all__ = ["JointServo", "ServoConfig", "viable_next_velocity"]
 
@@ -83,32 +83,34 @@ class JointServo:
     braking with clipped torque), ``brake_infeasible`` (see module docstring).
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, params: SuperLimbParams | None = None,
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, robot: RobotDescription | None = None,
                  config: ServoConfig | None = None) -> None:
-        p = params or SuperLimbParams()
+        robot = as_description(robot)  # None or SuperLimbParams: the SuperLimb
+        lim = robot.limits
+        self.n = n = robot.n
         self.model, self.data, self.config = model, data, config or ServoConfig()
-        if model.nv != 3 or model.nq != 3 or model.nu != 3:
-            raise ValueError(f"JointServo drives a 3-DOF arm as the whole state (nq = nv = nu = 3), model has "
-                             f"nq={model.nq}, nv={model.nv}, nu={model.nu}")
+        if model.nv != n or model.nq != n or model.nu != n:
+            raise ValueError(f"JointServo drives the {n}-joint arm {robot.name!r} as the whole state "
+                             f"(nq = nv = nu = {n}), model has nq={model.nq}, nv={model.nv}, nu={model.nu}")
         if model.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
             raise ValueError("JointServo predicts MuJoCo's semi-implicit Euler step: set integrator=\"Euler\"")
         if np.any(model.dof_damping != 0):
             raise ValueError("JointServo assumes zero joint damping (Euler treats damping implicitly)")
         self.h = float(model.opt.timestep)
-        self.q_min, self.q_max = p.lower.tolist(), p.upper.tolist()
-        self.v_max, self.A = p.velocity_limit.tolist(), p.braking_acceleration.tolist()
-        self.tau_max = p.torque_limit
+        self.q_min, self.q_max = lim.q_min.tolist(), lim.q_max.tolist()
+        self.v_max, self.A = lim.v_max.tolist(), lim.a_brake.tolist()
+        self.tau_max = np.array(lim.tau_max)
         self._tau_max_l = self.tau_max.tolist()
         self.kp = self.config.omega ** 2
         self.kd = 2.0 * self.config.zeta * self.config.omega
-        self._M = np.zeros((3, 3))
+        self._M = np.zeros((n, n))
         # per-step scratch arrays (no allocation on the fast path)
-        self._a, self._lo, self._hi, self._a_des = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-        self._tau, self._tau_brake, self._a_brake = np.zeros(3), np.zeros(3), np.zeros(3)
+        self._a, self._lo, self._hi, self._a_des = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+        self._tau, self._tau_brake, self._a_brake = np.zeros(n), np.zeros(n), np.zeros(n)
         # beyond this distance to a limit the viable bound exceeds v_max: v_max²/(2A) + v_max·h [rad]
         self._free_gap = [vm * vm / (2.0 * a) + vm * self.h for vm, a in zip(self.v_max, self.A)]
-        self._qp = make_backend("auto", 3, 6, 1e-12)
-        self._G = np.zeros((6, 3))
+        self._qp = make_backend("auto", n, 2 * n, 1e-12)
+        self._G = np.zeros((2 * n, n))
         self.qp_steps = self.fallback_steps = self.brake_infeasible = 0
         self.hold()
 
@@ -119,25 +121,25 @@ class JointServo:
 
     def hold(self) -> None:
         """Stop and hold the current position (used when a command is not usable)."""
-        self._seg_l = (self.data.qpos[:3].tolist(), [0.0] * 3, [0.0] * 3, float(self.data.time))
+        self._seg_l = (self.data.qpos[:self.n].tolist(), [0.0] * self.n, [0.0] * self.n, float(self.data.time))
 
     def torque(self) -> np.ndarray:
-        """τ (3,) [N·m] for the state in ``data`` (after ``mj_step1``); within ±τ_max always.
+        """τ (n,) [N·m] for the state in ``data`` (after ``mj_step1``); within ±τ_max always.
 
-        Plain-float arithmetic on the fast path: for 3 joints at 1 kHz, numpy's
+        Plain-float arithmetic on the fast path: for a handful of joints at 1 kHz, numpy's
         per-call overhead would cost more than the physics step itself.  Far from
         a position limit (gap ≥ v_max²/(2A) + v_max·h) the viable bound cannot be
         below v_max and is not evaluated.  Braking feasibility is checked where
         the servo may rely on it: whenever the viable box or the torque limit is active.
         """
         d, h = self.data, self.h
-        q, v = d.qpos.tolist(), d.qvel.tolist()  # nq = nv = 3 (checked in __init__)
+        q, v = d.qpos.tolist(), d.qvel.tolist()  # nq = nv = n (checked in __init__)
         q_c, v_c, a_c, t_end = self._seg_l
         r = max(t_end - d.time, 0.0)
         kp, kd, vmax, A, free = self.kp, self.kd, self.v_max, self.A, self._free_gap
         a, lo, hi, a_des = self._a, self._lo, self._hi, self._a_des
         active = False
-        for i in range(3):
+        for i in range(self.n):
             qi, vi = q[i], v[i]
             ad = a_c[i] + kp * (q_c[i] - v_c[i] * r + 0.5 * a_c[i] * r * r - qi) + kd * (v_c[i] - a_c[i] * r - vi)
             gap_up, gap_lo = self.q_max[i] - qi, qi - self.q_min[i]
@@ -155,24 +157,22 @@ class JointServo:
         tau = self._tau
         mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
         tau += d.qfrc_bias
-        t0, t1, t2 = tau.tolist()
-        tmax = self._tau_max_l
-        fits = abs(t0) <= tmax[0] and abs(t1) <= tmax[1] and abs(t2) <= tmax[2]
+        fits = all(abs(t) <= m for t, m in zip(tau.tolist(), self._tau_max_l))
         if active or not fits:
             self._check_brake(v)
         if fits:
             return tau.copy()
         mujoco.mj_fullM(self.model, d, self._M)
-        return self._constrained(self._M.copy(), d.qfrc_bias[:3].copy(), a_des.copy(), lo.copy(), hi.copy())
+        return self._constrained(self._M.copy(), d.qfrc_bias.copy(), a_des.copy(), lo.copy(), hi.copy())
 
     def _check_brake(self, v: list[float]) -> None:
         """Count the step if braking a_b = clip(−v/h, ±A) would need more than τ_max."""
         ab = self._a_brake
-        for i in range(3):
+        for i in range(self.n):
             ab[i] = min(max(-v[i] / self.h, -self.A[i]), self.A[i])
         tb = self._tau_brake
         mujoco.mj_mulM(self.model, self.data, tb, ab)
-        tb += self.data.qfrc_bias[:3]
+        tb += self.data.qfrc_bias
         if np.any(np.abs(tb) > self.tau_max):
             self.brake_infeasible += 1
 
@@ -180,9 +180,9 @@ class JointServo:
                      hi: np.ndarray) -> np.ndarray:
         """Nearest a to a_des in the viable box with |M a + b| ≤ τ_max; braking if the QP fails."""
         self.qp_steps += 1
-        self._G[:3], self._G[3:] = M, -M
+        self._G[:self.n], self._G[self.n:] = M, -M
         h_rows = np.concatenate([self.tau_max - bias, self.tau_max + bias])
-        out = self._qp.solve(np.eye(3), -a_des, lo, hi, self._G, h_rows)
+        out = self._qp.solve(np.eye(self.n), -a_des, lo, hi, self._G, h_rows)
         if out.x is not None:
             a = np.minimum(np.maximum(out.x, lo), hi)
             tau = M @ a + bias

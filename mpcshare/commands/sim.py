@@ -8,7 +8,8 @@ upper bound, the placebo ``random_handover`` and the upper bound ``oracle_handov
 trial in MuJoCo
 beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
 ``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
-for Foxglove) and, with ``--video``, a video of the gate on the first trial.
+for Foxglove) and, with ``--video``, a video of the gate on the first trial. ``--robot FILE
+--tip-frame NAME --mount X Y Z`` simulates another arm (:mod:`mpcshare.commands.robot_options`).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from mpcshare.commands.base import (
     positive_int,
     prepare_output_folder,
 )
+from mpcshare.commands.robot_options import add_robot_arguments, scene_from_args
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.run_table import RUN_NAMES
 from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
@@ -72,6 +74,7 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--mcap", action="store_true", help="also write each run as runs/*.mcap (opens in Foxglove)")
     add_sim_arguments(p)
+    add_robot_arguments(p)
 
 
 def _parse_map(items: Any) -> dict[str, str]:
@@ -121,18 +124,22 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     runs = [r for r in DEFAULT_RUNS if r.name in args.runs]
     wearer_name = getattr(args, "wearer", DEFAULT_WEARER_PRESET)
     wearer = wearer_preset(wearer_name)
+    scene = scene_from_args(args)
+    if scene is not None:
+        arm = scene.robot
+        print(f"arm: {arm.name} ({arm.n} joints, tip {arm.tip_frame}) from {arm.source}")
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
-                              mcap=getattr(args, "mcap", False), wearer=wearer)
+                              mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene)
     shown = next((r for r in runs if r.name == "gate"), next((r for r in runs if r.schedule is None), None))
     if args.video and shown is None:
         print("no video: only replayed schedules were run (add --runs gate)")
     elif args.video and shown is not None:
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
                                      strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
-                                     beta=args.beta, wearer=wearer)
+                                     beta=args.beta, wearer=wearer, scene=scene)
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
     return write_comparison(comp, out)

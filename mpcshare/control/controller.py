@@ -61,15 +61,15 @@ from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fu
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
 from mpcshare.control.mpc_follow import MPCFollower
-from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
+from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc, make_qp
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
 from mpcshare.errors import ControllerTypeError
-from robot.kinematics import ReachShell, TipKinematics
-from robot.qp import QPConfig, QPController, QPStatus
+from robot.description import RobotDescription, as_description
+from robot.kinematics import TipKinematics
+from robot.qp import QPStatus
 from robot.shoulder import ShoulderMap
 from robot.smoothing import ReferenceSmoother
-from robot.superlimb import TOOL_FRAME, SuperLimbParams
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -85,15 +85,15 @@ def _finite(x: np.ndarray) -> bool:
 
 
 class SharedController:
-    """Shared control of the SuperLimb's knife tip from a trained bundle (module docstring).
-
-    Build with :meth:`from_bundle`. Misuse at construction raises ``mpcshare.errors.ControllerSetupError`` (a
-    ValueError; ``ControllerTypeError``: also a TypeError) naming what is wrong (channels, strategy, β, shapes …).
+    """Shared control of an arm's knife tip from a trained bundle (module docstring); ``robot``: any
+    ``RobotDescription`` (a ``SuperLimbParams`` or None: the SuperLimb). Build with :meth:`from_bundle`.
+    Misuse at construction raises ``mpcshare.errors.ControllerSetupError`` (a ValueError;
+    ``ControllerTypeError``: also a TypeError) naming what is wrong (channels, strategy, β, shapes …).
     """
 
     default_base_pose = DEFAULT_BASE_POSE
 
-    def __init__(self, bundle: ModelBundle, *, robot: SuperLimbParams | None = None, strategy: str = "gate",
+    def __init__(self, bundle: ModelBundle, *, robot: RobotDescription | None = None, strategy: str = "gate",
                  beta: float = DEFAULT_BETA, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
@@ -105,17 +105,14 @@ class SharedController:
         self.layout: BundleLayout = check_bundle(bundle, tip_channels, fork_channels)
         self.bundle, self.strategy = bundle, strategy
         self.shoulder = shoulder if shoulder is not None else ShoulderMap()
-        self.params = robot if robot is not None else SuperLimbParams()
-        if not isinstance(self.params, SuperLimbParams):
-            raise ControllerTypeError(f"robot must be a SuperLimbParams or None, got {type(robot).__name__}")
+        self.robot = as_description(robot)  # TypeError naming the choices for anything else
         self.dt = 1.0 / float(bundle.rate_hz)
-        qp_cfg = cfg.qp if abs(cfg.qp.dt - self.dt) < 1e-12 else QPConfig(**{**cfg.qp.__dict__, "dt": self.dt})
-        self.qp = QPController.for_superlimb(self.params, qp_cfg)
-        self.mpc = mpc if mpc is not None else (make_mpc(self.params, self.dt) if use_mpc else None)
+        self.qp = make_qp(self.robot, cfg.qp, self.dt)
+        self.mpc = mpc if mpc is not None else (make_mpc(self.robot, self.dt) if use_mpc else None)
         self.mpc_follower = None if self.mpc is None else \
             MPCFollower(self.mpc, self.dt, cfg.mpc_deadline_s, cfg.mpc_every)
-        self.tip = TipKinematics(self.qp.model, TOOL_FRAME)
-        self.reach = ReachShell(self.qp.model, self.tip.frame_id, margin=cfg.reach_margin)
+        self.tip = TipKinematics(self.qp.model, self.robot.tip_frame)
+        self.reach = self.robot.reach_shell(cfg.reach_margin)
         self.frontend = StreamingFrontEnd(bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz,
                                           model_hz=bundle.model_hz, window_s=bundle.window_s,
                                           detect_stale=cfg.detect_stale)
@@ -133,7 +130,7 @@ class SharedController:
         self.reset()
 
     @classmethod
-    def from_bundle(cls, folder_or_bundle: str | Path | ModelBundle, robot: SuperLimbParams | None = None,
+    def from_bundle(cls, folder_or_bundle: str | Path | ModelBundle, robot: RobotDescription | None = None,
                     strategy: str = "gate", beta: float = DEFAULT_BETA, use_mpc: bool = False,
                     shoulder: ShoulderMap | None = None,
                     **options) -> SharedController:
@@ -225,9 +222,9 @@ class SharedController:
         except Exception as exc:  # noqa: BLE001 — last line of defence: brake within limits, say why
             reason = f"{type(exc).__name__}: {exc}"
             try:
-                qa, va = np.asarray(q, dtype=float).reshape(3), np.asarray(v, dtype=float).reshape(3)
+                qa, va = (np.asarray(x, dtype=float).reshape(self.qp.n) for x in (q, v))
             except Exception:  # noqa: BLE001 — q, v unusable: hold
-                qa = va = np.full(3, np.nan)
+                qa = va = np.full(self.qp.n, np.nan)
             try:
                 return self._hold(qa, va, [("internal_error", reason)], {}, t0)
             except Exception:  # noqa: BLE001 — even the QP failed: repeat the last command at rest

@@ -20,7 +20,7 @@ from mpcshare.errors import ControllerSetupError
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["BundleLayout", "arbitration_inputs", "check_bundle", "make_mpc"]
+__all__ = ["BundleLayout", "arbitration_inputs", "check_bundle", "make_mpc", "make_qp"]
 
 DEFAULT_TIP = ("knife_x", "knife_y", "knife_z")
 DEFAULT_FORK = ("fork_x", "fork_y", "fork_z")
@@ -117,14 +117,25 @@ def arbitration_inputs(bundle: ModelBundle, options: dict[str, float] | None = N
             "transmat": None if transmat is None else np.asarray(transmat, dtype=float)}
 
 
-def make_mpc(params, dt: float):
-    """The CasADi tip MPC (``robot.mpc.tip_mpc.TipMPC``) for ``params`` at period ``dt`` [s]."""
+def make_qp(robot, config, dt: float):
+    """The joint QP (``robot.qp.QPController``) on ``robot``'s tip frame and limits at period ``dt`` [s];
+    ``config`` (``QPConfig``) with its posture defaulting to the arm's home posture (the SuperLimb:
+    mid-range, the QP's own default)."""
+    from robot.qp import QPConfig, QPController
+
+    if abs(config.dt - dt) >= 1e-12:
+        config = QPConfig(**{**config.__dict__, "dt": dt})
+    return QPController.for_robot(robot, config)
+
+
+def make_mpc(robot, dt: float):
+    """The CasADi tip MPC (``robot.mpc.tip_mpc.TipMPC``) for ``robot`` (a description) at period ``dt`` [s]."""
     try:
         from robot.mpc.tip_mpc import TipMPC
     except ImportError as exc:
         raise RuntimeError("use_mpc=True needs robot.mpc.tip_mpc.TipMPC, which cannot be imported "
                            f"({exc}); pass use_mpc=False to run the QP on the smoothed reference") from exc
-    mpc = TipMPC(params=params, dt=dt)
+    mpc = TipMPC(robot, dt=dt)
     if int(mpc.horizon) < 2:
         raise ControllerSetupError(f"the MPC horizon must be ≥ 2 steps, got {mpc.horizon}")
     return mpc

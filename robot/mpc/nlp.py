@@ -18,9 +18,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from robot.description import RobotDescription
 from robot.mpc.problem import Weights, _state_rows, state_row_bounds
 from robot.mpc.symbolic import SymbolicArm
-from robot.superlimb import SuperLimbParams
 
 _OPTIONS = {
     "ipopt": {"ipopt": {"print_level": 0, "tol": 1e-8, "max_iter": 200, "warm_start_init_point": "yes",
@@ -37,29 +37,29 @@ _OPTIONS = {
 class NlpSolver:
     """``nlpsol(plugin)`` on the multiple-shooting NLP, warm-started (primal and dual)."""
 
-    def __init__(self, plugin: str, params: SuperLimbParams, horizon: int, dt: float, weights: Weights) -> None:
-        H = horizon
-        arm = SymbolicArm(params)
-        P = ca.SX.sym("P", 6 + 3 * (H + 1) + 3)
-        x0p, p_ref, a_prev = P[:6], ca.reshape(P[6:6 + 3 * (H + 1)], 3, H + 1), P[6 + 3 * (H + 1):]
-        xs = [ca.SX.sym(f"x{k}", 6) for k in range(H + 1)]
-        as_ = [ca.SX.sym(f"a{k}", 3) for k in range(H)]
-        lb_s, ub_s = state_row_bounds(params)
-        tau_max = params.torque_limit
+    def __init__(self, plugin: str, robot: RobotDescription, horizon: int, dt: float, weights: Weights) -> None:
+        H, n, lim = horizon, robot.n, robot.limits
+        arm = SymbolicArm(robot)
+        P = ca.SX.sym("P", 2 * n + 3 * (H + 1) + n)
+        x0p, p_ref, a_prev = P[:2 * n], ca.reshape(P[2 * n:2 * n + 3 * (H + 1)], 3, H + 1), P[2 * n + 3 * (H + 1):]
+        xs = [ca.SX.sym(f"x{k}", 2 * n) for k in range(H + 1)]
+        as_ = [ca.SX.sym(f"a{k}", n) for k in range(H)]
+        lb_s, ub_s = state_row_bounds(lim)
+        tau_max = lim.tau_max
         w, g, lbg, ubg, eq = [], [], [], [], []
         cost = 0
         a_last = a_prev
         for k in range(H):
             x, a = xs[k], as_[k]
             w += [x, a]
-            q, v = x[:3], x[3:]
+            q, v = x[:n], x[n:]
             step = ca.vertcat(q + dt * v + 0.5 * dt * dt * a, v + dt * a)
-            rows = [(xs[k + 1] - step, np.zeros(6), np.zeros(6), True)]
+            rows = [(xs[k + 1] - step, np.zeros(2 * n), np.zeros(2 * n), True)]
             if k == 0:
-                rows.append((x - x0p, np.zeros(6), np.zeros(6), True))
+                rows.append((x - x0p, np.zeros(2 * n), np.zeros(2 * n), True))
             rows.append((arm.inverse_dynamics(q, v, a), -tau_max, tau_max, False))
             if k > 0:
-                rows.append((_state_rows(params, dt, q, v), lb_s, ub_s, False))
+                rows.append((_state_rows(lim, dt, q, v), lb_s, ub_s, False))
                 cost += weights.tracking * ca.sumsqr(arm.tip_position(q) - p_ref[:, k])
             for expr, lo, hi, is_eq in rows:
                 g.append(expr)
@@ -69,11 +69,11 @@ class NlpSolver:
             cost += weights.acceleration * ca.sumsqr(a) + weights.jerk * ca.sumsqr(a - a_last)
             a_last = a
         w.append(xs[H])
-        g.append(_state_rows(params, dt, xs[H][:3], xs[H][3:]))
+        g.append(_state_rows(lim, dt, xs[H][:n], xs[H][n:]))
         lbg.append(lb_s)
         ubg.append(ub_s)
-        eq += [False] * 9
-        cost += weights.terminal * ca.sumsqr(arm.tip_position(xs[H][:3]) - p_ref[:, H])
+        eq += [False] * (3 * n)
+        cost += weights.terminal * ca.sumsqr(arm.tip_position(xs[H][:n]) - p_ref[:, H])
         nlp = {"x": ca.vertcat(*w), "p": P, "f": cost, "g": ca.vertcat(*g)}
         opts = dict(_OPTIONS[plugin])
         if plugin == "fatrop":
@@ -81,11 +81,12 @@ class NlpSolver:
         self.solver = ca.nlpsol(f"tip_mpc_{plugin}", plugin, nlp, opts)
         self.horizon, self.plugin = H, plugin
         self.lbg, self.ubg = np.concatenate(lbg), np.concatenate(ubg)
-        n_x = 9 * H + 6
+        n_x = 3 * n * H + 2 * n
         self.lbx, self.ubx = np.full(n_x, -np.inf), np.full(n_x, np.inf)
-        a_idx = np.concatenate([9 * k + 6 + np.arange(3) for k in range(H)])
-        self.lbx[a_idx] = np.tile(-params.acceleration_limit, H)
-        self.ubx[a_idx] = np.tile(params.acceleration_limit, H)
+        a_idx = np.concatenate([3 * n * k + 2 * n + np.arange(n) for k in range(H)])
+        self.lbx[a_idx] = np.tile(-lim.a_max, H)
+        self.ubx[a_idx] = np.tile(lim.a_max, H)
+        self.n = n
         self._a_idx = a_idx
         self._lam_x: np.ndarray | None = None
         self._lam_g: np.ndarray | None = None
@@ -96,15 +97,15 @@ class NlpSolver:
 
     def solve(self, w0: np.ndarray, q: np.ndarray, v: np.ndarray, p_ref: np.ndarray,
               a_prev: np.ndarray) -> tuple[np.ndarray | None, int, str]:
-        """(accelerations (3H,) or None, iterations, status) from the guess w0."""
-        H, dt = self.horizon, self._dt
-        x_guess = np.zeros(9 * H + 6)
+        """(accelerations (nH,) or None, iterations, status) from the guess w0."""
+        H, dt, n = self.horizon, self._dt, self.n
+        x_guess = np.zeros(3 * n * H + 2 * n)
         qk, vk = q.copy(), v.copy()
         for k in range(H):
-            a = w0[3 * k:3 * k + 3]
-            x_guess[9 * k:9 * k + 9] = np.concatenate([qk, vk, a])
+            a = w0[n * k:n * k + n]
+            x_guess[3 * n * k:3 * n * (k + 1)] = np.concatenate([qk, vk, a])
             qk, vk = qk + dt * vk + 0.5 * dt * dt * a, vk + dt * a
-        x_guess[9 * H:] = np.concatenate([qk, vk])
+        x_guess[3 * n * H:] = np.concatenate([qk, vk])
         args = {"x0": x_guess, "p": np.concatenate([q, v, p_ref.reshape(-1), a_prev]),
                 "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
         if self._lam_g is not None:

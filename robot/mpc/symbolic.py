@@ -1,72 +1,43 @@
-"""SuperLimb kinematics and rigid-body dynamics as CasADi functions.
+"""Any arm's kinematics and rigid-body dynamics as CasADi functions, generated from its Pinocchio model.
 
-Pinocchio's CasADi bindings are not in the pip wheel, so the model the MPC
-needs is generated here from the same :class:`robot.superlimb.SuperLimbParams`
-that the URDF, the MJCF and the Pinocchio model are written from (joint
-origins and axes, link inertias, armature, gravity, mount, knife pitch and
-length).  Every quantity is in the Pinocchio model's ``world`` frame (the
-wearer's torso frame); q [rad], v [rad/s], a [rad/s²].
+Pinocchio's CasADi bindings (``pinocchio.casadi``) are not in the pip wheel, so the model
+the MPC needs is generated here from the numbers the Pinocchio model of a
+:class:`robot.description.RobotDescription` holds: joint placements, joint types and
+axes, body inertias (links fixed to a joint already lumped in), armature, gravity and the
+tool frame's placement. q [rad], v [rad/s], a [rad/s²]; positions in the model's world frame.
 
-Derivation: **recursive Newton–Euler** (Luh, Walker & Paul 1980) written with
-world-frame vectors.  Forward pass, body i with joint axis z_i (world), joint
-origin o_i and rotation R_i (world):
+Derivation: **recursive Newton–Euler** (Featherstone 2008, Table 5.1) in each body's
+joint frame, with spatial vectors written as pairs of 3-vectors. Joint i with parent λ,
+placement ``ᵏX_λ`` = (R, p) (child → parent: x_λ = R·x_i + p) times the joint motion
+(revolute: rotation about the unit axis s, R·Rot(s, q_i); prismatic: translation s·q_i),
+motion subspace S_i = (0, s) or (s, 0) (linear, angular):
 
-    ω_i = ω_{i−1} + z_i·v_i
-    ω̇_i = ω̇_{i−1} + z_i·a_i + ω_{i−1} × z_i·v_i
-    ö_i = ö_{i−1} + ω̇_{i−1} × r_i + ω_{i−1} × (ω_{i−1} × r_i),   r_i = o_i − o_{i−1},  ö_0 = −g
-    c̈_i = ö_i + ω̇_i × ρ_i + ω_i × (ω_i × ρ_i),                  ρ_i = R_i·com_i
+    v_i = ᵢX_λ·v_λ + S_i·v̇ᵢ… i.e.  ω_i = Rᵀω_λ (+ s·v_i),   ν_i = Rᵀ(ν_λ + ω_λ × p) (+ s·v_i)
+    a_i = ᵢX_λ·a_λ + S_i·a_i + v_i ×ₘ S_i·v_i,                 a_0 = (−g, 0)  (gravity as a base acceleration)
+    f_i = I_i·a_i + v_i ×* I_i·v_i,    I·(ν, ω) = (m(ν + ω × c), I_c·ω + c × m(ν + ω × c))
+    τ_i = S_iᵀ·f_i + I_a,i·a_i,        f_λ += ᵏX_λ*·f_i = (R·f, R·n + p × R·f)
 
-Backward pass (forces f and moments n about o_i, children j of i):
-
-    f_i = m_i·c̈_i + Σ_j f_j
-    n_i = I_i·ω̇_i + ω_i × I_i·ω_i + ρ_i × m_i·c̈_i + Σ_j (n_j + (o_j − o_i) × f_j),   I_i = R_i·I_c,i·R_iᵀ
-    τ_i = z_iᵀ·n_i + I_a,i·a_i                                        (I_a: armature)
-
-so that ``inverse_dynamics(q, v, a) = M(q)·a + h(q, v)``; M is its Jacobian
-with respect to a (exact, τ is linear in a) and h = τ(q, v, 0) (Pinocchio's
-``nonLinearEffects``).  The knife is rigidly fixed to the forearm and is
-lumped into the forearm body; ``base_link`` is fixed to the world and has no
-effect on the dynamics.  The tip Jacobian is ∂p/∂q (world-aligned, the
-translational rows of Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobian).
-Checked against Pinocchio in ``tests/robot/mpc/test_symbolic.py`` (1e-9).
+(motion cross (ν, ω) ×ₘ (ν', ω') = (ω × ν' + ν × ω', ω × ω'); force cross
+(ν, ω) ×* (f, n) = (ω × f, ω × n + ν × f); m, c, I_c: mass, centre of mass and inertia
+about it, in the joint frame). So ``inverse_dynamics(q, v, a) = M(q)·a + h(q, v)``; M is
+its Jacobian with respect to a (exact, τ is linear in a), h = τ(q, v, 0) (Pinocchio's
+``nonLinearEffects``) and ``forward_dynamics`` = M⁻¹(τ − h) (Pinocchio's ABA). The tip
+Jacobian is ∂p/∂q (world-aligned, the translational rows of Pinocchio's
+``LOCAL_WORLD_ALIGNED`` frame Jacobian). Checked against Pinocchio's RNEA, CRBA and ABA on
+random states in ``tests/robot/mpc/test_symbolic.py`` for the SuperLimb and a second arm.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from robot.superlimb import Inertial, SuperLimbParams, rpy_to_matrix
+from robot.description import RobotDescription, as_description
+from robot.mjcf import joint_axis
 
-_BODY_LINKS = ("turret_link", "upper_arm_link", "forearm_link")
-
-
-def _inertia_matrix(inertia: tuple[float, ...]) -> np.ndarray:
-    """(ixx, iyy, izz, ixy, ixz, iyz) → symmetric 3×3 [kg·m²]."""
-    ixx, iyy, izz, ixy, ixz, iyz = inertia
-    return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-
-
-@dataclass(frozen=True)
-class _Body:
-    """Mass [kg], centre of mass [m] and inertia about it [kg·m²], in the joint (link) frame."""
-
-    mass: float
-    com: np.ndarray
-    inertia: np.ndarray
-
-
-def _combine(parts: list[tuple[Inertial, np.ndarray, np.ndarray]]) -> _Body:
-    """Lump rigidly attached inertials, each placed by (R, t) in the body frame (parallel-axis theorem)."""
-    mass = sum(i.mass for i, _, _ in parts)
-    com = sum(i.mass * (t + R @ np.asarray(i.com)) for i, R, t in parts) / mass
-    inertia = np.zeros((3, 3))
-    for i, R, t in parts:
-        c = t + R @ np.asarray(i.com) - com
-        inertia += R @ _inertia_matrix(i.inertia) @ R.T + i.mass * (float(c @ c) * np.eye(3) - np.outer(c, c))
-    return _Body(float(mass), com, inertia)
+__all__ = ["SymbolicArm"]
 
 
 def _axis_rotation(axis: np.ndarray, angle: ca.SX) -> ca.SX:
@@ -76,80 +47,87 @@ def _axis_rotation(axis: np.ndarray, angle: ca.SX) -> ca.SX:
 
 
 class SymbolicArm:
-    """CasADi functions of the SuperLimb built from ``params`` (default parameters if None).
+    """CasADi functions of an arm (module docstring); ``robot`` a :class:`RobotDescription`
+    (None or a ``SuperLimbParams``: the SuperLimb).
 
-    Attributes (``casadi.Function``, SX inside, callable on numbers, SX or MX):
+    Attributes (``casadi.Function``, SX inside, callable on numbers, SX or MX), n joints:
 
-    - ``tip_position(q) -> p (3,)`` [m], the ``knife_tip`` frame origin in the world frame;
-    - ``tip_jacobian(q) -> J (3, 3)`` [m/rad], J = ∂p/∂q (world-aligned);
-    - ``mass_matrix(q) -> M (3, 3)`` [kg·m²], armature on the diagonal;
-    - ``nonlinear_effects(q, v) -> h (3,)`` [N·m], C(q, v)·v + g(q);
-    - ``inverse_dynamics(q, v, a) -> τ (3,)`` [N·m], M(q)·a + h(q, v).
+    - ``tip_position(q) -> p (3,)`` [m], the tool frame's origin in the world frame;
+    - ``tip_jacobian(q) -> J (3, n)`` [m/rad], J = ∂p/∂q (world-aligned);
+    - ``mass_matrix(q) -> M (n, n)`` [kg·m²], armature on the diagonal;
+    - ``nonlinear_effects(q, v) -> h (n,)`` [N·m], C(q, v)·v + g(q);
+    - ``inverse_dynamics(q, v, a) -> τ (n,)`` [N·m], M(q)·a + h(q, v);
+    - ``forward_dynamics(q, v, τ) -> a (n,)`` [rad/s²], M(q)⁻¹·(τ − h(q, v)).
     """
 
-    def __init__(self, params: SuperLimbParams | None = None) -> None:
-        self.params = params or SuperLimbParams()
-        q, v, a = ca.SX.sym("q", 3), ca.SX.sym("v", 3), ca.SX.sym("a", 3)
+    def __init__(self, robot: RobotDescription | Any = None) -> None:
+        self.robot = as_description(robot)
+        self.n = n = self.robot.n
+        q, v, a, tau_in = ca.SX.sym("q", n), ca.SX.sym("v", n), ca.SX.sym("a", n), ca.SX.sym("tau", n)
         tip, tau = self._rnea(q, v, a)
         M = ca.jacobian(tau, a)
-        h = ca.substitute(tau, a, ca.SX.zeros(3))
+        h = ca.substitute(tau, a, ca.SX.zeros(n))
         self.tip_position = ca.Function("tip_position", [q], [tip], ["q"], ["p"])
         self.tip_jacobian = ca.Function("tip_jacobian", [q], [ca.jacobian(tip, q)], ["q"], ["J"])
         self.mass_matrix = ca.Function("mass_matrix", [q], [M], ["q"], ["M"])
         self.nonlinear_effects = ca.Function("nonlinear_effects", [q, v], [h], ["q", "v"], ["h"])
         self.inverse_dynamics = ca.Function("inverse_dynamics", [q, v, a], [tau], ["q", "v", "a"], ["tau"])
+        self.forward_dynamics = ca.Function("forward_dynamics", [q, v, tau_in], [ca.solve(M, tau_in - h)],
+                                            ["q", "v", "tau"], ["a"])
 
     # ------------------------------------------------------------------
-    def _bodies(self) -> list[_Body]:
-        p = self.params
-        links = {link.name: link for link in p.links}
-        eye, zero = np.eye(3), np.zeros(3)
-        bodies = [_combine([(links[name].inertial, eye, zero)]) for name in _BODY_LINKS[:2]]
-        knife_R = rpy_to_matrix((0.0, p.knife_pitch, 0.0))
-        knife_t = np.array([p.forearm_length, 0.0, 0.0])
-        bodies.append(_combine([(links["forearm_link"].inertial, eye, zero),
-                                (links["knife_link"].inertial, knife_R, knife_t)]))
-        return bodies
-
     def _rnea(self, q: ca.SX, v: ca.SX, a: ca.SX) -> tuple[ca.SX, ca.SX]:
-        """Tip position and τ = M(q)·a + h(q, v) by world-frame recursive Newton–Euler (module docstring)."""
-        p = self.params
-        R = ca.DM(rpy_to_matrix(p.mount_rpy))
-        o = ca.DM(p.mount_xyz)
-        omega, omega_dot = ca.SX.zeros(3), ca.SX.zeros(3)
-        acc_o = ca.SX(ca.DM([0.0, 0.0, p.gravity]))  # ö_0 = −g: gravity as an upward base acceleration
-        frames = []  # per body: (R, o, z, ω, ω̇, c̈)
-        bodies = self._bodies()
-        for i, (joint, body) in enumerate(zip(p.joints, bodies)):
-            axis = np.asarray(joint.axis, dtype=float)
-            norm = float(np.linalg.norm(axis))
-            if norm == 0.0:
-                raise ValueError(f"joint {joint.name}: axis must be non-zero, got {joint.axis}")
-            axis = axis / norm
-            r = R @ ca.DM(joint.origin_xyz)
-            acc_o = acc_o + ca.cross(omega_dot, r) + ca.cross(omega, ca.cross(omega, r))
-            o = o + r
-            R = R @ ca.DM(rpy_to_matrix(joint.origin_rpy))
-            z = R @ ca.DM(axis)
-            R = R @ _axis_rotation(axis, q[i])
-            omega_dot = omega_dot + z * a[i] + ca.cross(omega, z * v[i])
-            omega = omega + z * v[i]
-            rho = R @ ca.DM(body.com)
-            acc_c = acc_o + ca.cross(omega_dot, rho) + ca.cross(omega, ca.cross(omega, rho))
-            frames.append((R, o, z, omega, omega_dot, rho, acc_c))
-        tip = frames[-1][1] + frames[-1][0] @ ca.DM([p.forearm_length, 0.0, 0.0])
-        tip = tip + frames[-1][0] @ ca.DM(rpy_to_matrix((0.0, p.knife_pitch, 0.0))) @ ca.DM([p.knife_length, 0.0, 0.0])
-
-        tau = [None, None, None]
-        f_child, n_child, o_child = ca.SX.zeros(3), ca.SX.zeros(3), None
-        for i in (2, 1, 0):
-            R_i, o_i, z, omega, omega_dot, rho, acc_c = frames[i]
-            body = bodies[i]
-            inertia = R_i @ ca.DM(body.inertia) @ R_i.T
-            f = body.mass * acc_c + f_child
-            n = inertia @ omega_dot + ca.cross(omega, inertia @ omega) + ca.cross(rho, body.mass * acc_c)
-            if o_child is not None:
-                n = n + n_child + ca.cross(o_child - o_i, f_child)
-            tau[i] = ca.dot(z, n) + p.joints[i].armature * a[i]
-            f_child, n_child, o_child = f, n, o_i
+        """Tip position and τ = M(q)·a + h(q, v) by recursive Newton–Euler (module docstring)."""
+        model = self.robot.model
+        g = np.asarray(model.gravity.linear, dtype=float)
+        zero = ca.SX.zeros(3)
+        # per joint: R, p (in the parent), world pose (R_o, p_o), velocity (ν, ω), acceleration (α_lin, α_ang)
+        R_of, p_of = {0: ca.SX(ca.DM.eye(3))}, {0: ca.SX.zeros(3)}
+        vel, acc = {0: (zero, zero)}, {0: (ca.SX(ca.DM(-g)), zero)}
+        local, forces, motion = {}, {}, {}
+        for j in range(1, model.njoints):
+            jm = model.joints[j]
+            kind, s = joint_axis(jm)
+            iv, lam = jm.idx_v, model.parents[j]
+            place = model.jointPlacements[j]
+            R, p = ca.DM(place.rotation), ca.DM(place.translation)
+            if kind == "hinge":
+                R = R @ _axis_rotation(s, q[iv])
+                S_lin, S_ang = ca.DM.zeros(3), ca.DM(s)
+            else:
+                p = p + R @ ca.DM(s) * q[iv]
+                S_lin, S_ang = ca.DM(s), ca.DM.zeros(3)
+            local[j], motion[j] = (R, p), (S_lin, S_ang)
+            R_of[j], p_of[j] = R_of[lam] @ R, p_of[lam] + R_of[lam] @ p
+            nu_l, om_l = vel[lam]
+            al_l, aa_l = acc[lam]
+            Rt = R.T
+            om = Rt @ om_l + S_ang * v[iv]
+            nu = Rt @ (nu_l + ca.cross(om_l, p)) + S_lin * v[iv]
+            sv_lin, sv_ang = S_lin * v[iv], S_ang * v[iv]
+            aa = Rt @ aa_l + S_ang * a[iv] + ca.cross(om, sv_ang)
+            al = Rt @ (al_l + ca.cross(aa_l, p)) + S_lin * a[iv] + ca.cross(om, sv_lin) + ca.cross(nu, sv_ang)
+            vel[j], acc[j] = (nu, om), (al, aa)
+            inertia = model.inertias[j]
+            m, c, Ic = float(inertia.mass), ca.DM(inertia.lever), ca.DM(inertia.inertia)
+            f_a = m * (al + ca.cross(aa, c))
+            n_a = Ic @ aa + ca.cross(c, f_a)
+            f_v = m * (nu + ca.cross(om, c))
+            n_v = Ic @ om + ca.cross(c, f_v)
+            forces[j] = [f_a + ca.cross(om, f_v), n_a + ca.cross(om, n_v) + ca.cross(nu, f_v)]
+        tau: list[ca.SX] = [None] * self.n  # type: ignore[list-item]
+        for j in range(model.njoints - 1, 0, -1):
+            f, n_ = forces[j]
+            S_lin, S_ang = motion[j]
+            iv = model.joints[j].idx_v
+            tau[iv] = ca.dot(S_lin, f) + ca.dot(S_ang, n_) + float(model.armature[iv]) * a[iv]
+            lam = model.parents[j]
+            if lam > 0:
+                R, p = local[j]
+                Rf = R @ f
+                forces[lam][0] = forces[lam][0] + Rf
+                forces[lam][1] = forces[lam][1] + R @ n_ + ca.cross(p, Rf)
+        frame = model.frames[self.robot.tip_frame_id]
+        jt = frame.parentJoint
+        tip = p_of[jt] + R_of[jt] @ ca.DM(frame.placement.translation)
         return tip, ca.vertcat(*tau)

@@ -39,9 +39,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robot.description import RobotDescription, as_description
 from robot.mpc.problem import CondensedProblem, Weights
 from robot.mpc.qp import ConicQP, DaqpQP
-from robot.superlimb import SuperLimbParams
 
 RTI_SOLVERS = ("rti-daqp", "rti-qpoases", "rti-osqp", "rti-casadi-daqp")
 NLP_SOLVERS = ("ipopt", "fatrop", "sqpmethod")
@@ -53,9 +53,9 @@ DEFAULT_SOLVER = "rti-daqp"
 class MPCResult:
     """One MPC solve.
 
-    ``a`` (3,) first joint acceleration [rad/s²]; ``q_plan``, ``v_plan``,
-    ``tip_plan`` (H+1, 3) planned joint positions [rad], velocities [rad/s]
-    and tip positions [m] (row 0: the given state); ``ok``; ``status`` ("ok"
+    ``a`` (n,) first joint acceleration [rad/s²]; ``q_plan``, ``v_plan`` (H+1, n)
+    planned joint positions [rad] and velocities [rad/s], ``tip_plan`` (H+1, 3)
+    planned tip positions [m] (row 0: the given state); ``ok``; ``status`` ("ok"
     or why not); ``solve_time`` [s]; ``iterations`` (SQP iterations, or the
     NLP solver's); ``qp_iterations`` (active-set/interior-point iterations,
     summed); ``violation`` the largest constraint violation of the plan per
@@ -77,11 +77,12 @@ class MPCResult:
 
 
 class TipMPC:
-    """Tip-tracking MPC of the SuperLimb (module docstring).
+    """Tip-tracking MPC of any arm (module docstring).
 
-    Parameters: ``params`` (:class:`SuperLimbParams`, default the standard
-    arm); ``horizon`` H ≥ 2 steps; ``dt`` [s]; ``solver`` one of
-    :data:`SOLVERS`; ``weights`` (:class:`~robot.mpc.problem.Weights`);
+    Parameters: ``robot`` (:class:`~robot.description.RobotDescription`; None or a
+    ``SuperLimbParams``: the SuperLimb; ``params`` is the old name of the argument);
+    ``horizon`` H ≥ 2 steps; ``dt`` [s]; ``solver`` one of :data:`SOLVERS`;
+    ``weights`` (:class:`~robot.mpc.problem.Weights`);
     ``max_iterations`` SQP iterations per solve for the RTI solvers (1 = RTI);
     ``tolerance`` [rad/s²] step size that ends the SQP loop early;
     ``violation_tolerance`` the first step's constraint violation (relative to
@@ -91,9 +92,10 @@ class TipMPC:
     model to C (cached; falls back to the CasADi virtual machine).
     """
 
-    def __init__(self, params: SuperLimbParams | None = None, horizon: int = 20, dt: float = 0.01,
+    def __init__(self, robot: RobotDescription | None = None, horizon: int = 20, dt: float = 0.01,
                  solver: str = DEFAULT_SOLVER, weights: Weights | None = None, max_iterations: int = 1,
-                 tolerance: float = 1e-6, violation_tolerance: float = 1e-6, codegen: bool = True) -> None:
+                 tolerance: float = 1e-6, violation_tolerance: float = 1e-6, codegen: bool = True,
+                 params=None) -> None:
         if solver not in SOLVERS:
             raise ValueError(f"unknown MPC solver {solver!r}; valid choices: {', '.join(SOLVERS)}")
         if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or horizon < 2:
@@ -104,13 +106,15 @@ class TipMPC:
             raise ValueError(f"max_iterations must be an integer ≥ 1, got {max_iterations!r}")
         if not (math.isfinite(tolerance) and tolerance >= 0):
             raise ValueError(f"tolerance must be finite and ≥ 0, got {tolerance!r}")
-        self.params = params or SuperLimbParams()
+        self.robot = as_description(robot if robot is not None else params)
+        self.params = getattr(self.robot, "params", None)  # the SuperLimb's parameters (None for other arms)
+        self.n = self.robot.n
         self.horizon, self.dt, self.solver = int(horizon), float(dt), solver
         self.weights = weights or Weights()
         self.weights.check()
         self.max_iterations, self.tolerance = max_iterations, float(tolerance)
         self.violation_tolerance = float(violation_tolerance)
-        self.problem = CondensedProblem(self.params, self.horizon, self.dt, self.weights, codegen=codegen)
+        self.problem = CondensedProblem(self.robot, self.horizon, self.dt, self.weights, codegen=codegen)
         self.evaluation_ = self.problem.evaluation
         n_w, n_g = self.problem.n_w, self.problem.n_g
         self._nlp = None
@@ -122,27 +126,27 @@ class TipMPC:
             from robot.mpc.nlp import NlpSolver
 
             self._qp = None
-            self._nlp = NlpSolver(solver, self.params, self.horizon, self.dt, self.weights)
-        p = self.params
-        self._a_brake = p.braking_acceleration
-        self._scale = {"torque": p.torque_limit.min(), "velocity": p.velocity_limit.min(),
-                       "position": 1.0, "acceleration": p.acceleration_limit.min()}
+            self._nlp = NlpSolver(solver, self.robot, self.horizon, self.dt, self.weights)
+        lim = self.robot.limits
+        self._a_brake = lim.a_brake
+        self._scale = {"torque": lim.tau_max.min(), "velocity": lim.v_max.min(),
+                       "position": 1.0, "acceleration": lim.a_max.min()}
         self._guess: np.ndarray | None = None
-        self._a_prev = np.zeros(3)
+        self._a_prev = np.zeros(self.n)
 
     # ------------------------------------------------------------------
     def reset(self) -> None:
         """Forget the warm start (plan, QP working set, last acceleration)."""
         self._guess = None
-        self._a_prev = np.zeros(3)
+        self._a_prev = np.zeros(self.n)
         if self._qp is not None:
             self._qp.reset()
         if self._nlp is not None:
             self._nlp.reset()
 
     def _braking_plan(self, v: np.ndarray) -> np.ndarray:
-        """w (3H,) braking with a = clip(−v/dt, ±A) each step (the cold start; feasible from a viable state)."""
-        w = np.empty((self.horizon, 3))
+        """w (nH,) braking with a = clip(−v/dt, ±A) each step (the cold start; feasible from a viable state)."""
+        w = np.empty((self.horizon, self.n))
         for k in range(self.horizon):
             a = np.clip(-v / self.dt, -self._a_brake, self._a_brake)
             w[k] = a
@@ -152,10 +156,10 @@ class TipMPC:
     def _shifted(self, w: np.ndarray, v_end: np.ndarray) -> np.ndarray:
         """Previous plan shifted by one step, a braking step appended (the recursive-feasibility candidate)."""
         tail = np.clip(-v_end / self.dt, -self._a_brake, self._a_brake)
-        return np.concatenate([w[3:], tail])
+        return np.concatenate([w[self.n:], tail])
 
     def _check(self, q: object, v: object, p_ref: object) -> tuple[np.ndarray, np.ndarray, np.ndarray] | str:
-        shapes = {"q": (3,), "v": (3,), "p_ref": (self.horizon + 1, 3)}
+        shapes = {"q": (self.n,), "v": (self.n,), "p_ref": (self.horizon + 1, 3)}
         arrays = []
         for name, value in (("q", q), ("v", v), ("p_ref", p_ref)):
             try:
@@ -173,20 +177,20 @@ class TipMPC:
                  iterations: int = 0, qp_iterations: int = 0) -> MPCResult:
         """ok=False; the plan is the braking plan where the state is usable, else NaN."""
         self._guess = None
-        H = self.horizon
-        nan = np.full((H + 1, 3), np.nan)
+        H, n = self.horizon, self.n
+        nan, nan_q = np.full((H + 1, 3), np.nan), np.full((H + 1, n), np.nan)
         try:
             q_arr, v_arr = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
-            usable = q_arr.shape == (3,) and v_arr.shape == (3,) and np.isfinite(q_arr).all() \
+            usable = q_arr.shape == (n,) and v_arr.shape == (n,) and np.isfinite(q_arr).all() \
                 and np.isfinite(v_arr).all()
         except (TypeError, ValueError):
             usable = False
         if not usable:
-            return MPCResult(np.zeros(3), nan, nan.copy(), nan.copy(), False, status,
+            return MPCResult(np.zeros(n), nan_q, nan_q.copy(), nan, False, status,
                              time.perf_counter() - t0, iterations, qp_iterations)
         w = self._braking_plan(v_arr)
         X = self.problem.states(w, q_arr, v_arr)
-        return MPCResult(w[:3].copy(), X[:, :3].copy(), X[:, 3:].copy(), nan.copy(), False, status,
+        return MPCResult(w[:n].copy(), X[:, :n].copy(), X[:, n:].copy(), nan, False, status,
                          time.perf_counter() - t0, iterations, qp_iterations)
 
     # ------------------------------------------------------------------
@@ -250,9 +254,10 @@ class TipMPC:
         tips = np.vstack([nodes["tip"][:1], nodes["tip_next"]])
         if not (np.isfinite(w).all() and np.isfinite(tips).all()):
             return self._failure("nonfinite_solution", t0, q, v, iterations, qp_iterations)
-        self._guess = self._shifted(w, X[-1, 3:])
-        self._a_prev = w[:3].copy()
-        first = prob.violation(nodes["g"][0], w[:3], nodes=1)  # what the arm executes now
+        self._guess = self._shifted(w, X[-1, self.n:])
+        n = self.n
+        self._a_prev = w[:n].copy()
+        first = prob.violation(nodes["g"][0], w[:n], nodes=1)  # what the arm executes now
         worst = max(first[k] / self._scale[k] for k in first)
         ok = True
         if worst > self.violation_tolerance:
@@ -261,5 +266,5 @@ class TipMPC:
         elapsed = time.perf_counter() - t0
         if deadline_s is not None and elapsed > deadline_s:
             ok, status = False, f"timeout: {elapsed * 1e3:.2f} ms > {deadline_s * 1e3:.2f} ms"
-        return MPCResult(w[:3].copy(), X[:, :3].copy(), X[:, 3:].copy(), tips.copy(), ok, status, elapsed,
+        return MPCResult(w[:n].copy(), X[:, :n].copy(), X[:, n:].copy(), tips.copy(), ok, status, elapsed,
                          iterations, qp_iterations, violation, float(np.linalg.norm(tips[1] - p_ref[1])))

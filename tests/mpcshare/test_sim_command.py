@@ -140,3 +140,30 @@ def test_sim_runs_the_placebo_and_the_oracle_hand_overs_beside_the_gate(trained,
     assert comp["strategies"]["oracle_handover"]["limit_violations"] == 0
     md = (out / "comparison.md").read_text()
     assert "at random times" in md and "minimise the error" in md and "line ratio" in md
+
+
+def test_sim_on_another_arm_from_its_file(trained, tmp_path, capsys):
+    """``--robot FILE --tip-frame NAME --mount X Y Z``: the Panda of example-robot-data beside the plate."""
+    from tests.sim.second_arm import PANDA_FINGERS, PANDA_TIP, panda_path
+
+    data, model = trained
+    arm = ["--robot", str(panda_path()), "--tip-frame", PANDA_TIP, "--mount", "0", "-0.45", "0",
+           "--mount-rpy", "0", "0", "1.5708", "--lock-joints", *PANDA_FINGERS, "--velocity-limit", "1.5",
+           "--acceleration-limit", "8"]
+    out = tmp_path / "panda"
+    assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "1",
+                 "--runs", "reactive", *arm]) == 0
+    comp = json.loads((out / "comparison.json").read_text())
+    assert comp["strategies"]["reactive"]["limit_violations"] == 0
+    assert Episode.load(out / comp["run_files"]["reactive"][0]).q.shape[1] == 7
+    assert "panda (7 joints" in capsys.readouterr().out
+    wrong = [a if a != PANDA_TIP else "knife" for a in arm]
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "w"), "--runs", "reactive", *wrong]) == 1
+    err = capsys.readouterr().err
+    assert "'knife'" in err and PANDA_TIP in err  # the valid frames are named
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "m"), "--runs", "reactive",
+                 *arm[:4]]) == 1
+    assert "--mount" in capsys.readouterr().err
+    fast = arm[:-4] + ["--acceleration-limit", "80"]
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "f"), "--runs", "reactive", *fast]) == 1
+    assert "braking" in capsys.readouterr().err

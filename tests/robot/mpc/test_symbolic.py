@@ -1,4 +1,5 @@
-"""The CasADi SuperLimb model against Pinocchio (an independent implementation) to 1e-9."""
+"""The CasADi arm model (generated from the Pinocchio model) against Pinocchio's own algorithms to 1e-9:
+the SuperLimb's variants and a second arm (Franka Panda, 7 joints, from example-robot-data)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robot.model_files import build_pinocchio_model
+from robot.description import RobotDescription
 from robot.mpc.symbolic import SymbolicArm
 from robot.superlimb import Actuator, SuperLimbParams, rod_inertial
+from robot.superlimb.model_files import build_pinocchio_model
 
 TOL = 1e-9
 
@@ -101,3 +103,43 @@ def test_functions_accept_symbols() -> None:
 def test_zero_axis_is_rejected() -> None:
     with pytest.raises(ValueError, match="axis"):
         SymbolicArm(SuperLimbParams().with_joint("elbow", axis=(0.0, 0.0, 0.0)))
+
+
+def _panda() -> RobotDescription:
+    erd = pytest.importorskip("example_robot_data")
+    model = erd.load("panda").model
+    return RobotDescription.from_model(model, "panda_hand_tcp", mount_xyz=(0.1, -0.3, 0.2), mount_rpy=(0.2, 0.0, 0.5),
+                                       velocity_limit=1.5)
+
+
+def test_second_arm_matches_pinocchio_rnea_crba_and_aba() -> None:
+    """Panda with its two prismatic fingers (a branching tree, prismatic joints, a tilted mount)."""
+    robot = _panda()
+    model, data, fid = robot.model, robot.model.createData(), robot.tip_frame_id
+    model.armature = np.linspace(0.01, 0.1, model.nv)  # the armature term is used too
+    arm = SymbolicArm(robot)
+    assert arm.n == 9
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        q = rng.uniform(robot.limits.q_min, robot.limits.q_max)
+        v, a, tau = rng.normal(size=9), rng.normal(size=9) * 3.0, rng.normal(size=9) * 5.0
+        p_ref, J_ref, M_ref, h_ref = _pin_reference(model, data, fid, q, v)
+        np.testing.assert_allclose(np.asarray(arm.tip_position(q)).ravel(), p_ref, rtol=0, atol=TOL)
+        np.testing.assert_allclose(np.asarray(arm.tip_jacobian(q)), J_ref, rtol=0, atol=TOL)
+        np.testing.assert_allclose(np.asarray(arm.mass_matrix(q)), M_ref, rtol=0, atol=TOL)
+        np.testing.assert_allclose(np.asarray(arm.nonlinear_effects(q, v)).ravel(), h_ref, rtol=0, atol=TOL)
+        np.testing.assert_allclose(np.asarray(arm.inverse_dynamics(q, v, a)).ravel(), pin.rnea(model, data, q, v, a),
+                                   rtol=0, atol=TOL)
+        np.testing.assert_allclose(np.asarray(arm.forward_dynamics(q, v, tau)).ravel(),
+                                   pin.aba(model, data, q, v, tau), rtol=0, atol=1e-7)
+
+
+def test_superlimb_forward_dynamics_matches_aba() -> None:
+    params = VARIANTS["skew_axis_heavy_rotor"]
+    arm = SymbolicArm(params)
+    model, data, _ = build_pinocchio_model(params)
+    rng = np.random.default_rng(1)
+    for _ in range(10):
+        q, v, tau = rng.uniform(params.lower, params.upper), rng.normal(size=3), rng.normal(size=3)
+        np.testing.assert_allclose(np.asarray(arm.forward_dynamics(q, v, tau)).ravel(),
+                                   pin.aba(model, data, q, v, tau), rtol=0, atol=1e-9)

@@ -20,7 +20,7 @@ Every number lives in :class:`SuperLimbParams` (and the nested dataclasses);
 the joint position, velocity, acceleration and torque limits are *derived* from
 the actuator and transmission figures in :meth:`JointParams.torque_limit` and
 friends, and any of them can be overridden by setting the corresponding
-``*_override`` field.  :mod:`robot.model_files` turns it into URDF, MJCF and a
+``*_override`` field.  :mod:`robot.superlimb.model_files` turns it into URDF, MJCF and a
 Pinocchio model (``to_urdf``, ``to_mjcf``, ``build_pinocchio_model``), all from the
 same object, so the three descriptions cannot drift; ``python -m robot``
 regenerates the files in ``robot/assets/`` and a test checks they are up to date.
@@ -38,7 +38,7 @@ import numpy as np
 Vec3 = tuple[float, float, float]
 Inertia6 = tuple[float, float, float, float, float, float]
 
-ASSETS_DIR = Path(__file__).resolve().parent / "assets"
+ASSETS_DIR = Path(__file__).resolve().parent.parent / "assets"
 TOOL_FRAME = "knife_tip"
 GRAVITY = 9.81  # [m/s²], also written into the MJCF <option>
 
