@@ -40,7 +40,7 @@ def line_rms(effort: float, voluntary: tuple[float, float], reactive: tuple[floa
         return None
     if abs(e_v - e_r) <= 1e-12:
         return float(min(r_v, r_r))
-    if effort >= max(e_v, e_r):
+    if effort > max(e_v, e_r):
         return float(min(r_v, r_r))
     t = min(max((effort - e_r) / (e_v - e_r), 0.0), 1.0)
     return float(r_r + t * (r_v - r_r))

@@ -24,12 +24,19 @@ from sim.demonstrator import MODE_NAMES
 
 __all__ = ["TUNE_COMMAND"]
 
-#: Defaults: 5 held-out trials x 2 paired seeds = 10 pairs per setting, so that one-sided p < 0.01
-#: is reachable after Holm's correction across the 6 settings (exact Wilcoxon floor 0.5^10 ≈ 0.001);
-#: 2 percentiles x 1 β x 3 strategies; per pair 2 + 2 x (1 + 3) = 10 episodes and 6 x 5 placebo draws.
+#: Defaults: up to 5 held-out trials x enough paired seeds for >= 10 pairs per setting (the default
+#: data's 4 held-out trials x 3 seeds = 12), so that one-sided p < 0.01 is reachable after Holm's
+#: correction across the 6 settings (exact Wilcoxon floor 0.5^10 ≈ 0.001); 2 percentiles x 1 β x
+#: 3 strategies; per pair 2 + 2 x (1 + 3) = 10 episodes and 6 x 5 placebo draws.
 DEFAULT_PERCENTILES = (100.0, 70.0)
 DEFAULT_BETAS = (0.5,)
-DEFAULT_TRIALS, DEFAULT_SEEDS = 5, 2
+DEFAULT_TRIALS, MIN_PAIRS = 5, 10
+
+
+def default_trials_and_seeds(n_heldout: int, trials: int | None, seeds: int | None) -> tuple[int, int]:
+    """(trials, seeds): ``trials`` or min(5, held-out trials); ``seeds`` or ⌈10 / trials⌉ (≥ 10 pairs)."""
+    t = trials if trials is not None else max(1, min(DEFAULT_TRIALS, n_heldout))
+    return t, seeds if seeds is not None else math.ceil(MIN_PAIRS / t)
 
 
 def _percentile(text: str) -> float:
@@ -67,12 +74,13 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--strategies", nargs="+", choices=TUNABLE, default=list(TUNABLE),
                    help=f"strategies swept (default {' '.join(TUNABLE)}: the registry's tunable ones); each gets a "
                         "matched random_handover")
-    p.add_argument("--trials", type=base.positive_int, default=DEFAULT_TRIALS,
-                   help=f"held-out trials (default {DEFAULT_TRIALS}; trials x seeds = the pairs of each test)")
+    p.add_argument("--trials", type=base.positive_int, default=None,
+                   help=f"held-out trials (default: all, at most {DEFAULT_TRIALS}; trials x seeds = the pairs of "
+                        "each test)")
     p.add_argument("--duration", type=base.positive_float, default=30.0, help="seconds per trial (default 30)")
-    p.add_argument("--seeds", type=base.positive_int, default=DEFAULT_SEEDS,
-                   help=f"paired seeds 0..N-1 (default {DEFAULT_SEEDS}: {DEFAULT_TRIALS * DEFAULT_SEEDS} pairs, "
-                        "so that p < 0.01 is reachable after Holm's correction)")
+    p.add_argument("--seeds", type=base.positive_int, default=None,
+                   help=f"paired seeds 0..N-1 (default: enough for >= {MIN_PAIRS} trial x seed pairs, so that "
+                        "p < 0.01 is reachable after Holm's correction)")
     p.add_argument("--draws", type=base.positive_int, default=RANDOM_DRAWS,
                    help=f"random_handover draws per pair, their mean is the placebo (default {RANDOM_DRAWS})")
     p.add_argument("--workers", type=base.positive_int, default=1, help="local worker processes (default 1)")
@@ -92,6 +100,7 @@ def _usage_error(message: str) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from learning.data import split_by_trial
     from mpcshare.training.config import TrainConfig
     from mpcshare.tuning.report import build_result, chance_sentences, write_tune
     from mpcshare.tuning.runner import RayMissing, run_tune
@@ -102,13 +111,16 @@ def _run(args: argparse.Namespace) -> int:
         except ImportError:
             return _usage_error("--backend ray needs Ray: pip install -e .[ray] (or --backend local)")
     out = prepare_output_folder(args.out)
-    load_or_fail(args.data)  # a clear message before any training
-    seeds = list(range(args.seeds))
+    demos = load_or_fail(args.data)  # a clear message before any training
+    config = TrainConfig(max_epochs=args.epochs)
+    _, held = split_by_trial(demos, config.heldout_fraction, seed=config.seed)  # the split training makes
+    n_trials, n_seeds = default_trials_and_seeds(len(held.trial_ids), args.trials, args.seeds)
+    seeds = list(range(n_seeds))
     try:
         run = run_tune(args.data, out, percentiles=sorted(set(args.percentiles), reverse=True),
                        betas=sorted(set(args.betas)), strategies=list(dict.fromkeys(args.strategies)),
-                       n_trials=args.trials, seeds=seeds, duration_s=args.duration, wearer=args.wearer,
-                       config=TrainConfig(max_epochs=args.epochs), backend=args.backend, workers=args.workers,
+                       n_trials=n_trials, seeds=seeds, duration_s=args.duration, wearer=args.wearer,
+                       config=config, backend=args.backend, workers=args.workers,
                        address=args.address, progress=not args.quiet, mode_names=MODE_NAMES, draws=args.draws)
     except RayMissing as exc:
         return _usage_error(str(exc))

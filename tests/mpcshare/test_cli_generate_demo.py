@@ -68,8 +68,11 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert analysis["modes"]["n_modes"] == 3 and analysis["window_s"] == 0.8
     assert (out / "model" / "bundle.json").exists()
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
-    assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview",
-                                             "random_handover", "oracle_handover"}
+    from mpcshare.run_table import RUN_NAMES
+
+    assert set(comparison["strategies"]) == set(RUN_NAMES) >= {"voluntary", "reactive", "mix25", "mix50", "mix75",
+                                                                "gate", "paper_gate", "random_handover",
+                                                                "oracle_handover"}
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
     assert comparison["wearer"]["preset"] == "unimpaired"  # --wearer reaches the closed loop
     gate = comparison["strategies"]["gate"]  # the task figures: lag, sawing while cutting, RMS per mode
@@ -83,6 +86,7 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     # the summary states both claims, each in its own sentence (issue 22)
     summary_md = md.split("## Summary", 1)[1].split("\n## ", 1)[0]
     assert "Modes help: " in summary_md and "The temporal model adds information: " in summary_md
+    assert "Line: tracking RMS over the straight line" in summary_md  # the line ratio as a headline (issue 28)
     page = (out / "report.html").read_text()
     assert "<img" in page and 'src="data:image/png;base64,' in page
     assert 'src="analysis/' not in page and 'src="sim/' not in page  # every plot embedded

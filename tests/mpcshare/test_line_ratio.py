@@ -21,6 +21,7 @@ def test_the_line_between_the_parties_and_its_ends():
     assert line_rms(0.095, dominant, poor) == pytest.approx(0.0195)  # on the segment: the line itself
     assert line_rms(0.12, dominant, poor) == pytest.approx(0.003)  # beyond both efforts: the better party
     assert line_rms(0.05, dominant, poor) == pytest.approx(0.003)  # below both: the end of least effort
+    assert line_rms(0.11, dominant, poor) == pytest.approx(0.036)  # each party is on its own line
     assert line_ratio(0.0045, 0.035, VOL, REAC) == pytest.approx(0.5)
     assert line_ratio(None, 0.035, VOL, REAC) is None
     assert line_ratio(0.01, float("nan"), VOL, REAC) is None
