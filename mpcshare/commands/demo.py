@@ -67,7 +67,7 @@ def _stage(k: int, text: str) -> None:
 
 def _demo(args: argparse.Namespace) -> int:
     from mpcshare.bundle import load_bundle, save_bundle
-    from mpcshare.experiments import compare_strategies, render_clip
+    from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
     from mpcshare.reports.analysis import plot_demonstrations, write_json_atomic
     from mpcshare.reports.claims import mixture_advice
     from mpcshare.reports.comparison import write_comparison
@@ -144,7 +144,8 @@ def _demo(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     ids = bundle.heldout_trials[:args.sim_trials]
-    _stage(6, f"closed loop in MuJoCo: 5 strategies x {len(ids)} held-out trial(s) x {args.sim_duration:g} s")
+    _stage(6, f"closed loop in MuJoCo: {len(DEFAULT_RUNS)} strategies x {len(ids)} held-out trial(s) "
+              f"x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")
     wearer = wearer_preset(args.wearer)
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,

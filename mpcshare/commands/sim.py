@@ -53,7 +53,8 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--duration", type=positive_float, default=None,
                    help="simulate only the first DURATION seconds of each trial (default: whole trials)")
     p.add_argument("--runs", nargs="+", choices=_RUN_NAMES, default=list(_RUN_NAMES),
-                   help="strategies to simulate (default: all eight; random_handover replays the gate's share and "
+                   help=f"strategies to simulate (default: all {len(_RUN_NAMES)}: {', '.join(_RUN_NAMES)}; "
+                        "random_handover replays the gate's share and "
                         "hand-overs at random times, oracle_handover the error-minimising schedule)")
     p.add_argument("--beta", type=float, default=0.5, help="β while the robot acts (default 0.5)")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")

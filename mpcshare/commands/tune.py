@@ -32,7 +32,7 @@ def _percentile(text: str) -> float:
     except ValueError:
         v = math.nan
     if not (0.0 < v <= 100.0):
-        raise argparse.ArgumentTypeError(f"expected a percentile in (0, 100], got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a number above 0 and at most 100, got {text!r}")
     return v
 
 
@@ -43,7 +43,7 @@ def _beta(text: str) -> float:
     except ValueError:
         v = math.nan
     if not (0.0 <= v <= 1.0):
-        raise argparse.ArgumentTypeError(f"expected a beta in [0, 1], got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, got {text!r}")
     return v
 
 
