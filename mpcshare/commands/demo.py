@@ -164,11 +164,12 @@ def _demo(args: argparse.Namespace) -> int:
                                 data_summary=summary, sweep=sweep, mode_sources=mode_sources)
     if missing:
         print(f"report.html: could not embed {missing}")
-    from mpcshare.reports.comparison import comparison_findings
+    from mpcshare.reports.headline import headline_lines
 
-    for line in comparison_findings(comparison["strategies"]):
-        print(line)
-    print(f"done in {timings['total']:.0f} s; open {out / 'report.html'} (or report.md)")
+    print("\nWhat the robot did:")
+    for line in headline_lines(comparison["strategies"], markdown=False) or ["the closed loop was not run"]:
+        print(f"  {line}")
+    print(f"done in {timings['total']:.0f} s; the figures behind these lines: {out / 'report.html'} (or report.md)")
     return 0
 
 

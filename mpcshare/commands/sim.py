@@ -163,8 +163,9 @@ def _run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     obj = run_comparison(bundle, demos, out, args, trial_ids)
     from mpcshare.reports.comparison import comparison_findings
+    from mpcshare.reports.headline import headline_lines
 
-    for line in comparison_findings(obj["strategies"]):
+    for line in headline_lines(obj["strategies"], markdown=False) + comparison_findings(obj["strategies"]):
         print(line)
     print(f"done in {time.perf_counter() - t0:.0f} s; open {out / 'comparison.md'}")
     return 0

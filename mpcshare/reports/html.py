@@ -24,8 +24,9 @@ _IMG = re.compile(r'<img alt="([^"]*)" src="([^"]+)"\s*/?>')
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em;
        color: #222; line-height: 1.45; }
-table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
-th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
+table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; max-width: 100%; }
+th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; overflow-wrap: anywhere; }
+div.table { max-width: 100%; overflow-x: auto; }
 th:first-child, td:first-child { text-align: left; }
 img, video { max-width: 100%; }
 code, pre { background: #f4f4f4; }
@@ -57,7 +58,10 @@ def markdown_to_html(text: str, base_dir: str | Path, title: str = "mpcshare rep
     body = markdown.markdown(text, extensions=["tables", "fenced_code"], output_format="html")
     missing: list[str] = []
     body = _IMG.sub(lambda m: _inline(m, Path(base_dir), missing), body)
+    # a table wraps its cells on a narrow page; what still does not fit scrolls inside its own box
+    body = body.replace("<table>", '<div class="table"><table>').replace("</table>", "</table></div>")
     page = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
             f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head>\n"
             f"<body>\n{body}\n</body></html>\n")
     return page, missing

@@ -236,7 +236,8 @@ def _markdown(result: SweepResult) -> str:
               "- voluntary share: held-out steps the gate hands to the wearer (probability < 0.5).",
               "- R on held-out trials: quotients within HMM modes among held-out points, at the training K.",
               "- At the 100th percentile R holds every point, so its LSTM is the all-points LSTM.",
-              "", f"Timings [s]: {result.info.get('timings_s')}", ""]
+              "", "Time per stage: " + ", ".join(f"{k} {v:.1f} s" for k, v in
+                                                 (result.info.get("timings_s") or {}).items()) + ".", ""]
     return "\n".join(lines)
 
 

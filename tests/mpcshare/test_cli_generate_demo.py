@@ -79,10 +79,16 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert report["analysis"]["n_samples"] == analysis["n_samples"]
     assert report["comparison"]["trials"] == comparison["trials"]
     md = (out / "report.md").read_text()
-    assert md.startswith("# mpcshare demo") and "## Summary" in md and "## 4. Closed loop in MuJoCo" in md
+    assert md.startswith("# mpcshare demo") and "## Statistics" in md and "## 4. Closed loop in MuJoCo" in md
     # the summary states both claims, each in its own sentence (issue 22)
-    summary_md = md.split("## Summary", 1)[1].split("\n## ", 1)[0]
+    summary_md = md.split("## Statistics", 1)[1].split("\n## ", 1)[0]
     assert "Modes help: " in summary_md and "The temporal model adds information: " in summary_md
     page = (out / "report.html").read_text()
+    # the four answers come first, each with its verdict, before any statistic (issue 32)
+    heads = [page.index(f"<strong>{topic}: ") for topic in ("The task", "Sharing", "Effort", "Keep-out")]
+    first_statistic = min(page.index(w) for w in ("Lipschitz quotient", "Wilcoxon", "p = ") if w in page)
+    assert heads == sorted(heads) and heads[-1] < first_statistic
+    assert page.index("effort against error") < first_statistic  # then the plot with the line
+    assert "{'" not in page and "min_class_count" not in page and "(rad (" not in page  # words, not internals
     assert "<img" in page and 'src="data:image/png;base64,' in page
     assert 'src="analysis/' not in page and 'src="sim/' not in page  # every plot embedded

@@ -1,0 +1,68 @@
+"""How every plot of the project looks: one colour per task mode and per strategy, legends outside
+the data, strategy names a person can read.
+
+One mapping in one place: a mode has the same colour in the data plot, the quotient plot, the
+trial plot of the closed loop and the video; a strategy the same colour in the comparison, the
+effort–error plot and ``tune``'s Pareto plot. Modes are coloured by *name* (the task modes of
+the data format, ``sim.demonstrator.MODE_NAMES``; the mapping lives beside them, in
+``sim.demonstrator.MODE_COLOURS``, so that the video in ``sim`` uses it too); a mode without a name (an HMM mode no true
+mode matches) gets a grey of its own.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from typing import Any, Sequence
+
+from sim.demonstrator import MODE_COLOURS  # task mode name → colour; the video draws with the same
+
+__all__ = ["MODE_COLOURS", "STRATEGY_COLOURS", "legend_outside", "mode_colour", "strategy_colour",
+           "strategy_label", "strategy_ticks"]
+
+_UNNAMED = ("#8C8C8C", "#B0B0B0", "#6E6E6E", "#C8C8C8", "#5A5A5A", "#A0A0A0", "#7C7C7C", "#BEBEBE")
+
+#: strategy (run) name → colour; the wearer alone and the robot alone are the two ends of the line
+STRATEGY_COLOURS: dict[str, str] = {
+    "voluntary": "#C44E52",
+    "reactive": "#55A868",
+    "gate": "#4C72B0",
+    "paper_gate": "#8172B3",
+    "blend": "#DD8452",
+    "gate_mpc": "#64B5CD",
+    "oracle_preview": "#937860",
+    "random_handover": "#8C8C8C",
+    "oracle_handover": "#DA8BC3",
+}
+_MIX_COLOUR = "#B8A86A"  # constant-α mixtures (mix25, mix50, mix75): one family colour
+
+
+def mode_colour(label: int, names: Sequence[str] | None = None) -> str:
+    """The colour of mode ``label``: by its name in ``names`` (see :data:`MODE_COLOURS`), else a grey."""
+    k = int(label)
+    if names is not None and 0 <= k < len(names) and names[k] in MODE_COLOURS:
+        return MODE_COLOURS[names[k]]
+    return _UNNAMED[k % len(_UNNAMED)]
+
+
+def strategy_colour(name: str) -> str:
+    """The colour of a strategy (run) name; constant-α mixtures share one, anything else black."""
+    if name in STRATEGY_COLOURS:
+        return STRATEGY_COLOURS[name]
+    return _MIX_COLOUR if name.startswith("mix") else "#222222"
+
+
+def strategy_label(name: str, width: int = 10) -> str:
+    """A strategy name for a tick label: underscores as spaces, wrapped to ``width`` characters a line."""
+    return "\n".join(textwrap.wrap(name.replace("_", " "), width)) or name
+
+
+def strategy_ticks(ax: Any, names: Sequence[str]) -> None:
+    """Legible strategy names under a bar chart: wrapped, rotated 30°, right-aligned under their bar."""
+    ax.set_xticks(range(len(names)), [strategy_label(n) for n in names], rotation=30, ha="right",
+                  rotation_mode="anchor", fontsize=8)
+
+
+def legend_outside(ax: Any, **kwargs: Any) -> Any:
+    """A legend to the right of ``ax``, outside the data (the figure should use a constrained layout)."""
+    kwargs.setdefault("fontsize", 7)
+    return ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False, **kwargs)
