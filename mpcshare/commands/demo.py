@@ -67,7 +67,7 @@ def _stage(k: int, text: str) -> None:
 
 def _demo(args: argparse.Namespace) -> int:
     from mpcshare.bundle import load_bundle, save_bundle
-    from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
+    from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, output_size, render_clip
     from mpcshare.reports.analysis import plot_demonstrations, write_json_atomic
     from mpcshare.reports.claims import mixture_advice
     from mpcshare.reports.comparison import write_comparison
@@ -147,6 +147,9 @@ def _demo(args: argparse.Namespace) -> int:
     _stage(6, f"closed loop in MuJoCo: {len(DEFAULT_RUNS)} strategies x {len(ids)} held-out trial(s) "
               f"x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")
+    npz_bytes, _ = output_size(DEFAULT_RUNS, demos, ids, args.sim_duration)
+    print(f"writing about {npz_bytes / 1e6:.0f} MB of run files into {sim_out / 'runs'} "
+          "(fewer with --sim-trials or --sim-duration)", flush=True)
     wearer = wearer_preset(args.wearer)
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
                               mode_names=MODE_NAMES, wearer=wearer)

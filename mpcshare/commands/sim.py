@@ -33,7 +33,8 @@ from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "run_comparison"]
+__all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "announce_output_size",
+           "run_comparison"]
 
 _RUN_NAMES = ("voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview", "random_handover",
               "oracle_handover")
@@ -69,7 +70,11 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
                    help="use the data's CHANNEL as the bundle's channel NAME (e.g. fork_x=obs_3)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--mcap", action="store_true", help="also write each run as runs/*.mcap (opens in Foxglove)")
+    p.add_argument("--mcap", action="store_true",
+                   help="also write each run as runs/*.mcap (opens in Foxglove); its size is printed first")
+    p.add_argument("--mcap-rate", type=positive_float, default=None, metavar="HZ",
+                   help="with --mcap: the arm's joint states at about HZ (default: every physics step, 1000 Hz; "
+                        "100 makes them about 3x smaller)")
     add_sim_arguments(p)
 
 
@@ -108,6 +113,20 @@ def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str
     return Demonstrations(trials, demos.rate_hz, list(bundle.obs_names), act_names, list(demos.vol_names))
 
 
+def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list[int], args: argparse.Namespace,
+                         out: Path) -> None:
+    """Say how much the run files will take, before they are written, and how to make them smaller."""
+    from mpcshare.experiments import output_size
+
+    mcap = getattr(args, "mcap", False)
+    npz, mcap_bytes = output_size(runs, demos, trial_ids, args.duration, mcap, getattr(args, "mcap_rate", None))
+    what = f"about {npz / 1e6:.0f} MB of run files (NPZ)"
+    if mcap:
+        what += f" and {mcap_bytes / 1e6:.0f} MB of MCAP"
+    thin = "--trials, --duration or --runs" + (", --mcap-rate HZ" if mcap else "")
+    print(f"writing {what} into {out / 'runs'} (fewer with {thin})", flush=True)
+
+
 def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
                    trial_ids: list[int]) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
@@ -118,13 +137,15 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     if abs(demos.rate_hz - bundle.rate_hz) > 1e-9 * bundle.rate_hz:
         raise CommandError(f"the data is at {demos.rate_hz:g} Hz, the bundle was trained at {bundle.rate_hz:g} Hz")
     runs = [r for r in DEFAULT_RUNS if r.name in args.runs]
+    announce_output_size(runs, demos, trial_ids, args, out)
     wearer_name = getattr(args, "wearer", DEFAULT_WEARER_PRESET)
     wearer = wearer_preset(wearer_name)
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
-                              mcap=getattr(args, "mcap", False), wearer=wearer)
+                              mcap=getattr(args, "mcap", False), wearer=wearer,
+                              mcap_rate_hz=getattr(args, "mcap_rate", None))
     shown = next((r for r in runs if r.name == "gate"), next((r for r in runs if r.schedule is None), None))
     if args.video and shown is None:
         print("no video: only replayed schedules were run (add --runs gate)")

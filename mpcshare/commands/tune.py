@@ -78,7 +78,7 @@ def _usage_error(message: str) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from mpcshare.training.config import TrainConfig
-    from mpcshare.tuning.report import build_result, chance_sentences, write_tune
+    from mpcshare.tuning.report import build_result, chance_sentences, recommendation_line, write_tune
     from mpcshare.tuning.runner import RayMissing, run_tune
 
     if args.backend == "ray":
@@ -106,8 +106,9 @@ def _run(args: argparse.Namespace) -> int:
     write_tune(result, out)
     for line in chance_sentences(result):
         print(line)
-    if result["recommended"]:
-        print(f"recommended: {result['recommended']['setting']}")
+    line = recommendation_line(result)
+    if line:
+        print(line)
     print(f"tune: {out / 'tune.md'}")
     return 0
 

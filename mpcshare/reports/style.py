@@ -16,7 +16,7 @@ from typing import Any, Sequence
 
 from sim.demonstrator import MODE_COLOURS  # task mode name → colour; the video draws with the same
 
-__all__ = ["MODE_COLOURS", "STRATEGY_COLOURS", "legend_outside", "mode_colour", "strategy_colour",
+__all__ = ["MODE_COLOURS", "number", "STRATEGY_COLOURS", "legend_outside", "mode_colour", "strategy_colour",
            "strategy_label", "strategy_ticks"]
 
 _UNNAMED = ("#8C8C8C", "#B0B0B0", "#6E6E6E", "#C8C8C8", "#5A5A5A", "#A0A0A0", "#7C7C7C", "#BEBEBE")
@@ -66,3 +66,14 @@ def legend_outside(ax: Any, **kwargs: Any) -> Any:
     """A legend to the right of ``ax``, outside the data (the figure should use a constrained layout)."""
     kwargs.setdefault("fontsize", 7)
     return ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False, **kwargs)
+
+
+def number(x: Any, spec: str = ".1f", scale: float = 1.0) -> str:
+    """``x·scale`` formatted by ``spec`` for a table or sentence: "–" for None or non-finite, and never
+    "-0.0" (a value that rounds to zero is written without a sign)."""
+    import math
+
+    if x is None or not isinstance(x, (int, float)) or not math.isfinite(x):
+        return "–"
+    text = format(float(x) * scale, spec)
+    return text.lstrip("-") if text.startswith("-") and float(text) == 0.0 else text

@@ -17,9 +17,11 @@ from typing import Any
 
 from learning.atomic import atomic_open
 from mpcshare.reports.comparison import strict_json
+from mpcshare.reports.style import number
 from mpcshare.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
 
-__all__ = ["baseline_sentence", "build_result", "chance_sentences", "tune_markdown", "write_tune"]
+__all__ = ["baseline_sentence", "build_result", "chance_sentences", "recommendation_line", "tune_markdown",
+           "write_tune"]
 
 
 def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
@@ -33,11 +35,30 @@ def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
 
 
 def _mm(x: Any) -> str:
-    return "–" if x is None else f"{1e3 * x:.1f}"
+    return number(x, ".1f", 1e3)
 
 
 def _num(x: Any, fmt: str = ".3f") -> str:
-    return "–" if x is None else format(x, fmt)
+    return number(x, fmt)
+
+
+def recommendation_line(result: dict[str, Any]) -> str | None:
+    """The recommendation in one line, with its figures and what it loses to: said plainly when the
+    wearer alone (``voluntary``) tracks better."""
+    rec = result["recommended"]
+    if not rec:
+        return None
+    line = (f"recommended: {rec['setting']} (tracking RMS {_mm(rec['tracking_rmse_m'])} mm, effort "
+            f"{_num(rec['voluntary_effort'])} rad)")
+    vol = result["summary"].get("voluntary")
+    v_rms = vol["tracking_rmse_m"]["mean"] if vol else None
+    if v_rms is not None and rec["tracking_rmse_m"] is not None and rec["tracking_rmse_m"] > v_rms:
+        v_eff = vol["voluntary_effort"]["mean"]
+        cheaper = v_eff is not None and rec["voluntary_effort"] is not None and v_eff <= rec["voluntary_effort"]
+        return (line + f"; but it LOSES to the wearer alone, who tracks at {_mm(v_rms)} mm"
+                + (f" with no more effort ({_num(v_eff)} rad)" if cheaper else
+                   f" at more effort ({_num(v_eff)} rad)") + ": on these trials the robot does not help")
+    return line + ("" if rec["beats_random"] else "; no setting beats chance: this is only the lowest error")
 
 
 def chance_sentences(result: dict[str, Any]) -> list[str]:
@@ -89,7 +110,8 @@ def baseline_sentence(result: dict[str, Any]) -> str | None:
 
 def tune_markdown(result: dict[str, Any]) -> str:
     """``tune.md``: the table, the Pareto set, the tests in words and the recommendation."""
-    lines = ["# Closed-loop sweep (`mpcshare tune`)", "",
+    head = recommendation_line(result)
+    lines = ["# Closed-loop sweep (`mpcshare tune`)", "", *([f"**{head[0].upper() + head[1:]}.**", ""] if head else []),
              f"Held-out trials {result.get('trials')}, seeds {result.get('seeds')}, "
              f"{result.get('duration_s') or 'whole'} s each, wearer {result.get('wearer')}. "
              "Means over trials x seeds with 95 % bootstrap CIs.", "",
