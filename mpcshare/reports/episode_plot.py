@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from mpcshare.reports.style import legend_outside
+
 __all__ = ["plot_episode"]
 
 
@@ -42,7 +44,7 @@ def plot_episode(episode: Any, path: str | Path, title: str = "") -> Path:
     from sim.task_metrics import STROKE_BAND_HZ, bandpass
 
     t = np.asarray(episode.t, dtype=float)
-    fig = Figure(figsize=(10, 10), constrained_layout=True)
+    fig = Figure(figsize=(11.5, 10), constrained_layout=True)
     grid = fig.add_gridspec(6, 1, height_ratios=[1, 1, 1, 0.8, 0.8, 1.1])
     axes = [fig.add_subplot(grid[0])]
     axes += [fig.add_subplot(grid[i], sharex=axes[0]) for i in range(1, 5)]
@@ -53,16 +55,16 @@ def plot_episode(episode: Any, path: str | Path, title: str = "") -> Path:
         ax.plot(t, episode.tip_reference[:, i], color="#DD8452", lw=0.9, ls="--", label="reference")
         ax.plot(t, episode.tip[:, i], color="#4C72B0", lw=1.0, label="knife tip")
         ax.set_ylabel(f"{axis} [m]")
-    axes[0].legend(loc="upper right", fontsize=7, ncol=3)
+    legend_outside(axes[0])
     axes[3].plot(t, episode.alpha, color="#55A868", label="α (robot)")
     axes[3].plot(t, episode.beta, color="#C44E52", lw=0.8, label="β (wearer)")
     axes[3].set_ylim(-0.05, 1.05)
     axes[3].set_ylabel("weight")
-    axes[3].legend(loc="upper right", fontsize=7, ncol=2)
+    legend_outside(axes[3])
     for i, name in enumerate(("elevation", "protraction", "abduction")):
         axes[4].plot(t, episode.voluntary[:, i], lw=0.8, label=name)
     axes[4].set_ylabel("shoulder [rad]")
-    axes[4].legend(loc="upper right", fontsize=7, ncol=3)
+    legend_outside(axes[4])
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     ok = np.isfinite(episode.tip).all(axis=1) & np.isfinite(episode.tip_intent).all(axis=1)
     found = None
@@ -75,7 +77,7 @@ def plot_episode(episode: Any, path: str | Path, title: str = "") -> Path:
         saw_ax.plot(t[window], 1e3 * tip_b[window, axis], color="#4C72B0", lw=1.0, label="knife tip")
         saw_ax.set_ylabel(f"{'xyz'[axis]}, {STROKE_BAND_HZ[0]:g}–{STROKE_BAND_HZ[1]:g} Hz [mm]")
         saw_ax.set_title("sawing: the stroke band where the intent saws hardest", fontsize=8)
-        saw_ax.legend(loc="upper right", fontsize=7, ncol=2)
+        legend_outside(saw_ax)
     else:
         saw_ax.text(0.5, 0.5, "too short for the stroke band", ha="center", va="center", transform=saw_ax.transAxes)
     saw_ax.set_xlabel("time [s]")
