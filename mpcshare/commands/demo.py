@@ -30,7 +30,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.data import format_summary
-from mpcshare.commands.sim import add_wearer_argument
+from mpcshare.commands.sim import add_wearer_argument, cutting_steps
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, generate_demonstrations
 
@@ -158,7 +158,7 @@ def _demo(args: argparse.Namespace) -> int:
                                      seed=args.seed, wearer=wearer)
         comp.video = None if video is None else str(Path(video).relative_to(sim_out))
         print(f"video: {video}" if video else f"no video: {message}")
-    comparison = write_comparison(comp, sim_out)
+    comparison = write_comparison(comp, sim_out, cutting=cutting_steps(demos, ids[0]))
     lap("closed loop", t0)
 
     timings["total"] = time.perf_counter() - t_start

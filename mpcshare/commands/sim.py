@@ -34,7 +34,7 @@ if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torc
     from mpcshare.bundle import ModelBundle
 
 __all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "announce_output_size",
-           "run_comparison"]
+           "cutting_steps", "run_comparison"]
 
 _RUN_NAMES = ("voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview", "random_handover",
               "oracle_handover")
@@ -127,6 +127,12 @@ def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list
     print(f"writing {what} into {out / 'runs'} (fewer with {thin})", flush=True)
 
 
+def cutting_steps(demos: Demonstrations, trial_id: int) -> Any:
+    """Where trial ``trial_id``'s demonstration cuts (bool per sample), or None without mode labels."""
+    trial = next(tr for tr in demos.trials if tr.trial_id == trial_id)
+    return None if trial.mode is None else trial.mode == MODE_NAMES.index("cutting")
+
+
 def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
                    trial_ids: list[int]) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
@@ -155,7 +161,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
                                      beta=args.beta, wearer=wearer)
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
-    return write_comparison(comp, out)
+    return write_comparison(comp, out, cutting=cutting_steps(demos, trial_ids[0]))
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -216,8 +216,11 @@ def strict_json(x: Any) -> Any:
     return x
 
 
-def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
-    """Write comparison.json, comparison.md and comparison.png into ``out``; returns the JSON object."""
+def write_comparison(comp: Comparison, out: str | Path, cutting: np.ndarray | None = None) -> dict[str, Any]:
+    """Write comparison.json, comparison.md and comparison.png into ``out``; returns the JSON object.
+
+    ``cutting``: bool per sample of the first trial, where the demonstration cuts (the trial
+    plot's sawing close-up is taken there)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     obj = comp.to_dict()
@@ -233,7 +236,8 @@ def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
 
         episode = Episode.load(out / comp.run_files[shown][0])
         trial_plot = "trial.png"
-        plot_episode(episode, out / trial_plot, title=f"{shown}, trial {comp.trials[0]}")
+        plot_episode(episode, out / trial_plot, title=f"{shown}, trial {comp.trials[0]}",
+                     cutting=None if cutting is None else np.asarray(cutting)[:len(episode.t)])
     with atomic_open(out / "comparison.md", "w") as f:
         f.write("# Closed-loop comparison of strategies\n\n"
                 + comparison_markdown(comp, trial_plot=trial_plot, effort_plot="effort_error.png"))

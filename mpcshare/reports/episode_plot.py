@@ -19,28 +19,37 @@ from mpcshare.reports.style import legend_outside
 __all__ = ["plot_episode"]
 
 
-def _sawing_window(t: np.ndarray, intent_band: np.ndarray, seconds: float = 4.0) -> tuple[slice, int] | None:
+def _sawing_window(t: np.ndarray, intent_band: np.ndarray, seconds: float = 4.0,
+                   allowed: np.ndarray | None = None) -> tuple[slice, int] | None:
     """(window, axis): the ``seconds`` where the intent saws hardest along one axis, scored by the
-    stroke-band energy times the number of sign changes (a rhythm, not one fast move); None: too short."""
+    stroke-band energy times the number of sign changes (a rhythm, not one fast move); only windows
+    wholly inside ``allowed`` (e.g. the cutting steps) when there is one; None: too short."""
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     n = int(round(seconds / dt)) if dt > 0 else 0
     if n < 2 or t.size < n:
         return None
     box = np.ones(n)
+    inside = None
+    if allowed is not None and len(allowed) == t.size:
+        inside = np.convolve(~np.asarray(allowed, dtype=bool), box, mode="valid") == 0
+        inside = inside if inside.any() else None  # no whole window inside: score them all
     best = (-1.0, 0, 0)
     for axis in range(intent_band.shape[1]):
         x = intent_band[:, axis]
         crossings = np.r_[0.0, (np.sign(x[1:]) != np.sign(x[:-1])).astype(float)]
         score = np.convolve(x ** 2, box, mode="valid") * np.convolve(crossings, box, mode="valid")
+        if inside is not None:
+            score = np.where(inside, score, -1.0)
         k = int(np.argmax(score))
         if score[k] > best[0]:
             best = (float(score[k]), k, axis)
     return slice(best[1], best[1] + n), best[2]
 
 
-def plot_episode(episode: Any, path: str | Path, title: str = "") -> Path:
+def plot_episode(episode: Any, path: str | Path, title: str = "", cutting: np.ndarray | None = None) -> Path:
     """Panels over time: tip x/y/z with intent and reference [m], α and β, shoulder angles [rad];
-    then the sawing close-up (module docstring)."""
+    then the sawing close-up (module docstring), taken inside the ``cutting`` steps (bool per
+    control step) when given, so that a repositioning jump is not mistaken for a stroke."""
     from sim.task_metrics import STROKE_BAND_HZ, bandpass
 
     t = np.asarray(episode.t, dtype=float)
@@ -70,7 +79,7 @@ def plot_episode(episode: Any, path: str | Path, title: str = "") -> Path:
     found = None
     if dt > 0 and ok.all() and t.size > 60:
         tip_b, intent_b = bandpass(episode.tip, dt, STROKE_BAND_HZ), bandpass(episode.tip_intent, dt, STROKE_BAND_HZ)
-        found = _sawing_window(t, intent_b)
+        found = _sawing_window(t, intent_b, allowed=cutting)
     if found is not None:
         window, axis = found
         saw_ax.plot(t[window], 1e3 * intent_b[window, axis], color="0.3", lw=1.2, label="intended stroke")

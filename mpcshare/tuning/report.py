@@ -144,17 +144,17 @@ def tune_markdown(result: dict[str, Any]) -> str:
 def _plot(result: dict[str, Any], path: Path) -> None:
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(7, 5), layout="constrained")
+    from mpcshare.reports.style import legend_outside, strategy_colour
+
+    fig = Figure(figsize=(8.5, 5), layout="constrained")
     ax = fig.add_subplot()
-    colors = {"gate": "C0", "blend": "C1", "random_handover": "C7", "voluntary": "C3", "reactive": "C2",
-              "oracle_preview": "C4"}
     pts = {n: (s["tracking_rmse_m"]["mean"], s["voluntary_effort"]["mean"], s["strategy"])
            for n, s in result["summary"].items()
            if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None}
     for name, (err, eff, strat) in pts.items():
         edged = {"edgecolor": "k", "linewidth": 1.5} if name in result["pareto"] else {}
         marker = "x" if strat == "random_handover" else "o"
-        ax.scatter(1e3 * err, eff, color=colors.get(strat, "k"), marker=marker, zorder=3,
+        ax.scatter(1e3 * err, eff, color=strategy_colour(strat), marker=marker, zorder=3,
                    **(edged if marker == "o" else {}))
         if name in result["pareto"] or strat in ("voluntary", "oracle_preview"):  # the rest by colour and legend
             ax.annotate(name, (1e3 * err, eff), fontsize=6, xytext=(3, 3), textcoords="offset points")
@@ -165,8 +165,8 @@ def _plot(result: dict[str, Any], path: Path) -> None:
     from matplotlib.lines import Line2D
 
     shown = sorted({v[2] for v in pts.values()})
-    ax.legend([Line2D([], [], ls="", marker="x" if k == "random_handover" else "o", color=colors.get(k, "k"))
-               for k in shown], shown, fontsize=7, loc="best")
+    legend_outside(ax, handles=[Line2D([], [], ls="", marker="x" if k == "random_handover" else "o",
+                                       color=strategy_colour(k)) for k in shown], labels=shown)
     ax.set_xlabel("tracking RMS [mm]")
     ax.set_ylabel("voluntary effort [rad]")
     ax.set_title("effort against error (dashed: voluntary to reactive; edged and named: Pareto set)", fontsize=9)
