@@ -41,10 +41,11 @@ class Headline:
     text: str
 
     def markdown(self) -> str:
-        return f"**{self.topic}: {self.verdict}.** {self.text}"
+        return f"**{self.topic}: {self.verdict}.** {self.text[:1].upper()}{self.text[1:]}"
 
     def plain(self) -> str:
-        return f"{self.topic}: {self.verdict}. {self.text}"
+        """The line for a terminal: no Markdown."""
+        return f"{self.topic}: {self.verdict}. {self.text[:1].upper()}{self.text[1:]}".replace("`", "")
 
 
 def _finite(x: Any) -> bool:
@@ -85,8 +86,8 @@ def _task(name: str, m: dict[str, Any]) -> Headline:
     cut = amp >= SAWING_TARGET[0] and corr >= SAWING_TARGET[1]
     return Headline("The task", "yes, it cut" if cut else "NO, it did not saw",
                     f"while cutting, the knife's stroke under `{name}` correlates {corr:.2f} with the intended "
-                    f"stroke at {amp:.2f} of its amplitude (sawing needs at least {SAWING_TARGET[1]:g} and "
-                    f"{SAWING_TARGET[0]:g}).{lag_text}")
+                    f"stroke at {amp:.2f} of its amplitude (sawing needs a correlation of at least "
+                    f"{SAWING_TARGET[1]:g} and an amplitude of at least {SAWING_TARGET[0]:g}).{lag_text}")
 
 
 def _compare(mine: float, other: float) -> str:
