@@ -168,15 +168,19 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
 
 
 def _plot(comp: Comparison, path: Path) -> None:
+    """Horizontal bars per strategy, one panel per figure: the names read on one axis, never overlapping."""
     names = list(comp.strategies)
     keys = (("tracking_rmse_m", "tracking RMS [mm]", 1e3), ("voluntary_effort", "effort: mean ‖θ‖ [rad]", 1.0),
             ("conflict_share", "conflicts [%]", 100.0), ("reactive_share", "robot leads [%]", 100.0))
-    fig = Figure(figsize=(11, 3.6), constrained_layout=True)
-    for ax, (key, label, scale) in zip(fig.subplots(1, len(keys)), keys):
-        ax.bar(range(len(names)), [comp.strategies[n][key] * scale for n in names],
-               color=[strategy_colour(n) for n in names])
-        strategy_ticks(ax, names)
+    fig = Figure(figsize=(11, 1.2 + 0.32 * len(names)), constrained_layout=True)
+    axes = fig.subplots(1, len(keys), sharey=True)
+    for ax, (key, label, scale) in zip(axes, keys):
+        ax.barh(range(len(names)), [comp.strategies[n][key] * scale for n in names],
+                color=[strategy_colour(n) for n in names])
         ax.set_title(label, fontsize=9)
+        ax.tick_params(axis="x", labelsize=8)
+    strategy_ticks(axes[0], names)
+    axes[0].invert_yaxis()  # the first strategy on top, as in the tables
     fig.savefig(path, dpi=110)
 
 

@@ -23,16 +23,20 @@ def _sawing_window(t: np.ndarray, intent_band: np.ndarray, seconds: float = 4.0,
                    allowed: np.ndarray | None = None) -> tuple[slice, int] | None:
     """(window, axis): the ``seconds`` where the intent saws hardest along one axis, scored by the
     stroke-band energy times the number of sign changes (a rhythm, not one fast move); only windows
-    wholly inside ``allowed`` (e.g. the cutting steps) when there is one; None: too short."""
+    wholly inside ``allowed`` (e.g. the cutting steps) when there is one, shortened to its longest
+    stretch (down to 1 s) when that is shorter than ``seconds``; None: too short."""
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     n = int(round(seconds / dt)) if dt > 0 else 0
     if n < 2 or t.size < n:
         return None
+    ok = None if allowed is None or len(allowed) != t.size else np.asarray(allowed, dtype=bool)
+    if ok is not None:
+        edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(int), 0]))  # starts and ends of the stretches
+        longest = int((edges[1::2] - edges[0::2]).max()) if edges.size else 0
+        ok = ok if longest * dt >= 1.0 else None  # no second of it: score every window
+        n = n if ok is None else min(n, longest)
     box = np.ones(n)
-    inside = None
-    if allowed is not None and len(allowed) == t.size:
-        inside = np.convolve(~np.asarray(allowed, dtype=bool), box, mode="valid") == 0
-        inside = inside if inside.any() else None  # no whole window inside: score them all
+    inside = None if ok is None else np.convolve(~ok, box, mode="valid") == 0
     best = (-1.0, 0, 0)
     for axis in range(intent_band.shape[1]):
         x = intent_band[:, axis]

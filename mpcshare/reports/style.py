@@ -1,5 +1,5 @@
 """How every plot of the project looks: one colour per task mode and per strategy, legends outside
-the data, strategy names a person can read.
+the data, strategy names a person can read (horizontal bars).
 
 One mapping in one place: a mode has the same colour in the data plot, the quotient plot, the
 trial plot of the closed loop and the video; a strategy the same colour in the comparison, the
@@ -11,13 +11,12 @@ mode matches) gets a grey of its own.
 
 from __future__ import annotations
 
-import textwrap
 from typing import Any, Sequence
 
 from sim.demonstrator import MODE_COLOURS  # task mode name → colour; the video draws with the same
 
 __all__ = ["MODE_COLOURS", "number", "STRATEGY_COLOURS", "legend_outside", "mode_colour", "strategy_colour",
-           "strategy_label", "strategy_ticks"]
+           "strategy_ticks"]
 
 _UNNAMED = ("#8C8C8C", "#B0B0B0", "#6E6E6E", "#C8C8C8", "#5A5A5A", "#A0A0A0", "#7C7C7C", "#BEBEBE")
 
@@ -51,15 +50,9 @@ def strategy_colour(name: str) -> str:
     return _MIX_COLOUR if name.startswith("mix") else "#222222"
 
 
-def strategy_label(name: str, width: int = 10) -> str:
-    """A strategy name for a tick label: underscores as spaces, wrapped to ``width`` characters a line."""
-    return "\n".join(textwrap.wrap(name.replace("_", " "), width)) or name
-
-
 def strategy_ticks(ax: Any, names: Sequence[str]) -> None:
-    """Legible strategy names under a bar chart: wrapped, rotated 30°, right-aligned under their bar."""
-    ax.set_xticks(range(len(names)), [strategy_label(n) for n in names], rotation=30, ha="right",
-                  rotation_mode="anchor", fontsize=8)
+    """Legible strategy names on the y axis of a horizontal bar chart (one a row, underscores as spaces)."""
+    ax.set_yticks(range(len(names)), [n.replace("_", " ") for n in names], fontsize=8)
 
 
 def legend_outside(ax: Any, **kwargs: Any) -> Any:
