@@ -53,7 +53,7 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
                    help="simulate at most this many held-out trials (default: all)")
     p.add_argument("--duration", type=positive_float, default=None,
                    help="simulate only the first DURATION seconds of each trial (default: whole trials)")
-    p.add_argument("--runs", nargs="+", choices=_RUN_NAMES, default=list(_RUN_NAMES),
+    p.add_argument("--runs", nargs="+", choices=_RUN_NAMES, default=list(_RUN_NAMES), metavar="RUN",
                    help=f"strategies to simulate (default: all {len(_RUN_NAMES)}: {', '.join(_RUN_NAMES)}; "
                         "random_handover replays the gate's share and "
                         "hand-overs at random times, oracle_handover the error-minimising schedule)")

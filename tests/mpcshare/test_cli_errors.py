@@ -1,5 +1,7 @@
 """The command line's error messages, one test per message a person meets (issue: "What a person sees")."""
 
+import argparse
+
 import pytest
 
 from learning.data import save
@@ -59,3 +61,15 @@ def test_top_level_help_lists_every_command():
     description = text.split("positional arguments")[0]
     for c in COMMANDS:
         assert c.name in description, c.name
+
+
+def test_sim_help_names_the_runs_it_runs_by_default():
+    from mpcshare.experiments import DEFAULT_RUNS
+
+    sim = next(c for c in COMMANDS if c.name == "sim")
+    p = argparse.ArgumentParser()
+    sim.add_arguments(p)
+    text = " ".join(p.format_help().split())
+    names = [r.name for r in DEFAULT_RUNS]
+    assert f"default: all {len(names)}: {', '.join(names)}" in text
+    assert p.parse_args(["--model", "m", "--out", "o"]).runs == names

@@ -50,7 +50,7 @@ def test_demo_refuses_an_output_path_that_is_a_file(tmp_path, capsys):
     assert "exists and is not a folder" in capsys.readouterr().err
 
 
-def test_demo_runs_every_stage_into_one_report(tmp_path):
+def test_demo_runs_every_stage_into_one_report(tmp_path, capsys):
     out = tmp_path / "demo"
     code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "4", "--n-random", "2",
                  "--no-search", "--no-sweep", "--sim-trials", "1", "--sim-duration", "3", "--no-video",
@@ -68,6 +68,12 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert analysis["modes"]["n_modes"] == 3 and analysis["window_s"] == 0.8
     assert (out / "model" / "bundle.json").exists()
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
+    said = capsys.readouterr().out  # the progress names what it runs, and the closing lines answer first
+    assert f"[6/6] closed loop in MuJoCo: {len(comparison['strategies'])} strategies x 1 held-out trial(s)" in said
+    assert "MB of run files" in said.split("[6/6]")[1]
+    closing = said.split("What the robot did:")[1]
+    assert [ln.strip().split(":")[0] for ln in closing.splitlines()[1:5]] == ["The task", "Sharing", "Effort",
+                                                                             "Keep-out"]
     assert set(comparison["strategies"]) == {"voluntary", "reactive", "gate", "blend", "gate_mpc", "oracle_preview",
                                              "random_handover", "oracle_handover"}
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
