@@ -1,7 +1,7 @@
 """Train a shared controller from demonstrations and run it beside a simulated wearer.
 
-    python examples/run_eating_sim.py --out eating-sim          # trains a small model first
-    python examples/run_eating_sim.py --model mpcshare-out/model --out eating-sim   # reuse `mpcshare demo`'s
+    python examples/run_eating_sim.py                 # trains a small model first; writes examples-out/eating-sim/
+    python examples/run_eating_sim.py --model mpcshare-out/model --out my-run   # reuse `mpcshare demo`'s model
 
 Steps, each one call:
 1. demonstrations: the synthetic bimanual eating data (fork = observation, knife = action);
@@ -30,21 +30,24 @@ from mpcshare.reports.episode_plot import plot_episode  # noqa: E402
 from mpcshare.training import train_bundle  # noqa: E402
 from mpcshare.training.config import TrainConfig  # noqa: E402
 from sim.closed_loop import run_episode  # noqa: E402
-from sim.demonstrator import generate_demonstrations  # noqa: E402
+from sim.demonstrator import CUTTING, generate_demonstrations  # noqa: E402
 from sim.metrics import episode_metrics  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--out", default="eating-sim", help="output folder")
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--out", default="examples-out/eating-sim", help="output folder (git ignores examples-out/)")
     p.add_argument("--model", default=None, help="a bundle from `mpcshare train` / `mpcshare demo` (else train one)")
     p.add_argument("--minutes", type=float, default=4.0, help="minutes of demonstrations per subject to train on")
     p.add_argument("--seconds", type=float, default=30.0, help="seconds of the held-out trial to simulate")
-    p.add_argument("--strategy", default="gate", choices=STRATEGIES)
+    p.add_argument("--strategy", default="gate", choices=STRATEGIES,
+                   help="who leads (default gate): " + ", ".join(STRATEGIES))
     p.add_argument("--video", action="store_true", help="render a video (needs offscreen OpenGL)")
     args = p.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    print(f"writing into {out.resolve()}")
 
     # 1-2. demonstrations and a model bundle
     if args.model:
@@ -67,7 +70,8 @@ def main(argv: list[str] | None = None) -> dict:
 
     # 5. what happened
     metrics = episode_metrics(episode)
-    plot_episode(episode, out / "trial.png", title=f"{args.strategy}, trial {trial.trial_id}")
+    cutting = None if trial.mode is None else trial.mode[:len(episode.t)] == CUTTING  # the sawing close-up's steps
+    plot_episode(episode, out / "trial.png", title=f"{args.strategy}, trial {trial.trial_id}", cutting=cutting)
     print(f"tracking error against the wearer's intent: RMS {metrics['tracking_rmse_m'] * 1e3:.1f} mm, "
           f"p95 {metrics['tracking_p95_m'] * 1e3:.1f} mm")
     print(f"robot in control {metrics['reactive_share']:.0%} of the time, {metrics['handovers']} hand-overs; "

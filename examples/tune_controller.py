@@ -5,7 +5,7 @@ against its matched random hand-overs on held-out trials × paired seeds, writes
 ``tune.json``, ``tune.md`` and ``pareto.png`` into ``--out`` and prints whether the gate
 beats chance and the recommended setting.
 
-Usage: ``python examples/tune_controller.py [--data DATA.npz] [--out tune-out] [--workers 2]``.
+Usage: ``python examples/tune_controller.py [--data DATA.npz] [--out examples-out/tune] [--workers 2]``.
 """
 
 from __future__ import annotations
@@ -21,13 +21,15 @@ from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=None, help="data set (default: 8 synthetic trials of 1 min)")
-    ap.add_argument("--out", default="tune-out")
-    ap.add_argument("--workers", type=int, default=2)
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap.add_argument("--data", default=None, help="data set (None: 8 synthetic trials of 1 min)")
+    ap.add_argument("--out", default="examples-out/tune", help="output folder (git ignores examples-out/)")
+    ap.add_argument("--workers", type=int, default=2, help="local worker processes")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    print(f"writing into {out.resolve()}")
     data = args.data
     if data is None:
         data = out / "demos.npz"

@@ -69,8 +69,9 @@ def run(cfg: QPConfig, seconds: float, smooth: bool) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seconds", type=float, default=6.0)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap.add_argument("--seconds", type=float, default=6.0, help="seconds of the reference per setting")
     ap.add_argument("--raw", action="store_true", help="feed the jumping reference to the QP without ruckig")
     ap.add_argument("--solver", default="auto", help="auto, daqp, osqp or qpsolvers:<name>")
     args = ap.parse_args()

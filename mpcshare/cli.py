@@ -54,13 +54,15 @@ def build_parser(commands: Sequence[Command] = COMMANDS) -> argparse.ArgumentPar
 
     parser = argparse.ArgumentParser(
         prog="mpcshare",
-        description="Shared control from demonstrations: generate, inspect and analyse data, report.")
+        description="Shared control of a wearable robot arm, learnt from demonstrations. Commands: "
+                    + ", ".join(c.name for c in commands) + ". Start with `mpcshare demo`.",
+        epilog="`mpcshare COMMAND --help` shows a command's options and their defaults.")
     parser.add_argument("--version", action="version", version=f"mpcshare {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for c in commands:
         p = sub.add_parser(c.name, help=c.help, description=c.help)
         c.add_arguments(p)
-        p.set_defaults(_run=c.run)
+        p.set_defaults(_run=c.run, _parser=p)
     return parser
 
 
@@ -88,7 +90,9 @@ def main(argv: Sequence[str] | None = None, commands: Sequence[Command] = ()) ->
     registered); one with the name of a registered command replaces it.
     """
     parser = build_parser(_merge(commands))
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # the subcommand's usage, not the top level's (exit status 2)
+        args._parser.error(f"unrecognized arguments: {' '.join(unknown)}")
     prefer_offscreen_gl()
     try:
         return int(args._run(args))

@@ -45,7 +45,7 @@ if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torc
     from mpcshare.bundle import ModelBundle
 
 __all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
-           "pool_metrics", "render_clip", "simulate_episode"]
+           "output_size", "pool_metrics", "render_clip", "simulate_episode"]
 
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
@@ -199,7 +199,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        make_controller: Callable[..., Any] | None = None,
                        log: Callable[[str], None] | None = print,
                        mode_names: Sequence[str] | None = None, mcap: bool = False,
-                       wearer: WearerConfig | None = None, scene: SceneConfig | None = None) -> Comparison:
+                       wearer: WearerConfig | None = None, scene: SceneConfig | None = None,
+                       mcap_rate_hz: float | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -213,6 +214,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
     simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
     the comparison records them and the preset's name. ``scene``: the arm's world (:func:`simulate_episode`).
+    ``mcap_rate_hz``: the MCAP's joint states at about this rate (default: every physics step).
     """
     make_controller = make_controller or _from_bundle
     known = set(demos.trial_ids)
@@ -250,7 +252,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
         path = runs_dir / f"{run.name}_trial{tid}{f'_draw{j}' if n_draws > 1 else ''}.npz"
         episode.save(path)
         if mcap:
-            write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork_poses(by_id[tid], demos.obs_names))
+            write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork_poses(by_id[tid], demos.obs_names),
+                           joint_stride=_joint_stride(episode, mcap_rate_hz))
         files[run.name].append(str(path.relative_to(Path(out))))
 
     for run in runs:
@@ -288,6 +291,33 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
                       wearer=describe_wearer(wearer),
                       offline_wearer_share_by_mode=_offline_share(bundle, mode_names))
+
+
+def _joint_stride(episode: Any, rate_hz: float | None) -> int:
+    """Every how many physics steps the MCAP keeps a joint state, for about ``rate_hz`` (None: all)."""
+    if rate_hz is None or len(episode.t_physics) < 2:
+        return 1
+    physics_hz = 1.0 / float(np.median(np.diff(episode.t_physics)))
+    return max(1, int(round(physics_hz / rate_hz)))
+
+
+def output_size(runs: Sequence[StrategyRun], demos: Demonstrations, trial_ids: Sequence[int],
+                duration_s: float | None, mcap: bool = False,
+                mcap_rate_hz: float | None = None) -> tuple[float, float]:
+    """(run files, MCAP files) [bytes] that :func:`compare_strategies` will write, about (measured sizes of
+    :func:`sim.episode.run_file_bytes_estimate` and :func:`sim.run_mcap.mcap_bytes_estimate`); MCAP 0 without it."""
+    from sim.episode import run_file_bytes_estimate
+    from sim.run_mcap import mcap_bytes_estimate
+    from sim.scene import SceneConfig
+
+    sc = SceneConfig()
+    physics_hz, control_hz = 1.0 / sc.timestep, 1.0 / sc.control_period
+    by_id = {tr.trial_id: tr for tr in demos.trials}
+    seconds = sum(min(float(by_id[int(t)].t[-1] - by_id[int(t)].t[0]), duration_s or math.inf) for t in trial_ids)
+    episodes = sum(r.draws for r in runs)
+    npz = episodes * run_file_bytes_estimate(seconds, physics_hz, control_hz)
+    joint_hz = physics_hz if mcap_rate_hz is None else physics_hz / max(1, round(physics_hz / mcap_rate_hz))
+    return npz, (episodes * mcap_bytes_estimate(seconds, control_hz, joint_hz) if mcap else 0.0)
 
 
 _SOURCES = {name for names in SCHEDULE_SOURCES.values() for name in names}

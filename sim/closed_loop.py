@@ -153,6 +153,21 @@ class _Loop:
             self._log_command(k, cmd)
         self.out["tip"][k], self.out["voluntary"][k], self.base_poses[k] = tip, theta, base
 
+    def caption(self, k: int) -> Any:
+        """What the video shows on control step ``k``'s frame: time, who leads (α), the demonstration's task mode."""
+        from sim.demonstrator import MODE_COLOURS, MODE_NAMES
+        from sim.render import Caption
+
+        a = self.alpha[k]
+        who = "no command" if not np.isfinite(a) else (f"robot leads (alpha {a:.2f})" if a >= 0.5
+                                                        else f"wearer leads (alpha {a:.2f})")
+        parts = [f"t = {k * self.sc.control_period:.1f} s", who]
+        label = int(self.trial.mode[k]) if self.trial.mode is not None and k < len(self.trial.mode) else -1
+        if label < 0:
+            return Caption(parts)
+        name = MODE_NAMES[label] if label < len(MODE_NAMES) else f"mode {label}"
+        return Caption(parts + [name], MODE_COLOURS.get(name))
+
     def _log_command(self, k: int, cmd: Any) -> None:
         self.alpha[k], self.beta[k] = _scalar(getattr(cmd, "alpha", np.nan)), _scalar(getattr(cmd, "beta", np.nan))
         self.novelty[k] = _scalar(getattr(cmd, "novelty", np.nan))
@@ -289,8 +304,8 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     wall0, cpu0 = time.perf_counter(), time.process_time()
     for k in range(n_ctrl):
         loop.control_step(k)
-        if renderer is not None:
-            renderer.maybe_capture(loop.world.data, k)
+        if renderer is not None and renderer.wants(k):
+            renderer.maybe_capture(loop.world.data, k, loop.caption(k))
         loop.physics_period(k)
         if bar is not None:
             bar.update(1)

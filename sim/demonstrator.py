@@ -52,6 +52,7 @@ from learning.data import Demonstrations, Trial
 __all__ = [
     "DEFAULT_MINUTES",
     "DEFAULT_SUBJECTS",
+    "MODE_COLOURS",
     "MODE_NAMES",
     "OBS_NAMES",
     "ACT_NAMES",
@@ -63,6 +64,9 @@ __all__ = [
 ]
 
 MODE_NAMES: tuple[str, ...] = ("cutting", "repositioning", "collecting", "removing")
+#: one colour per task mode, in every plot and the video (mpcshare.reports.style reads it from here)
+MODE_COLOURS: dict[str, str] = {"cutting": "#C44E52", "repositioning": "#4C72B0", "collecting": "#55A868",
+                                "removing": "#DD8452"}
 CUTTING, REPOSITIONING, COLLECTING, REMOVING = range(4)
 _POSE_FORCE = ("x", "y", "z", "roll", "pitch", "yaw", "fx", "fy", "fz")
 OBS_NAMES: tuple[str, ...] = tuple(f"fork_{c}" for c in _POSE_FORCE)

@@ -13,19 +13,46 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-__all__ = ["VideoRecorder"]
+__all__ = ["Caption", "VideoRecorder"]
+
+
+class Caption:
+    """Text drawn on a frame: a dark banner across the top, with an optional coloured patch
+    (e.g. the task mode's colour) before the last part. Sized for a 640-pixel-wide frame."""
+
+    def __init__(self, parts: list[str], patch_colour: str | None = None) -> None:
+        self.parts, self.patch_colour = parts, patch_colour
+
+    def draw(self, img: np.ndarray) -> np.ndarray:
+        """``img`` (H, W, 3) uint8 with the caption drawn on a copy."""
+        from PIL import Image, ImageDraw, ImageFont
+
+        frame = Image.fromarray(np.ascontiguousarray(img))
+        draw = ImageDraw.Draw(frame)
+        size = max(12, frame.width // 36)
+        font = ImageFont.load_default(size=size)
+        pad = size // 2
+        draw.rectangle([0, 0, frame.width, size + 2 * pad], fill=(20, 20, 20))
+        x = pad
+        for i, text in enumerate(self.parts):
+            if self.patch_colour and i == len(self.parts) - 1:
+                draw.rectangle([x, pad, x + size, pad + size], fill=self.patch_colour)
+                x += size + pad // 2
+            draw.text((x, pad), text, fill=(255, 255, 255), font=font)
+            x += int(draw.textlength(text, font=font)) + 2 * pad
+        return np.asarray(frame)
 
 
 class VideoRecorder:
     """Captures frames every ``control_rate_hz / fps`` control steps from the camera ``camera``.
 
     ``path``: .mp4 (if ``imageio-ffmpeg`` is installed; otherwise the same name with
-    .gif) or .gif.  GIF frames are kept palette-quantised in memory (≈ 75 kB each at
-    320×240) and written on :meth:`close`.
+    .gif) or .gif.  GIF frames are kept palette-quantised in memory (≈ 300 kB each at
+    640×480, the largest offscreen buffer the scene declares) and written on :meth:`close`.
     """
 
     def __init__(self, model: mujoco.MjModel, path: str | Path, fps: int = 25, control_rate_hz: float = 100.0,
-                 width: int = 320, height: int = 240, camera: str = "side") -> None:
+                 width: int = 640, height: int = 480, camera: str = "side") -> None:
         self.path = Path(path)
         if self.path.suffix.lower() not in (".mp4", ".gif"):
             raise ValueError(f"video path must end in .mp4 or .gif, got {self.path.name!r}")
@@ -56,13 +83,19 @@ class VideoRecorder:
             except ImportError:
                 self.path = self.path.with_suffix(".gif")
 
-    def maybe_capture(self, data: mujoco.MjData, k: int) -> None:
-        """Render control step k if it falls on a frame."""
-        if self._renderer is None or k % self.every:
+    def wants(self, k: int) -> bool:
+        """Whether control step ``k`` falls on a frame (so a caller builds a caption only then)."""
+        return self._renderer is not None and k % self.every == 0
+
+    def maybe_capture(self, data: mujoco.MjData, k: int, caption: Caption | None = None) -> None:
+        """Render control step k if it falls on a frame, with ``caption`` drawn on it."""
+        if not self.wants(k):
             return
         try:
             self._renderer.update_scene(data, camera=self.camera)
             img = self._renderer.render()
+            if caption is not None:
+                img = caption.draw(img)
         except Exception as exc:  # noqa: BLE001  (a GL failure mid-run must not stop the episode)
             self.message = f"rendering stopped at step {k}: {type(exc).__name__}: {exc}"
             self._renderer = None

@@ -32,7 +32,7 @@ def load_npz(path: PathLike) -> Demonstrations:
     try:
         npz = np.load(p, allow_pickle=False)
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as e:
-        raise DataFormatError(f"not a readable NPZ file ({e})", path=p) from None
+        raise DataFormatError(f"the file is corrupted ({e})", path=p) from None
     if not isinstance(npz, np.lib.npyio.NpzFile):
         raise DataFormatError("not an NPZ archive (a single .npy array?)", path=p)
     with npz:
@@ -47,8 +47,13 @@ def load_npz(path: PathLike) -> Demonstrations:
         for k in keys:
             try:
                 arrays[k] = npz[k]
-            except (ValueError, OSError, zipfile.BadZipFile, EOFError) as e:
-                raise DataFormatError(f"cannot be read without pickle ({e})", path=p, field=k) from None
+            except ValueError as e:
+                if "pickle" in str(e):  # an object array: numpy refuses it without pickle
+                    raise DataFormatError("holds Python objects and cannot be read without pickle",
+                                          path=p, field=k) from None
+                raise DataFormatError(f"the file is corrupted ({e})", path=p, field=k) from None
+            except (OSError, zipfile.BadZipFile, EOFError) as e:
+                raise DataFormatError(f"the file is corrupted ({e})", path=p, field=k) from None
     return from_stacked_arrays(arrays, Origin(path=p))
 
 

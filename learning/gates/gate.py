@@ -248,9 +248,9 @@ class ModeGates(BaseEstimator):
                 value, reason = 0, "no training points in this mode: hand over to the wearer"
             elif min(n_pos, n_neg) < self.min_class_count:
                 value = int(n_pos > n_neg)
-                reason = (f"{n_pos} predictable / {n_neg} unpredictable points: fewer than "
-                          f"min_class_count={self.min_class_count} of one class; constant majority "
-                          f"value {value}")
+                reason = (f"{n_pos} predictable and {n_neg} unpredictable points: too few of one kind to "
+                          f"learn from (at least {self.min_class_count} of each needed), so it keeps the "
+                          f"majority's answer")
             if reason is not None:
                 gate = ConstantGate(value, reason, n_pos, n_neg)
                 constant[j] = {"value": value, "reason": reason, "n_positive": n_pos, "n_negative": n_neg}

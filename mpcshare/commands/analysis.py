@@ -80,7 +80,8 @@ def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
         result = analyze(demos, analysis_config(args), progress=True)
     except AnalysisError as exc:
         raise CommandError(f"cannot analyse the data: {exc}") from exc
-    write_analysis_report(result, out, mode_names=mode_names)
+    write_analysis_report(result, out, mode_names=mode_names,
+                          channel_names=(list(demos.obs_names), list(demos.act_names)))
     return result.summary
 
 

@@ -74,11 +74,8 @@ def nonnegative_float(text: str) -> float:
 # ------------------------------------------------------- files
 
 def percentile(text: str) -> float:
-    """argparse type: a percentile in [0, 100]."""
-    value = nonnegative_float(text)
-    if value > 100:
-        raise argparse.ArgumentTypeError(f"expected a percentile in [0, 100], got {text!r}")
-    return value
+    """argparse type: a percentile, a number from 0 to 100."""
+    return float(_number(text, float, lambda v: 0 <= v <= 100, "a number from 0 to 100"))
 
 
 def prepare_output_folder(path: str | Path) -> Path:
@@ -104,6 +101,8 @@ def load_or_fail(path: str) -> Demonstrations:
     try:
         return load(path)
     except DataFormatError as exc:
-        raise CommandError(f"cannot use {path}: {exc}") from exc
+        # the loader's message starts with the file it names: say the path once
+        said = exc.path is not None and str(exc).startswith(str(exc.path))
+        raise CommandError(f"cannot use {exc}" if said else f"cannot use {path}: {exc}") from exc
     except OSError as exc:
         raise CommandError(f"cannot read {path}: {exc}") from exc

@@ -31,8 +31,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.data import format_summary
-from mpcshare.commands.sim import add_wearer_argument
-from mpcshare.run_table import RUN_NAMES
+from mpcshare.commands.sim import add_wearer_argument, cutting_steps
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 
@@ -112,7 +111,7 @@ def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any)
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from mpcshare.experiments import compare_strategies, render_clip
+    from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, output_size, render_clip
     from mpcshare.reports.comparison import write_comparison
     from mpcshare.reports.demo import write_demo_report
     from sim.wearer_presets import wearer_preset
@@ -163,8 +162,12 @@ def _demo(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     ids = bundle.heldout_trials[:args.sim_trials]
-    _stage(6, f"closed loop in MuJoCo: {len(RUN_NAMES)} runs x {len(ids)} held-out trial(s) x {args.sim_duration:g} s")
+    _stage(6, f"closed loop in MuJoCo: {len(DEFAULT_RUNS)} strategies x {len(ids)} held-out trial(s) "
+              f"x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")
+    npz_bytes, _ = output_size(DEFAULT_RUNS, demos, ids, args.sim_duration)
+    print(f"writing about {npz_bytes / 1e6:.0f} MB of run files into {sim_out / 'runs'} "
+          "(fewer with --sim-trials or --sim-duration)", flush=True)
     wearer = wearer_preset(args.wearer)
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
                               mode_names=MODE_NAMES, wearer=wearer)
@@ -173,7 +176,7 @@ def _demo(args: argparse.Namespace) -> int:
                                      seed=args.seed, wearer=wearer)
         comp.video = None if video is None else str(Path(video).relative_to(sim_out))
         print(f"video: {video}" if video else f"no video: {message}")
-    comparison = write_comparison(comp, sim_out)
+    comparison = write_comparison(comp, sim_out, cutting=cutting_steps(demos, ids[0]))
     lap("closed loop", t0)
 
     timings["total"] = time.perf_counter() - t_start
@@ -182,11 +185,12 @@ def _demo(args: argparse.Namespace) -> int:
                                 data_summary=summary, sweep=sweep, mode_sources=mode_sources)
     if missing:
         print(f"report.html: could not embed {missing}")
-    from mpcshare.reports.comparison import comparison_findings
+    from mpcshare.reports.headline import headline_lines
 
-    for line in comparison_findings(comparison["strategies"]):
-        print(line)
-    print(f"done in {timings['total']:.0f} s; open {out / 'report.html'} (or report.md)")
+    print("\nWhat the robot did:")
+    for line in headline_lines(comparison["strategies"], markdown=False) or ["the closed loop was not run"]:
+        print(f"  {line}")
+    print(f"done in {timings['total']:.0f} s; the figures behind these lines: {out / 'report.html'} (or report.md)")
     return 0
 
 

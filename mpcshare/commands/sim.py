@@ -37,7 +37,8 @@ from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "run_comparison"]
+__all__ = ["SIM_COMMAND", "align_channels", "add_sim_arguments", "add_wearer_argument", "announce_output_size",
+           "cutting_steps", "run_comparison"]
 
 
 
@@ -54,10 +55,11 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
                    help="simulate at most this many held-out trials (default: all)")
     p.add_argument("--duration", type=positive_float, default=None,
                    help="simulate only the first DURATION seconds of each trial (default: whole trials)")
-    p.add_argument("--runs", nargs="+", choices=RUN_NAMES, default=list(RUN_NAMES),
-                   help="strategies to simulate (default: all; the strategies of the registry, gate_mpc, "
-                        "oracle_preview, random_handover: the gate's share and hand-overs at random times, 5 draws, "
-                        "oracle_handover: the best replay of error-minimising schedules, an upper bound)")
+    p.add_argument("--runs", nargs="+", choices=RUN_NAMES, default=list(RUN_NAMES), metavar="RUN",
+                   help=f"strategies to simulate (default: all {len(RUN_NAMES)}: {', '.join(RUN_NAMES)}; the "
+                        "strategies of the registry, gate_mpc, oracle_preview, random_handover: the gate's share and "
+                        "hand-overs at random times, 5 draws, oracle_handover: the best replay of error-minimising "
+                        "schedules, an upper bound)")
     p.add_argument("--beta", type=float, default=DEFAULT_BETA,
                    help=f"β while the robot acts (default {DEFAULT_BETA:g})")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
@@ -72,7 +74,11 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
                    help="use the data's CHANNEL as the bundle's channel NAME (e.g. fork_x=obs_3)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--mcap", action="store_true", help="also write each run as runs/*.mcap (opens in Foxglove)")
+    p.add_argument("--mcap", action="store_true",
+                   help="also write each run as runs/*.mcap (opens in Foxglove); its size is printed first")
+    p.add_argument("--mcap-rate", type=positive_float, default=None, metavar="HZ",
+                   help="with --mcap: the arm's joint states at about HZ (default: every physics step, 1000 Hz; "
+                        "100 makes them about 3x smaller)")
     add_sim_arguments(p)
     add_robot_arguments(p)
 
@@ -112,6 +118,26 @@ def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str
     return Demonstrations(trials, demos.rate_hz, list(bundle.obs_names), act_names, list(demos.vol_names))
 
 
+def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list[int], args: argparse.Namespace,
+                         out: Path) -> None:
+    """Say how much the run files will take, before they are written, and how to make them smaller."""
+    from mpcshare.experiments import output_size
+
+    mcap = getattr(args, "mcap", False)
+    npz, mcap_bytes = output_size(runs, demos, trial_ids, args.duration, mcap, getattr(args, "mcap_rate", None))
+    what = f"about {npz / 1e6:.0f} MB of run files (NPZ)"
+    if mcap:
+        what += f" and {mcap_bytes / 1e6:.0f} MB of MCAP"
+    thin = "--trials, --duration or --runs" + (", --mcap-rate HZ" if mcap else "")
+    print(f"writing {what} into {out / 'runs'} (fewer with {thin})", flush=True)
+
+
+def cutting_steps(demos: Demonstrations, trial_id: int) -> Any:
+    """Where trial ``trial_id``'s demonstration cuts (bool per sample), or None without mode labels."""
+    trial = next(tr for tr in demos.trials if tr.trial_id == trial_id)
+    return None if trial.mode is None else trial.mode == MODE_NAMES.index("cutting")
+
+
 def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
                    trial_ids: list[int]) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
@@ -122,6 +148,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     if abs(demos.rate_hz - bundle.rate_hz) > 1e-9 * bundle.rate_hz:
         raise CommandError(f"the data is at {demos.rate_hz:g} Hz, the bundle was trained at {bundle.rate_hz:g} Hz")
     runs = [r for r in DEFAULT_RUNS if r.name in args.runs]
+    announce_output_size(runs, demos, trial_ids, args, out)
     wearer_name = getattr(args, "wearer", DEFAULT_WEARER_PRESET)
     wearer = wearer_preset(wearer_name)
     scene = scene_from_args(args)
@@ -132,7 +159,8 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
-                              mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene)
+                              mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene,
+                              mcap_rate_hz=getattr(args, "mcap_rate", None))
     shown = next((r for r in runs if r.name == "gate"), next((r for r in runs if r.schedule is None), None))
     if args.video and shown is None:
         print("no video: only replayed schedules were run (add --runs gate)")
@@ -142,7 +170,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
                                      beta=args.beta, wearer=wearer, scene=scene)
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
-    return write_comparison(comp, out)
+    return write_comparison(comp, out, cutting=cutting_steps(demos, trial_ids[0]))
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -171,8 +199,9 @@ def _run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     obj = run_comparison(bundle, demos, out, args, trial_ids)
     from mpcshare.reports.comparison import comparison_findings
+    from mpcshare.reports.headline import headline_lines
 
-    for line in comparison_findings(obj["strategies"]):
+    for line in headline_lines(obj["strategies"], markdown=False) + comparison_findings(obj["strategies"]):
         print(line)
     print(f"done in {time.perf_counter() - t0:.0f} s; open {out / 'comparison.md'}")
     return 0

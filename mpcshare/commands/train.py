@@ -87,7 +87,7 @@ def _config(args: argparse.Namespace) -> TrainConfig:
 def _fmt(x) -> str:
     if x is None:
         return "–"
-    return "inf" if isinstance(x, float) and math.isinf(x) else f"{x:.4g}"
+    return "inf" if isinstance(x, float) and math.isinf(x) else f"{x:#.3g}"
 
 
 def print_metrics(metrics: dict) -> None:

@@ -46,7 +46,7 @@ def _percentile(text: str) -> float:
     except ValueError:
         v = math.nan
     if not (0.0 < v <= 100.0):
-        raise argparse.ArgumentTypeError(f"expected a percentile in (0, 100], got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a number above 0 and at most 100, got {text!r}")
     return v
 
 
@@ -57,7 +57,7 @@ def _beta(text: str) -> float:
     except ValueError:
         v = math.nan
     if not (0.0 <= v <= 1.0):
-        raise argparse.ArgumentTypeError(f"expected a beta in [0, 1], got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, got {text!r}")
     return v
 
 
@@ -102,7 +102,7 @@ def _usage_error(message: str) -> int:
 def _run(args: argparse.Namespace) -> int:
     from learning.data import split_by_trial
     from mpcshare.training.config import TrainConfig
-    from mpcshare.tuning.report import build_result, chance_sentences, write_tune
+    from mpcshare.tuning.report import build_result, chance_sentences, recommendation_line, write_tune
     from mpcshare.tuning.runner import RayMissing, run_tune
 
     if args.backend == "ray":
@@ -133,8 +133,9 @@ def _run(args: argparse.Namespace) -> int:
     write_tune(result, out)
     for line in chance_sentences(result):
         print(line)
-    if result["recommended"]:
-        print(f"recommended: {result['recommended']['setting']}")
+    line = recommendation_line(result)
+    if line:
+        print(line)
     print(f"tune: {out / 'tune.md'}")
     return 0
 

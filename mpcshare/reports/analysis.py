@@ -29,14 +29,15 @@ from learning.atomic import atomic_open, write_json
 from learning.data import Demonstrations
 from learning.modes import match_modes
 from mpcshare.reports.claims import claim_sentences, mixture_advice
+from mpcshare.reports.style import legend_outside, mode_colour
 
 __all__ = ["plot_demonstrations", "write_analysis_report", "fmt", "fmt_p", "fmt_p_value"]
 
-_MODE_COLOURS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860", "#DA8BC3", "#8C8C8C")
 
 
-def _mode_bands(ax, t: np.ndarray, labels: np.ndarray, alpha: float = 0.15) -> None:
-    """Shade the background of ``ax`` by mode label."""
+def _mode_bands(ax, t: np.ndarray, labels: np.ndarray, names: Sequence[str | None] | None,
+                alpha: float = 0.15) -> None:
+    """Shade the background of ``ax`` by mode label, each mode in the colour of its name (``style``)."""
     if len(t) == 0:
         return
     change = np.flatnonzero(np.diff(labels) != 0) + 1
@@ -46,20 +47,22 @@ def _mode_bands(ax, t: np.ndarray, labels: np.ndarray, alpha: float = 0.15) -> N
         k = int(labels[a])
         if k < 0:
             continue
-        ax.axvspan(t[a], t[min(b, len(t) - 1)], color=_MODE_COLOURS[k % len(_MODE_COLOURS)],
-                   alpha=alpha, lw=0)
+        ax.axvspan(t[a], t[min(b, len(t) - 1)], color=mode_colour(k, names), alpha=alpha, lw=0)
 
 
-def _mode_legend(ax, labels: np.ndarray, mode_names: Sequence[str] | None, title: str) -> None:
+def _mode_legend(ax, labels: np.ndarray, names: Sequence[str | None] | None, title: str,
+                 texts: Sequence[str] | None = None) -> None:
+    """A legend of the modes present, outside the data, above the panel ``ax``."""
     from matplotlib.patches import Patch
 
     ks = [int(k) for k in np.unique(labels) if k >= 0]
-    handles = [Patch(color=_MODE_COLOURS[k % len(_MODE_COLOURS)], alpha=0.4,
-                     label=mode_names[k] if mode_names is not None and k < len(mode_names) else f"mode {k}")
+    texts = texts or names
+    handles = [Patch(color=mode_colour(k, names), alpha=0.4,
+                     label=texts[k] if texts is not None and k < len(texts) and texts[k] else f"mode {k}")
                for k in ks]
     if handles:
-        ax.legend(handles=handles, title=title, loc="upper right", fontsize=7, title_fontsize=7,
-                  ncol=len(handles))
+        ax.legend(handles=handles, title=title, loc="lower left", bbox_to_anchor=(0.0, 1.02), fontsize=7,
+                  title_fontsize=7, ncol=len(handles), frameon=False)
 
 
 def plot_demonstrations(demos: Demonstrations, path: Path, *, mode_names: Sequence[str] | None = None,
@@ -74,20 +77,19 @@ def plot_demonstrations(demos: Demonstrations, path: Path, *, mode_names: Sequen
             ("knife orientation [rad]", tr.act[:n, 3:6], demos.act_names[3:6])]
     if tr.voluntary is not None:
         rows.append(("voluntary [rad]", tr.voluntary[:n], demos.vol_names))
-    fig = Figure(figsize=(11, 1.9 * len(rows)))
+    fig = Figure(figsize=(11, 1.9 * len(rows) + 0.5), layout="constrained")
     axes = fig.subplots(len(rows), 1, sharex=True, squeeze=False)[:, 0]
     for ax, (title, y, names) in zip(axes, rows):
         for c in range(y.shape[1]):
             ax.plot(t, y[:, c], lw=0.9, label=names[c] if c < len(names) else str(c))
         if tr.mode is not None:
-            _mode_bands(ax, t, tr.mode[:n])
+            _mode_bands(ax, t, tr.mode[:n], mode_names)
         ax.set_ylabel(title, fontsize=8)
-        ax.legend(loc="upper left", fontsize=7, ncol=3)
+        legend_outside(ax)
     if tr.mode is not None:
         _mode_legend(axes[0], tr.mode[:n], mode_names, "true mode")
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(f"trial {tr.trial_id} (subject {tr.subject}), first {t[-1]:.0f} s")
-    fig.tight_layout()
     fig.savefig(path, dpi=110)
 
 
@@ -100,37 +102,43 @@ def _log_q(q: np.ndarray) -> np.ndarray:
     return np.log10(np.clip(np.where(np.isinf(q), hi, q), lo, hi))
 
 
-def _plot_trial_quotients(r: AnalysisResult, path: Path, mode_names: Sequence[str] | None) -> None:
+def _plot_trial_quotients(r: AnalysisResult, path: Path, mode_names: Sequence[str] | None,
+                          channel_names: tuple[Sequence[str], Sequence[str]] | None = None) -> None:
+    """A trial's standardised fork and knife channels (named when ``channel_names`` = (obs, act) is
+    given) and its quotients over time; background: HMM modes in the colour of the true mode they match."""
     w = r.windows
     tid = w.trial[0]
     sel = w.trial == tid
     n = min(int(sel.sum()), int(90 * w.rate_hz))
     idx = np.flatnonzero(sel)[:n]
     t = w.t[idx] - w.t[idx[0]]
-    fig = Figure(figsize=(11, 7))
+    fig = Figure(figsize=(11, 7.5), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
-    axes[0].plot(t, w.lag(0)[idx] * math.sqrt(w.lags), lw=0.8)
-    axes[0].set_ylabel("fork (standardised)", fontsize=8)
-    axes[1].plot(t, w.Y[idx], lw=0.8)
-    axes[1].set_ylabel("knife (standardised)", fontsize=8)
+    obs_names, act_names = channel_names or ((), ())
+    for ax, y, names, what in ((axes[0], w.lag(0)[idx] * math.sqrt(w.lags), obs_names, "fork"),
+                               (axes[1], w.Y[idx], act_names, "knife")):
+        for c in range(y.shape[1]):
+            ax.plot(t, y[:, c], lw=0.8, label=names[c] if c < len(names) else f"{what} {c}")
+        ax.set_ylabel(f"{what} (standardised)", fontsize=8)
+        legend_outside(ax, fontsize=6)
     axes[2].semilogy(t, np.maximum(r.q[idx], 1e-3), lw=0.9, color="k", label="without modes")
-    axes[2].semilogy(t, np.maximum(r.q_modes[idx], 1e-3), lw=0.9, color="tab:green", label="within HMM modes")
+    axes[2].semilogy(t, np.maximum(r.q_modes[idx], 1e-3), lw=0.9, color="tab:purple", label="within HMM modes")
     for K in r.config.K:
-        axes[2].axhline(K, ls="--", lw=0.8, color="tab:red")
-        axes[2].text(t[-1], K, f" K={K:g}", va="center", fontsize=7, color="tab:red")
+        axes[2].axhline(K, ls="--", lw=0.8, color="0.4")
+        axes[2].text(t[-1], K, f" K={K:g}", va="center", fontsize=7, color="0.3")
     axes[2].set_ylabel("quotient q", fontsize=8)
-    axes[2].legend(loc="upper left", fontsize=7)
-    for ax in axes:
-        _mode_bands(ax, t, r.modes[idx])
-    names = None
-    if r.true_modes is not None and mode_names is not None:  # name HMM modes by their best match
+    legend_outside(axes[2])
+    colour_names: list[str | None] | None = None
+    texts = None
+    if r.true_modes is not None and mode_names is not None:  # an HMM mode takes its best match's name
         match = match_modes(r.modes, r.true_modes)
-        names = [f"{k} ≈ {mode_names[match[k]]}" if match.get(k, -1) >= 0 else str(k)
-                 for k in range(r.config.n_modes)]
-    _mode_legend(axes[0], r.modes[idx], names, "HMM mode")
+        colour_names = [mode_names[match[k]] if match.get(k, -1) >= 0 else None for k in range(r.config.n_modes)]
+        texts = [f"{k} ≈ {c}" if c else str(k) for k, c in enumerate(colour_names)]
+    for ax in axes:
+        _mode_bands(ax, t, r.modes[idx], colour_names)
+    _mode_legend(axes[0], r.modes[idx], colour_names, "HMM mode", texts)
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(f"trial {tid}: signals and point-wise Lipschitz quotients (background: HMM modes)")
-    fig.tight_layout()
     fig.savefig(path, dpi=110)
 
 
@@ -299,7 +307,7 @@ def _markdown(report: AnalysisReport, mode_names: Sequence[str] | None) -> str:
                     zip(sel.candidates, sel.heldout_loglik, sel.bic)], "",
                   f"Chosen: {sel.n_modes} ({sel.rule} rule, {sel.n_folds}-fold by trial); "
                   f"held-out maximum {sel.n_modes_max}, BIC minimum {sel.n_modes_bic}.", ""]
-    lines += ["", "Timings [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in report.timings_s.items()), ""]
+    lines += ["", "Time per stage: " + ", ".join(f"{k} {v:.1f} s" for k, v in report.timings_s.items()) + ".", ""]
     return "\n".join(lines)
 
 
@@ -329,12 +337,13 @@ def _claim_lines(t) -> list[str]:
     ]
 
 
-def write_analysis_report(result: AnalysisResult, out: Path, *,
-                          mode_names: Sequence[str] | None = None) -> None:
-    """Write report.json, report.md and the plots of an analysis into ``out``."""
+def write_analysis_report(result: AnalysisResult, out: Path, *, mode_names: Sequence[str] | None = None,
+                          channel_names: tuple[Sequence[str], Sequence[str]] | None = None) -> None:
+    """Write report.json, report.md and the plots of an analysis into ``out`` (``channel_names``:
+    the data's obs and act names, to label the plotted channels)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    _plot_trial_quotients(result, out / "quotients_trial.png", mode_names)
+    _plot_trial_quotients(result, out / "quotients_trial.png", mode_names, channel_names)
     _plot_histogram(result, out / "quotient_hist.png")
     _plot_segmentation(result, out / "segmentation.png")
     _plot_shares(result, out / "voluntary_share.png")

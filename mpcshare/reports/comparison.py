@@ -16,17 +16,19 @@ from matplotlib.figure import Figure
 
 from learning.atomic import atomic_open, write_json
 from mpcshare.experiments import Comparison
-from mpcshare.run_table import RUN_COLORS
+from mpcshare.reports.headline import SAWING_TARGET, headline_lines, line_ratio
+from mpcshare.reports.style import strategy_colour, strategy_ticks
 
-__all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "write_comparison"]
+__all__ = ["SAWING_TARGET", "comparison_findings", "comparison_markdown", "line_sentence", "plot_effort_error",
+           "write_comparison"]
 
 _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("line_ratio", "line ratio", 1.0, "{:.2f}"),
             ("tracking_p95_m", "tracking p95 [mm]", 1e3, "{:.1f}"),
             ("voluntary_effort", "effort [rad]", 1.0, "{:.3f}"),
-            ("reactive_share", "reactive share", 100.0, "{:.0f} %"),
+            ("reactive_share", "robot leads [%]", 100.0, "{:.0f}"),
             ("handovers", "hand-overs", 1.0, "{:.0f}"),
-            ("conflict_share", "conflicts", 100.0, "{:.1f} %"),
+            ("conflict_share", "conflicts [%]", 100.0, "{:.1f}"),
             ("limit_violations", "limit violations", 1.0, "{:.0f}"),
             ("step_p50_ms", "step p50 [ms]", 1.0, "{:.2f}"),
             ("step_p99_ms", "step p99 [ms]", 1.0, "{:.2f}"),
@@ -38,8 +40,7 @@ _TASK_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
                  ("rms_at_lag_m", "RMS at that lag [mm]", 1e3, "{:.1f}"),
                  ("saw_amplitude_ratio", "sawing amplitude", 1.0, "{:.2f}"),
                  ("saw_correlation", "sawing correlation", 1.0, "{:.2f}"),
-                 ("stroke_share", "strokes executed", 100.0, "{:.0f} %"))
-SAWING_TARGET = (0.6, 0.7)  # amplitude ratio and correlation of the stroke that count as sawing (docs/design.md)
+                 ("stroke_share", "strokes executed [%]", 100.0, "{:.0f}"))
 
 
 def _ratio(a: float, b: float) -> float:
@@ -159,13 +160,18 @@ def _who_leads_table(comp: Comparison) -> list[str]:
 
 
 def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.png",
-                        trial_plot: str | None = None) -> str:
-    """The Markdown section: table, findings, plot."""
+                        trial_plot: str | None = None, effort_plot: str | None = None) -> str:
+    """The Markdown section: the four headline answers, the effort–error plot, then the tables,
+    findings and plots."""
     span = "whole trials" if comp.duration_s is None else f"the first {comp.duration_s:g} s of each"
     who = (comp.wearer or {}).get("preset") or ("custom settings" if comp.wearer else None)
     wearer = f" Simulated wearer: {who}." if who else ""
-    lines = [f"Held-out trials {comp.trials}, {span}; pooled over trials.{wearer}", "",
-             *_table(comp.strategies, _COLUMNS), ""]
+    lines = [*[f"- {h}" for h in headline_lines(comp.strategies)], ""]
+    if effort_plot:
+        lines += [f"![effort against error, with the line from the wearer alone to the robot alone]({effort_plot})",
+                  ""]
+    lines += ["### The figures", "", f"Held-out trials {comp.trials}, {span}; pooled over trials.{wearer}", "",
+              *_table(comp.strategies, _COLUMNS), ""]
     if any(m.get("lag_s") is not None for m in comp.strategies.values()):
         lines += ["The task: the knife's lag behind the wearer's intent (the time shift that minimises the RMS) "
                   "and, while cutting, its motion in the stroke band (0.8–3 Hz) against the intended stroke:", "",
@@ -184,29 +190,61 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
 
 
 def _plot(comp: Comparison, path: Path) -> None:
+    """Horizontal bars per strategy, one panel per figure: the names read on one axis, never overlapping."""
     names = list(comp.strategies)
     keys = (("tracking_rmse_m", "tracking RMS [mm]", 1e3), ("line_ratio", "line ratio (< 1: beats mixing)", 1.0),
             ("voluntary_effort", "effort: mean ‖θ‖ [rad]", 1.0), ("conflict_share", "conflicts [%]", 100.0),
-            ("reactive_share", "reactive share [%]", 100.0))
-    colors = [RUN_COLORS.get(n, "#4C72B0") for n in names]
-    fig = Figure(figsize=(14, 3.4), constrained_layout=True)
-    for ax, (key, label, scale) in zip(fig.subplots(1, len(keys)), keys):
+            ("reactive_share", "robot leads [%]", 100.0))
+    fig = Figure(figsize=(13, 1.2 + 0.32 * len(names)), constrained_layout=True)
+    axes = fig.subplots(1, len(keys), sharey=True)
+    for ax, (key, label, scale) in zip(axes, keys):
         vals = [np.nan if comp.strategies[n].get(key) is None else comp.strategies[n][key] * scale for n in names]
-        ax.bar(range(len(names)), vals, color=colors)
+        ax.barh(range(len(names)), vals, color=[strategy_colour(n) for n in names])
         if key == "line_ratio":
-            ax.axhline(1.0, color="0.4", ls="--", lw=0.8)
-        ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
+            ax.axvline(1.0, color="0.4", ls="--", lw=0.8)
         ax.set_title(label, fontsize=9)
+        ax.tick_params(axis="x", labelsize=8)
+    strategy_ticks(axes[0], names)
+    axes[0].invert_yaxis()  # the first strategy on top, as in the tables
     fig.savefig(path, dpi=110)
 
 
-def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
-    """Write comparison.json, comparison.md and comparison.png into ``out``; returns the JSON object."""
+def plot_effort_error(strategies: dict[str, dict[str, Any]], path: str | Path) -> Path:
+    """Each run at (effort, tracking RMS), with the straight line from the wearer alone to the robot alone:
+    a run below the line beats mixing the two at its effort (its line ratio, in its label, is below 1)."""
+    fig = Figure(figsize=(7.5, 4.6), constrained_layout=True)
+    ax = fig.subplots()
+    pts = {n: (m["voluntary_effort"], m["tracking_rmse_m"] * 1e3) for n, m in strategies.items()
+           if m.get("voluntary_effort") is not None and m.get("tracking_rmse_m") is not None
+           and np.isfinite([m["voluntary_effort"], m["tracking_rmse_m"]]).all()}
+    if "voluntary" in pts and "reactive" in pts:
+        (x0, y0), (x1, y1) = pts["reactive"], pts["voluntary"]
+        ax.plot([x0, x1], [y0, y1], "--", color="0.5", lw=1.2, zorder=1,
+                label="mixing the two: robot alone → wearer alone")
+    for n, (x, y) in pts.items():
+        ratio = line_ratio(strategies, n) if n not in ("voluntary", "reactive") else None
+        ax.scatter([x], [y], s=46, color=strategy_colour(n), edgecolor="k", linewidth=0.6, zorder=3,
+                   label=n.replace("_", " ") + ("" if ratio is None else f" (line ratio {ratio:.2f})"))
+    ax.set_xlabel("the wearer's effort: mean ‖θ‖ [rad]")
+    ax.set_ylabel("tracking RMS [mm]")
+    ax.set_title("effort against error: lower left is better", fontsize=9)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def write_comparison(comp: Comparison, out: str | Path, cutting: np.ndarray | None = None) -> dict[str, Any]:
+    """Write comparison.json, comparison.md and comparison.png into ``out``; returns the JSON object.
+
+    ``cutting``: bool per sample of the first trial, where the demonstration cuts (the trial
+    plot's sawing close-up is taken there)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     obj = comp.to_dict()
     write_json(obj, out / "comparison.json")
     _plot(comp, out / "comparison.png")
+    plot_effort_error(comp.strategies, out / "effort_error.png")
     trial_plot = None
     shown = "gate" if comp.run_files.get("gate") else next((k for k, v in comp.run_files.items() if v), None)
     if shown is not None:
@@ -215,7 +253,9 @@ def write_comparison(comp: Comparison, out: str | Path) -> dict[str, Any]:
 
         episode = Episode.load(out / comp.run_files[shown][0])
         trial_plot = "trial.png"
-        plot_episode(episode, out / trial_plot, title=f"{shown}, trial {comp.trials[0]}")
+        plot_episode(episode, out / trial_plot, title=f"{shown}, trial {comp.trials[0]}",
+                     cutting=None if cutting is None else np.asarray(cutting)[:len(episode.t)])
     with atomic_open(out / "comparison.md", "w") as f:
-        f.write("# Closed-loop comparison of strategies\n\n" + comparison_markdown(comp, trial_plot=trial_plot))
+        f.write("# Closed-loop comparison of strategies\n\n"
+                + comparison_markdown(comp, trial_plot=trial_plot, effort_plot="effort_error.png"))
     return obj

@@ -18,10 +18,11 @@ from typing import Any
 from learning.atomic import atomic_open, write_json
 from mpcshare.reports.claims import claim_sentences, mixture_advice
 from mpcshare.reports.comparison import comparison_findings
+from mpcshare.reports.headline import headline_lines
 from mpcshare.reports.html import write_html_report
 from mpcshare.reports.mode_sources import mode_source_sentence
 
-__all__ = ["demo_summary", "write_demo_report"]
+__all__ = ["demo_headline", "demo_summary", "write_demo_report"]
 
 
 def _pct(x: float | None) -> str:
@@ -87,6 +88,26 @@ def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison:
     return out
 
 
+def demo_headline(comparison: dict[str, Any] | None, out: Path) -> list[str]:
+    """The report's first lines: the four answers (:mod:`mpcshare.reports.headline`), then the plot with the line."""
+    lines = ["## What the robot did", ""]
+    answers = headline_lines(comparison["strategies"]) if comparison else []
+    if not answers:
+        return lines + ["The closed loop was not run, so there is nothing to say yet about the task, sharing, "
+                        "effort or keep-out.", ""]
+    lines += [f"- {a}" for a in answers] + [""]
+    if (out / "sim" / "effort_error.png").exists():
+        lines += ["![effort against error, with the line from the wearer alone to the robot alone]"
+                  "(sim/effort_error.png)", ""]
+    return lines
+
+
+def _effort_unit(units: str) -> tuple[str, str]:
+    """``"rad (shoulder angles from neutral)"`` → ``("rad", "shoulder angles from neutral")``."""
+    unit, _, meaning = str(units).partition(" (")
+    return unit, meaning.rstrip(")")
+
+
 def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[str, Any], training: dict[str, Any],
                       comparison: dict[str, Any] | None, timings_s: dict[str, float],
                       data_summary: dict[str, Any] | None = None, sweep: dict[str, Any] | None = None,
@@ -94,7 +115,8 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
     """Write ``report.md``, ``report.html`` and ``report.json`` into ``out``; returns links not inlined in the HTML."""
     out = Path(out)
     parts = ["# mpcshare demo: from demonstrations to a shared controller", "",
-             "## Summary", "", *[f"- {s}" for s in demo_summary(analysis, training, comparison, mode_sources)], "",
+             *demo_headline(comparison, out),
+             "## Statistics", "", *[f"- {s}" for s in demo_summary(analysis, training, comparison, mode_sources)], "",
              "Stages and their own files: `demos.npz` and `data_summary.*` (data), `analysis/` "
              "(predictability analysis), `model/` (the trained bundle), `sweep/` (the K trade-off), "
              "`sim/` (closed-loop runs, `comparison.json`).", "",
@@ -103,6 +125,7 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
              "## 3. Gates and reactive predictor", ""]
     t, p = training["training"], training["predictor"]
     g = training["gate"]["overall"]
+    unit, meaning = _effort_unit(training["effort_units"])
     parts += ["| quantity | value |", "|---|---|",
               f"| K (percentile {t['percentile']:g}) | {_num(t['K'])} |",
               f"| reactive share, training / held-out | {_pct(t['reactive_share_train'])} / "
@@ -113,16 +136,18 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
                 for name, b in training.get("baselines", {}).items()],
               f"| gate accuracy / F1 / Brier (held-out) | {_num(g['accuracy'])} / {_num(g['f1'])} / "
               f"{_num(g['brier'])} |",
-              f"| voluntary share / effort ({training['effort_units']}) | {_pct(training['voluntary_share'])} / "
-              f"{_num(training['voluntary_effort'])} |", ""]
+              f"| the wearer leads / the wearer's effort [{unit}] | {_pct(training['voluntary_share'])} / "
+              f"{_num(training['voluntary_effort'])} |", "",
+              f"Effort: {meaning}, averaged over the steps the wearer leads." if meaning else ""]
     consts = t["gates"]["constant_modes"]
-    parts += [f"Mode {m}: constant gate {c['value']} ({c['reason']})." for m, c in consts.items()]
+    parts += [f"Mode {m}: the gate always says {'robot' if c['value'] else 'wearer'} ({c['reason']})."
+              for m, c in consts.items()]
     if (out / "sweep" / "sweep.md").exists():
         parts += ["", "### The trade-off between accuracy and effort (K sweep)", "",
                   _section((out / "sweep" / "sweep.md").read_text(), "sweep")]
     if comparison is not None and (out / "sim" / "comparison.md").exists():
         parts += ["## 4. Closed loop in MuJoCo", "", _section((out / "sim" / "comparison.md").read_text(), "sim")]
-    parts += ["## Timings", "", "| stage | seconds |", "|---|---|",
+    parts += ["## Time per stage", "", "| stage | time [s] |", "|---|---|",
               *[f"| {k} | {v:.0f} |" for k, v in timings_s.items()], ""]
     md = "\n".join(parts) + "\n"
     with atomic_open(out / "report.md", "w") as f:

@@ -24,8 +24,9 @@ _IMG = re.compile(r'<img alt="([^"]*)" src="([^"]+)"\s*/?>')
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em;
        color: #222; line-height: 1.45; }
-table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
-th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
+table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; max-width: 100%; }
+th, td { border: 1px solid #ccc; padding: 0.25em 0.5em; text-align: right; }
+div.table { max-width: 100%; overflow-x: auto; }
 th:first-child, td:first-child { text-align: left; }
 img, video { max-width: 100%; }
 code, pre { background: #f4f4f4; }
@@ -49,6 +50,16 @@ def _inline(match: re.Match, base: Path, missing: list[str]) -> str:
     return f'<img alt="{html.escape(alt)}" src="data:{mime};base64,{data}"/>'
 
 
+_TABLE = re.compile(r"<table>.*?</table>", re.S)
+
+
+def _narrow_table(table: str) -> str:
+    """A table that fits a narrow page: its cells may wrap after an underscore (``random_<wbr>handover``)
+    as well as at spaces, and what still does not fit scrolls inside its own box, never cut off."""
+    table = re.sub(r">([^<]+)<", lambda m: ">" + m.group(1).replace("_", "_<wbr>") + "<", table)
+    return f'<div class="table">{table}</div>'
+
+
 def markdown_to_html(text: str, base_dir: str | Path, title: str = "mpcshare report") -> tuple[str, list[str]]:
     """Render ``text`` and inline the local files it links (relative to ``base_dir``).
 
@@ -57,7 +68,9 @@ def markdown_to_html(text: str, base_dir: str | Path, title: str = "mpcshare rep
     body = markdown.markdown(text, extensions=["tables", "fenced_code"], output_format="html")
     missing: list[str] = []
     body = _IMG.sub(lambda m: _inline(m, Path(base_dir), missing), body)
+    body = _TABLE.sub(lambda m: _narrow_table(m.group(0)), body)
     page = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
             f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head>\n"
             f"<body>\n{body}\n</body></html>\n")
     return page, missing

@@ -107,7 +107,7 @@ def trend_sentence(rows: Sequence[dict[str, Any]]) -> str:
     for name, v, d, verb in (("the reactive RMSE", rm, -1, "falls"), ("the voluntary effort", ef, +1, "rises")):
         bad = _monotone(v, d)
         overall = d * (v[-1] - v[0]) > 0
-        s = f"{name} goes from {v[0]:.4g} to {v[-1]:.4g}"
+        s = f"{name} goes from {v[0]:#.3g} to {v[-1]:#.3g}"
         if overall and not bad:
             s += f" ({verb} at every step)"
         elif overall:
@@ -134,8 +134,8 @@ def baseline_sentence(rows: Sequence[dict[str, Any]]) -> str:
     better = sum(o < b - 1e-12 for o, b in zip(own, v) if o is not None)
     trend = "falls" if v[-1] < v[0] else "does not fall"
     steps = "at every step" if not _monotone(v, -1) else "not at every step"
-    return (f"The LSTM trained on all points, measured on the same subsets R, {trend} from {v[0]:.4g} to "
-            f"{v[-1]:.4g} ({steps}): this is how much easier R itself gets; the LSTM trained on R "
+    return (f"The LSTM trained on all points, measured on the same subsets R, {trend} from {v[0]:#.3g} to "
+            f"{v[-1]:#.3g} ({steps}): this is how much easier R itself gets; the LSTM trained on R "
             f"beats it on {better} of {len(rs)} percentiles.")
 
 
@@ -236,7 +236,8 @@ def _markdown(result: SweepResult) -> str:
               "- voluntary share: held-out steps the gate hands to the wearer (probability < 0.5).",
               "- R on held-out trials: quotients within HMM modes among held-out points, at the training K.",
               "- At the 100th percentile R holds every point, so its LSTM is the all-points LSTM.",
-              "", f"Timings [s]: {result.info.get('timings_s')}", ""]
+              "", "Time per stage: " + ", ".join(f"{k} {v:.1f} s" for k, v in
+                                                 (result.info.get("timings_s") or {}).items()) + ".", ""]
     return "\n".join(lines)
 
 

@@ -18,10 +18,11 @@ from pathlib import Path
 from typing import Any
 
 from learning.atomic import atomic_open, write_json
-from mpcshare.run_table import RUN_COLORS
+from mpcshare.reports.style import number
 from mpcshare.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
 
-__all__ = ["baseline_sentence", "build_result", "chance_sentences", "tune_markdown", "write_tune"]
+__all__ = ["baseline_sentence", "build_result", "chance_sentences", "recommendation_line", "tune_markdown",
+           "write_tune"]
 
 
 def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
@@ -39,11 +40,30 @@ def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
 
 
 def _mm(x: Any) -> str:
-    return "–" if x is None else f"{1e3 * x:.1f}"
+    return number(x, ".1f", 1e3)
 
 
 def _num(x: Any, fmt: str = ".3f") -> str:
-    return "–" if x is None else format(x, fmt)
+    return number(x, fmt)
+
+
+def recommendation_line(result: dict[str, Any]) -> str | None:
+    """The recommendation in one line, with its figures and what it loses to: said plainly when the
+    wearer alone (``voluntary``) tracks better."""
+    rec = result["recommended"]
+    if not rec:
+        return None
+    line = (f"recommended: {rec['setting']} (tracking RMS {_mm(rec['tracking_rmse_m'])} mm, effort "
+            f"{_num(rec['voluntary_effort'])} rad)")
+    vol = result["summary"].get("voluntary")
+    v_rms = vol["tracking_rmse_m"]["mean"] if vol else None
+    if v_rms is not None and rec["tracking_rmse_m"] is not None and rec["tracking_rmse_m"] > v_rms:
+        v_eff = vol["voluntary_effort"]["mean"]
+        cheaper = v_eff is not None and rec["voluntary_effort"] is not None and v_eff <= rec["voluntary_effort"]
+        return (line + f"; but it LOSES to the wearer alone, who tracks at {_mm(v_rms)} mm"
+                + (f" with no more effort ({_num(v_eff)} rad)" if cheaper else
+                   f" at more effort ({_num(v_eff)} rad)") + ": on these trials the robot does not help")
+    return line + ("" if rec["beats_random"] else "; no setting beats chance: this is only the lowest error")
 
 
 def chance_sentences(result: dict[str, Any]) -> list[str]:
@@ -98,7 +118,8 @@ def baseline_sentence(result: dict[str, Any]) -> str | None:
 def tune_markdown(result: dict[str, Any]) -> str:
     """``tune.md``: the table, the Pareto set, the tests in words and the recommendation."""
     mt = result.get("multiple_testing") or {}
-    lines = ["# Closed-loop sweep (`mpcshare tune`)", "",
+    head = recommendation_line(result)
+    lines = ["# Closed-loop sweep (`mpcshare tune`)", "", *([f"**{head[0].upper() + head[1:]}.**", ""] if head else []),
              f"Held-out trials {result.get('trials')}, seeds {result.get('seeds')}, "
              f"{result.get('duration_s') or 'whole'} s each, wearer {result.get('wearer')}. "
              "Means over trials x seeds with 95 % bootstrap CIs. Line ratio: the tracking RMS over the straight "
@@ -137,16 +158,17 @@ def tune_markdown(result: dict[str, Any]) -> str:
 def _plot(result: dict[str, Any], path: Path) -> None:
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(7, 5), layout="constrained")
+    from mpcshare.reports.style import legend_outside, strategy_colour
+
+    fig = Figure(figsize=(8.5, 5), layout="constrained")
     ax = fig.add_subplot()
-    colors = RUN_COLORS
     pts = {n: (s["tracking_rmse_m"]["mean"], s["voluntary_effort"]["mean"], s["strategy"])
            for n, s in result["summary"].items()
            if s["tracking_rmse_m"]["mean"] is not None and s["voluntary_effort"]["mean"] is not None}
     for name, (err, eff, strat) in pts.items():
         edged = {"edgecolor": "k", "linewidth": 1.5} if name in result["pareto"] else {}
         marker = "x" if strat == "random_handover" else "o"
-        ax.scatter(1e3 * err, eff, color=colors.get(strat, "k"), marker=marker, zorder=3,
+        ax.scatter(1e3 * err, eff, color=strategy_colour(strat), marker=marker, zorder=3,
                    **(edged if marker == "o" else {}))
         if name in result["pareto"] or strat in ("voluntary", "oracle_preview"):  # the rest by colour and legend
             lr = result["summary"][name].get("line_ratio")
@@ -159,8 +181,8 @@ def _plot(result: dict[str, Any], path: Path) -> None:
     from matplotlib.lines import Line2D
 
     shown = sorted({v[2] for v in pts.values()})
-    ax.legend([Line2D([], [], ls="", marker="x" if k == "random_handover" else "o", color=colors.get(k, "k"))
-               for k in shown], shown, fontsize=7, loc="best")
+    legend_outside(ax, handles=[Line2D([], [], ls="", marker="x" if k == "random_handover" else "o",
+                                       color=strategy_colour(k)) for k in shown], labels=shown)
     ax.set_xlabel("tracking RMS [mm]")
     ax.set_ylabel("voluntary effort [rad]")
     ax.set_title("effort against error (dashed: the voluntary-reactive line; edged and named: Pareto set, with its "

@@ -50,7 +50,7 @@ def test_demo_refuses_an_output_path_that_is_a_file(tmp_path, capsys):
     assert "exists and is not a folder" in capsys.readouterr().err
 
 
-def test_demo_runs_every_stage_into_one_report(tmp_path):
+def test_demo_runs_every_stage_into_one_report(tmp_path, capsys):
     out = tmp_path / "demo"
     code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "4", "--n-random", "2",
                  "--no-search", "--no-sweep", "--sim-trials", "1", "--sim-duration", "3", "--no-video",
@@ -68,6 +68,12 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert analysis["modes"]["n_modes"] == 3 and analysis["window_s"] == 0.8
     assert (out / "model" / "bundle.json").exists()
     comparison = json.loads((out / "sim" / "comparison.json").read_text())
+    said = capsys.readouterr().out  # the progress names what it runs, and the closing lines answer first
+    assert f"[6/6] closed loop in MuJoCo: {len(comparison['strategies'])} strategies x 1 held-out trial(s)" in said
+    assert "MB of run files" in said.split("[6/6]")[1]
+    closing = said.split("What the robot did:")[1]
+    assert [ln.strip().split(":")[0] for ln in closing.splitlines()[1:5]] == ["The task", "Sharing", "Effort",
+                                                                             "Keep-out"]
     from mpcshare.run_table import RUN_NAMES
 
     assert set(comparison["strategies"]) == set(RUN_NAMES) >= {"voluntary", "reactive", "mix25", "mix50", "mix75",
@@ -82,12 +88,18 @@ def test_demo_runs_every_stage_into_one_report(tmp_path):
     assert report["analysis"]["n_samples"] == analysis["n_samples"]
     assert report["comparison"]["trials"] == comparison["trials"]
     md = (out / "report.md").read_text()
-    assert md.startswith("# mpcshare demo") and "## Summary" in md and "## 4. Closed loop in MuJoCo" in md
+    assert md.startswith("# mpcshare demo") and "## Statistics" in md and "## 4. Closed loop in MuJoCo" in md
     # the summary states both claims, each in its own sentence (issue 22)
-    summary_md = md.split("## Summary", 1)[1].split("\n## ", 1)[0]
+    summary_md = md.split("## Statistics", 1)[1].split("\n## ", 1)[0]
     assert "Modes help: " in summary_md and "The temporal model adds information: " in summary_md
     assert "Line: tracking RMS over the straight line" in summary_md  # the line ratio as a headline (issue 28)
     page = (out / "report.html").read_text()
+    # the four answers come first, each with its verdict, before any statistic (issue 32)
+    heads = [page.index(f"<strong>{topic}: ") for topic in ("The task", "Sharing", "Effort", "Keep-out")]
+    first_statistic = min(page.index(w) for w in ("Lipschitz quotient", "Wilcoxon", "p = ") if w in page)
+    assert heads == sorted(heads) and heads[-1] < first_statistic
+    assert page.index("effort against error") < first_statistic  # then the plot with the line
+    assert "{'" not in page and "min_class_count" not in page and "(rad (" not in page  # words, not internals
     assert "<img" in page and 'src="data:image/png;base64,' in page
     assert 'src="analysis/' not in page and 'src="sim/' not in page  # every plot embedded
 

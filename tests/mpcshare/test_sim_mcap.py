@@ -53,6 +53,32 @@ def test_no_mcap_by_default(demos, tmp_path):
     assert sorted(p.suffix for p in (tmp_path / "runs").iterdir()) == [".npz"]
 
 
+def test_mcap_rate_thins_the_joint_states(demos, tmp_path):
+    comp = compare_strategies(None, demos, [0], runs=[StrategyRun("voluntary", "voluntary")], duration_s=0.4,
+                              out=tmp_path, make_controller=_idle, log=None, mcap=True, mcap_rate_hz=100.0)
+    counts = _counts((tmp_path / comp.run_files["voluntary"][0]).with_suffix(".mcap"))
+    assert counts["/arm/joint_states"] == 40 and counts["/knife/tip"] == 40  # 1 kHz → 100 Hz; control rate kept
+
+
+def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tmp_path, monkeypatch, capsys):
+    data = tmp_path / "demos.npz"
+    save(demos, data)
+    bundle = SimpleNamespace(obs_names=list(demos.obs_names), rate_hz=demos.rate_hz, heldout_trials=[0],
+                             config={"data_path": str(data)})
+    monkeypatch.setattr(mpcshare.bundle, "load_bundle", lambda path: bundle)
+    monkeypatch.setattr(mpcshare.experiments, "_from_bundle", _idle)
+    from mpcshare.experiments import DEFAULT_RUNS, output_size
+
+    out = tmp_path / "sim"
+    assert main(["sim", "--model", "stand-in", "--out", str(out), "--duration", "3", "--runs", "voluntary",
+                 "--mcap", "--mcap-rate", "200"]) == 0
+    said = capsys.readouterr().out
+    assert "MB of run files (NPZ) and" in said and "MB of MCAP" in said and "--mcap-rate HZ" in said
+    npz, mcap = output_size(DEFAULT_RUNS[:1], demos, [0], 3.0, True, 200.0)
+    written = {p.suffix: p.stat().st_size for p in (out / "runs").iterdir()}
+    assert 0.6 < written[".npz"] / npz < 1.6 and 0.5 < written[".mcap"] / mcap < 2.0
+
+
 def test_sim_command_mcap_option(demos, tmp_path, monkeypatch):
     data = tmp_path / "demos.npz"
     save(demos, data)

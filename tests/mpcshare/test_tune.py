@@ -169,8 +169,8 @@ def test_plan_pairs_every_setting_with_the_same_trials_and_seeds():
 
 
 @pytest.mark.parametrize("args, needle", [
-    (["--percentiles", "0"], "(0, 100]"), (["--percentiles", "101"], "(0, 100]"),
-    (["--betas", "1.5"], "[0, 1]"), (["--strategies", "wild"], "gate"),
+    (["--percentiles", "0"], "above 0 and at most 100"), (["--percentiles", "101"], "above 0 and at most 100"),
+    (["--betas", "1.5"], "a number from 0 to 1"), (["--strategies", "wild"], "gate"),
 ])
 def test_bad_input_gets_one_line_and_status_2(data, tmp_path, capsys, args, needle):
     with pytest.raises(SystemExit) as exc:
@@ -219,3 +219,23 @@ def test_default_sweep_has_at_least_ten_pairs():
         assert t == min(5, n_heldout) and t * s >= 10 and 0.5 ** (t * s) * 6 < 0.01  # Holm over 6 settings
     assert default_trials_and_seeds(4, None, None) == (4, 3)  # the default data: 4 held-out trials
     assert default_trials_and_seeds(4, 2, None) == (2, 5) and default_trials_and_seeds(4, 2, 1) == (2, 1)
+
+
+def test_the_recommendation_says_when_it_loses_to_the_wearer_alone():
+    from mpcshare.tuning.report import build_result, recommendation_line, tune_markdown
+
+    rows = []
+    for i in range(4):
+        rows += [_row("voluntary", 0, i, 0.0132, effort=0.05), _row("reactive", 0, i, 0.020, effort=0.0),
+                 _row("gate", 0, i, 0.0153, effort=0.045),
+                 _row("random_handover", 0, i, 0.0153 + (1e-4 if i % 2 else -1e-4), "gate", effort=0.045)]
+    for r in rows:
+        if r["strategy"] == "voluntary":
+            r["percentile"], r["beta"] = None, None
+    result = build_result(rows)
+    line = recommendation_line(result)
+    assert line.startswith("recommended: gate p90 b0.5") and "LOSES to the wearer alone" in line
+    assert "13.2 mm" in line and "15.3 mm" in line
+    md = tune_markdown(result)
+    assert md.index("LOSES to the wearer alone") < md.index("| setting |")  # said first, before the table
+    assert "-0.0" not in md  # an effect that rounds to zero has no sign

@@ -187,3 +187,16 @@ def test_a_leading_wearer_saws_in_the_closed_loop(trial):
     assert saws["saw_correlation"] > 0.8 and saws["saw_amplitude_ratio"] > 0.7 and abs(saws["lag_s"]) <= 0.05
     _, corrects_only = figures(WearerConfig(feedforward=False))  # corrections alone: no stroke
     assert corrects_only["saw_correlation"] < 0.5 and corrects_only["saw_amplitude_ratio"] < 0.5
+
+
+def test_a_caption_is_drawn_across_the_top_of_a_frame():
+    from sim.demonstrator import MODE_COLOURS
+    from sim.render import Caption
+
+    img = np.full((480, 640, 3), 200, dtype=np.uint8)
+    out = Caption(["t = 1.0 s", "robot leads (alpha 1.00)", "cutting"], MODE_COLOURS["cutting"]).draw(img)
+    assert out.shape == img.shape and (img == 200).all()  # drawn on a copy
+    banner, below = out[:30], out[60:]
+    assert (banner == 20).all(axis=2).mean() > 0.5 and (banner == 255).all(axis=2).any()  # dark, white text
+    assert (np.abs(banner.astype(int) - [0xC4, 0x4E, 0x52]).sum(axis=2) == 0).any()  # the mode's colour
+    assert (below == 200).all()
