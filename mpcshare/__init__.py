@@ -8,7 +8,9 @@
 - :mod:`mpcshare.reports` — the analysis, comparison and demo reports and their plots;
 - :mod:`mpcshare.experiments` — closed-loop comparisons of strategies on held-out trials, with
   :mod:`mpcshare.handover_runs` (the replayed hand-over schedules) and :mod:`mpcshare.tuning`
-  (the ``tune`` sweep of K × β × strategy, local or on Ray);
+  (the ``tune`` sweep of K × β × strategy, local or on Ray); :mod:`mpcshare.run_table` — the runs
+  (the strategy registry's and the extra ones) every command and report reads; :mod:`mpcshare.line_ratio`
+  — the tracking RMS over the straight voluntary–reactive line;
 - :mod:`mpcshare.errors` — :class:`~mpcshare.errors.MpcshareError` and ``PROJECT_ERRORS``, the
   roots of every error the project raises;
 - :mod:`mpcshare.cli` and :mod:`mpcshare.commands` — the ``mpcshare`` command line (registry

@@ -2,7 +2,8 @@
 
 - :mod:`sim.demonstrator` — synthetic bimanual-eating demonstrations (the default data);
   :mod:`sim.regime_free` and :mod:`sim.hidden_regime` — data without hidden modes and with
-  weakly cued ones, for calibrating the analysis.
+  weakly cued ones, for calibrating the analysis; :mod:`sim.world_family` — the randomised family of
+  worlds (structure drawn per seed), on which the closed-loop claims are checked.
 - :mod:`sim.scene` — the MuJoCo scene (swaying torso with the SuperLimb, table, plate, food, fork).
 - :mod:`sim.servo` — the joint servo at the physics rate, limits held in MuJoCo.
 - :mod:`sim.wearer_protocol` — what the closed loop needs from a wearer (:class:`~sim.wearer_protocol.Wearer`,
