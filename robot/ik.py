@@ -8,7 +8,8 @@ For a tip target p* [m] in the model's world frame, bounded least squares (scipy
 
 from q_pref first, then from uniform random starts until one reaches p* within ``tol``;
 otherwise the in-limit configuration whose tip is nearest (best effort, so that an episode
-can always start; the starts stop when two more find the same error to 1 µm). The SuperLimb has an exact closed form (:mod:`robot.superlimb.kinematics`).
+can always start; the starts stop when two more find the same error to 1 µm). The SuperLimb
+has an exact closed form (:mod:`robot.superlimb.kinematics`).
 """
 
 from __future__ import annotations
