@@ -10,7 +10,7 @@ constant mixtures ``mix25``/``mix50``/``mix75``, ``paper_gate``, ``gate``, ``ble
 an upper bound). Per world it prints one JSON line (``"world"``): per run the tracking RMS [mm],
 the effort [rad], the line ratio (:mod:`mpcshare.line_ratio`), the stroke-band correlation while
 cutting, the robot's share and the limit violations; ``best_mix`` (the constant α with the lowest
-RMS); one-sided paired Wilcoxon p-values over (trial, seed) pairs of ``gate`` against
+line ratio); one-sided paired Wilcoxon p-values over (trial, seed) pairs of ``gate`` against
 ``random_handover``, ``paper_gate`` and the best mixture; and what the oracle guarantees. At the
 end one JSON object: every world, and the distribution over the family's worlds and over all
 (median, min, max, share ≤ 0.9 and ≤ 0.8 of the line ratios; effort against ``voluntary``).
@@ -97,7 +97,8 @@ def run_world(world: str, quick: bool, seeds: int) -> dict[str, Any]:
             pooled = comp.strategies
     out = {name: {k2: (None if pooled[name].get(k) is None else pooled[name][k] * s) for k, (k2, s) in FIGURES.items()}
            for name in RUNS}
-    best_mix = min(MIXES, key=lambda m: pooled[m]["tracking_rmse_m"])
+    best_mix = min(MIXES, key=lambda m: (pooled[m]["line_ratio"] is None, pooled[m]["line_ratio"] or 0.0,
+                                         pooled[m]["tracking_rmse_m"]))
     better = min(pooled["voluntary"]["tracking_rmse_m"], pooled["reactive"]["tracking_rmse_m"])
     return {"world": world, "data": info, "trials": trials, "seeds": seeds, "quick": quick, "runs": out,
             "best_mix": best_mix, "p_values": {
