@@ -29,6 +29,7 @@ from mpcshare.bundle import load_bundle
 from mpcshare.control.schedule import StepSchedule
 from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, pool_task_metrics, simulate_episode
+from mpcshare.training.rule_choice import line_ratio as _line
 from sim.demonstrator import CUTTING, MODE_NAMES
 from sim.wearer_presets import WEARER_PRESETS, wearer_preset
 
@@ -48,13 +49,8 @@ def true_mode_schedule(trial: Any, margin_s: float) -> StepSchedule:
 
 
 def line_ratio(run: dict[str, float], vol: dict[str, float], rea: dict[str, float]) -> float | None:
-    """RMS_s / RMS_line(e_s) (module docstring); None when the parties' efforts coincide."""
-    ev, er = vol["voluntary_effort"], rea["voluntary_effort"]
-    if not abs(ev - er) > 1e-12:
-        return None
-    line = rea["tracking_rmse_m"] + (run["voluntary_effort"] - er) / (ev - er) * (
-        vol["tracking_rmse_m"] - rea["tracking_rmse_m"])
-    return float(run["tracking_rmse_m"] / line) if line > 0 else None
+    """RMS_s / RMS_line(e_s) (module docstring; :func:`mpcshare.training.rule_choice.line_ratio`)."""
+    return _line(run["tracking_rmse_m"], run["voluntary_effort"], vol, rea)
 
 
 def run_pooled(bundle: Any, demos: Demonstrations, trials: list[int], name: str, strategy: str,
