@@ -11,7 +11,10 @@ the given held-out trials, beside ``voluntary`` and ``reactive``, and reads each
 of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing the parties).
 
 Criterion (:data:`CRITERION`): the lowest line ratio among the candidates whose effort is at most
-``max_effort`` × the voluntary effort (the issue-28 target 0.75); when none is, the lowest effort.
+``max_effort`` × the voluntary effort (the issue-28 target 0.75). When none is, or the line is
+ill-posed (the robot alone costs the wearer at least ``max_effort`` × the effort of doing it
+alone: they correct it that much, and every ratio then divides by a near-vertical line), the
+lowest tracking RMS: where nothing saves effort, track best.
 The choice, every candidate's figures and why are returned for the bundle's ``metrics`` and
 ``training.md``.
 """
@@ -32,8 +35,8 @@ from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "candidates", "choose_rule", "line_ratio", "rule_markdown"]
 
-CRITERION = ("lowest line ratio among the candidates with effort <= max_effort x voluntary; "
-             "if none, the lowest effort")
+CRITERION = ("lowest line ratio among the candidates with effort <= max_effort x voluntary; if none, or "
+             "reactive itself costs >= max_effort x voluntary, the lowest tracking RMS")
 
 
 def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive: dict[str, float]) -> float | None:
@@ -57,7 +60,7 @@ def candidates(v: np.ndarray) -> list[dict[str, Any]]:
             continue
         on = 0.5 * (s[i - 1] + s[i])
         out.append({"wearer_modes": sorted(int(j) for j in order[:i]),
-                    "settings": {"share_on": round(on, 6), "share_off": round(0.5 * (on + s[i]), 6)}})
+                    "settings": {"share_on": round(float(on), 6), "share_off": round(float(0.5 * (on + s[i])), 6)}})
     return out
 
 
@@ -105,14 +108,16 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, du
     if not rows:
         raise ValueError(f"every mode has the same held-out unpredictable share {v.tolist()}: nothing to choose")
     ok = [r for r in rows if r["effort_vs_voluntary"] <= max_effort and r["line_ratio"] is not None]
-    if ok:
+    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
+    if ok and posed:
         best = min(ok, key=lambda r: r["line_ratio"])
         why = (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(ok)} of {len(rows)} candidates with "
                f"effort <= {max_effort:g}x voluntary")
     else:
-        best = min(rows, key=lambda r: r["effort_vs_voluntary"])
-        why = (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest effort "
-               f"({best['effort_vs_voluntary']:.2f}x)")
+        best = min(rows, key=lambda r: r["tracking_rmse_m"])
+        cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort"
+                 if not posed else f"no candidate has effort <= {max_effort:g}x voluntary")
+        why = f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm)"
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
             "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
             "trials": [int(t) for t in trials], "duration_s": duration_s, "voluntary_share_by_mode": v.tolist(),

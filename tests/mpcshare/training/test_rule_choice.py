@@ -33,7 +33,7 @@ def test_line_ratio_against_the_straight_line():
 
 def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     """With simulated figures (the loop replaced): the lowest line ratio among efforts <= 0.75x wins;
-    when none is below the cap, the lowest effort."""
+    when none is below the cap, or the robot alone costs the wearer as much, the lowest RMS."""
     figures = {"voluntary": (0.010, 0.08), "reactive": (0.020, 0.02)}
     by_on = {}
 
@@ -54,9 +54,11 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     assert choice["wearer_modes"] == [1] and "lowest line ratio" in choice["why"]
     by_on.update({ons[0]: (0.014, 0.07)})
     choice = choose_rule(Bundle(), None, [3])
-    assert choice["wearer_modes"] == [1] and "no candidate" in choice["why"]
-    by_on.update({ons[1]: (0.009, 0.065)})
-    assert choose_rule(Bundle(), None, [3])["wearer_modes"] == [0, 1]
+    assert choice["wearer_modes"] == [0, 1] and "no candidate" in choice["why"]  # 10.5 mm
     assert "| gate | [0, 1] |" in rule_markdown(choice)
+    by_on.update({ons[0]: (0.0105, 0.04), ons[1]: (0.0104, 0.05)})
+    figures["reactive"] = (0.020, 0.065)  # the robot alone costs 0.81x: the line is ill-posed
+    choice = choose_rule(Bundle(), None, [3])
+    assert choice["wearer_modes"] == [0, 1] and "reactive alone costs 0.81x" in choice["why"]
     with pytest.raises(ValueError, match="at least one held-out trial"):
         choose_rule(Bundle(), None, [])
