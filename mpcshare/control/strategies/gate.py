@@ -118,12 +118,20 @@ class ModeCostGate:
         self._below_since = math.inf
         self._push = 0.0
         self._last_t = -math.inf
+        self._pi: np.ndarray | None = None
+        self._score = math.nan
 
     def score(self, mode_proba: np.ndarray | None) -> float:
-        """s = max_k π·A^k·v (NaN without mode probabilities)."""
+        """s = max_k π·A^k·v (NaN without mode probabilities); recomputed only for a new π object (the
+        controller replaces π on its 10 Hz ticks)."""
+        if mode_proba is self._pi:
+            return self._score
+        self._pi = mode_proba
         if mode_proba is None or np.shape(mode_proba) != (self.forecast.shape[1],):
-            return math.nan
-        return float(np.max(self.forecast @ mode_proba))
+            self._score = math.nan
+        else:
+            self._score = float(np.max(self.forecast @ mode_proba))
+        return self._score
 
     def _pushing(self, t: float, inputs: StepInputs) -> bool:
         """Leaky integral of the wearer pushing against the robot above push_mps (module docstring)."""
