@@ -73,6 +73,13 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--forecast", type=nonnegative_float, default=d.forecast_s,
                    help=f"forecast horizon of the predictor [s] (default {d.forecast_s:g}; 0: the present only)")
     g.add_argument("--seed", type=int, default=d.seed, help=f"seed of everything random (default {d.seed})")
+    r = p.add_argument_group("hand-over rule (the default gate's settings, chosen in the closed loop)")
+    r.add_argument("--rule-trials", type=positive_int, default=None,
+                   help="held-out trials the choice simulates, the last ones (default: half of them, 1 to 2)")
+    r.add_argument("--rule-duration", type=positive_float, default=30.0,
+                   help="seconds simulated per trial for the choice (default 30)")
+    r.add_argument("--no-rule-choice", action="store_true",
+                   help="keep the rule's default settings (no closed-loop choice)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
 
 
@@ -138,6 +145,7 @@ def _run(args: argparse.Namespace) -> int:
         from mpcshare.training import train_bundle
         bundle = train_bundle(demos, config, progress=not args.quiet)
         bundle.config["data_path"] = str(Path(args.data).resolve())  # `mpcshare sim`'s default --data
+        choice = _choose_rule(bundle, demos, args)
     except TrainingError as exc:
         raise CommandError(f"cannot train on {args.data}: {exc}") from None
     try:
@@ -145,8 +153,30 @@ def _run(args: argparse.Namespace) -> int:
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
     print_metrics(bundle.metrics)
+    if choice is not None:
+        from mpcshare.training.rule_choice import rule_markdown
+
+        (out / "training.md").write_text(rule_markdown(choice))
+        print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']}); "
+              f"{out / 'training.md'}")
     print(f"bundle: {out}")
     return 0
+
+
+def _choose_rule(bundle, demos, args: argparse.Namespace) -> dict | None:
+    """The gate's settings chosen in the closed loop (:mod:`mpcshare.training.rule_choice`), recorded in
+    ``bundle.metrics`` (``rule_settings``, ``rule_choice``); None with ``--no-rule-choice``."""
+    if args.no_rule_choice:
+        return None
+    from mpcshare.training.rule_choice import choose_rule
+
+    held = list(bundle.heldout_trials)
+    n = args.rule_trials or min(2, max(1, len(held) // 2))
+    log = None if args.quiet else print
+    choice = choose_rule(bundle, demos, held[-n:], duration_s=args.rule_duration, log=log)
+    bundle.metrics["rule_settings"] = choice["settings"]
+    bundle.metrics["rule_choice"] = choice
+    return choice
 
 
 TRAIN_COMMAND = Command("train", "train gates and the reactive predictor into a model bundle, "

@@ -6,6 +6,7 @@
 - :mod:`mpcshare.control.frontend` — the streaming front end (Kalman filter, anti-aliased
   history, model ticks);
 - :mod:`mpcshare.control.arbitration` — α, β and the fusion û = α·û_r + β·û_v;
+- :mod:`mpcshare.control.strategies` — the arbitration strategies, one module each, in ``REGISTRY``;
 - :mod:`mpcshare.control.setup` — checking a bundle against the controller and building the MPC;
 - :mod:`mpcshare.control.workspace` — frames (the base pose) and the workspace box.
 """

@@ -8,7 +8,8 @@ Per :meth:`SharedController.step`:
    (``predictor.make_stream().step(concat(o_t, p_t))``), whose forecast of the tip over
    its horizon becomes a continuous trajectory p̂(·) (:class:`~mpcshare.control.forecast.ForecastTrack`:
    a spline, cross-faded between ticks; held when the predictor has no forecast);
-2. arbitration (:mod:`mpcshare.control.arbitration`): α, β; û = α·û_r + β·û_v [m/s] with the
+2. arbitration (:mod:`mpcshare.control.arbitration`, the strategy of :mod:`mpcshare.control.strategies`
+   given the gate probability, the mode posterior, û_r and û_v): α, β; û = α·û_r + β·û_v [m/s] with the
    reactive term aimed ``forecast_lead_s`` ahead to cancel the latency after the
    reference, û_r = sat(ṗ̂(t + τ) + k·(p̂(t + τ) − p_ref)); û integrated into the tip reference
    p_ref (plate frame), clamped to the workspace box and the reach shell

@@ -105,15 +105,23 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
 
 
 def arbitration_inputs(bundle: ModelBundle, options: dict[str, float] | None = None) -> dict[str, Any]:
-    """What the Arbiter's strategies read of a bundle: ``mode_stats`` (the bundle's per-mode figures,
-    ``bundle.metrics["mode_stats"]``, None when absent), ``transmat`` (the mode model's (K, K)
-    transition matrix per model tick, None when it has none), ``model_dt`` [s] and ``options`` (the
-    bundle's chosen rule settings, ``bundle.metrics["rule_settings"]``, updated with ``options``)."""
+    """What the Arbiter's strategies read of a bundle (``mpcshare.control.strategies.gate``).
+
+    ``mode_stats``: ``{"voluntary_share": [v_j per mode]}``, v_j = 1 − n_positive/n of the held-out
+    gate figures per mode (``bundle.metrics["gate"]["per_mode"]``; None when absent or a mode has no
+    held-out point); ``transmat``: the mode model's (K, K) transition matrix per model tick (None when
+    it has none); ``model_dt`` [s]; ``options``: the bundle's chosen rule settings
+    (``bundle.metrics["rule_settings"]``) updated with ``options``.
+    """
     metrics = getattr(bundle, "metrics", None) or {}
     transmat = getattr(bundle.modes, "transmat_", None)
     chosen = dict(metrics.get("rule_settings") or {})
     chosen.update(options or {})
-    return {"mode_stats": metrics.get("mode_stats"), "model_dt": 1.0 / float(bundle.model_hz), "options": chosen,
+    per_mode = (metrics.get("gate") or {}).get("per_mode") or {}
+    shares = [1.0 - m["n_positive"] / m["n"] if m.get("n") else None for _, m in sorted(per_mode.items(),
+                                                                                        key=lambda kv: int(kv[0]))]
+    stats = {"voluntary_share": shares} if shares and None not in shares else None
+    return {"mode_stats": stats, "model_dt": 1.0 / float(bundle.model_hz), "options": chosen,
             "transmat": None if transmat is None else np.asarray(transmat, dtype=float)}
 
 

@@ -1,12 +1,193 @@
-"""``gate``: the default shared strategy. Until the expected-cost rule of issue 28 lands, the paper's
-gate (:mod:`mpcshare.control.strategies.paper_gate`) with the same settings."""
+"""``gate``: the default shared strategy, who leads decided by expected cost over whole modes.
+
+Issue 28's evidence: within a mode whose unpredictability is a matter of phase (a sawing
+stroke), the paper's per-point gate keeps or drops the stroke by chance, and a hand-over *at*
+a mode boundary costs about a second of large error while the wearer perceives the cue and
+picks up; the wearer leading the whole stroke mode, from before it begins until after it ends,
+tracks far below the voluntary–reactive line. This rule hands whole modes to the wearer,
+early, and keeps them there a while.
+
+**Per-mode cost.** For each task mode j of the bundle's mode model, v_j ∈ [0, 1] is its
+held-out unpredictable share: the share of the mode's held-out points whose Lipschitz quotient
+exceeds K (``1 − n_positive/n`` of the bundle's ``metrics["gate"]["per_mode"]``; points the
+robot's predictor cannot follow). With the robot's expected excess error in mode j taken
+proportional to v_j and the wearer's to a constant c, the robot's expected excess cost of
+leading at mode probabilities π is π·v − c: the wearer should lead where π·v ≥ c (Song &
+Asada's reading, per mode rather than per point: a reciprocating cut cannot be a function of
+the fork, so the whole mode goes to the wearer).
+
+**Anticipation.** The mode model's transition matrix A (per model period Δ) forecasts the
+mode probabilities k periods ahead as π_t·A^k. The rule looks ``lead_s`` ahead:
+
+    s_t = max_{k = 0..n} π_t·A^k·v,     n = round(lead_s / Δ)
+
+so the wearer is handed a wearer-led mode before it is most probable, by the time the
+hand-over (the wearer's reaction, the ramp) takes.
+
+**Hysteresis, hold, dwell.** The wearer takes the lead when s_t ≥ ``share_on``; the robot
+takes it back when s_t < ``share_off`` has held for ``hold_s`` (the wearer keeps a stroke
+mode until after it ends, and the hand-over's own cost is paid only for gains longer than
+the hold), and never sooner than the Arbiter's ``min_dwell_s`` after the last hand-over. α
+moves along the hand-over ramp (``handover_s``); the safety overrides of the Arbiter apply.
+
+**The wearer's push.** While the robot leads, the wearer's own command is evidence: a
+wearer commanding a tip speed ‖û_v‖ above ``push_mps`` against the robot (û_v·û_r < 0) for
+``push_s`` (a leaky integral x' = 1[push] − x/push_s reaching 1 − 1/e of its limit) takes the
+lead, and keeps it for ``hold_s`` after the evidence fades (off when ``push_mps`` is inf).
+
+Settings (:data:`DEFAULTS`) come from the controller's ``strategy_options`` over the bundle's
+``rule_settings``. A bundle without per-mode figures falls back to the paper's gate
+(:mod:`mpcshare.control.strategies.paper_gate`), and its reasons say so.
+"""
 
 from __future__ import annotations
 
-from mpcshare.control.strategies.base import StrategySpec
-from mpcshare.control.strategies.paper_gate import make
+import math
+from typing import Any
 
-__all__ = ["SPECS"]
+import numpy as np
 
-SPECS = (StrategySpec("gate", "The default shared strategy: who leads is decided per step.", tunable=True,
-                      color="C0", factory=make, order=4),)
+from mpcshare.control.strategies.base import ArbiterView, StepInputs, StrategyContext, StrategySpec, Target
+from mpcshare.control.strategies.paper_gate import PaperGate
+
+__all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast", "voluntary_shares"]
+
+#: The rule's settings and their defaults (see the module docstring).
+DEFAULTS: dict[str, float] = {"share_on": 0.3, "share_off": 0.2, "lead_s": 0.5, "hold_s": 0.5,
+                              "push_mps": math.inf, "push_s": 0.3}
+
+
+def check_settings(options: dict[str, Any]) -> dict[str, float]:
+    """The rule's settings: :data:`DEFAULTS` updated with ``options``; ValueError naming a wrong one."""
+    unknown = sorted(set(options) - set(DEFAULTS))
+    if unknown:
+        raise ValueError(f"unknown gate setting(s) {unknown}; valid: {', '.join(DEFAULTS)}")
+    s = {k: float(options.get(k, v)) for k, v in DEFAULTS.items()}
+    if not 0.0 <= s["share_off"] <= s["share_on"] <= 1.0:
+        raise ValueError(f"need 0 <= share_off <= share_on <= 1, got {s['share_off']!r}, {s['share_on']!r}")
+    for k in ("lead_s", "hold_s", "push_s"):
+        if not (math.isfinite(s[k]) and s[k] >= 0):
+            raise ValueError(f"gate setting {k} must be finite and >= 0 s, got {s[k]!r}")
+    if not s["push_mps"] > 0:
+        raise ValueError(f"gate setting push_mps must be > 0 m/s (inf: off), got {s['push_mps']!r}")
+    return s
+
+
+def voluntary_shares(mode_stats: dict[str, Any] | None, n_modes: int | None = None) -> np.ndarray | None:
+    """(K,) v_j from ``mode_stats["voluntary_share"]`` (a list, or a dict mode → share); None when absent."""
+    if not mode_stats or mode_stats.get("voluntary_share") is None:
+        return None
+    raw = mode_stats["voluntary_share"]
+    if isinstance(raw, dict):
+        K = n_modes if n_modes is not None else 1 + max(int(k) for k in raw)
+        v = np.array([float(raw.get(str(j), raw.get(j, 0.0)) or 0.0) for j in range(K)])  # type: ignore[call-overload]
+    else:
+        v = np.asarray(raw, dtype=float)
+    if v.ndim != 1 or not np.all(np.isfinite(v)) or np.any(v < 0) or np.any(v > 1):
+        raise ValueError(f"mode_stats voluntary_share must be K shares in [0, 1], got {raw!r}")
+    return v
+
+
+def mode_forecast(v: np.ndarray, transmat: np.ndarray | None, steps: int) -> np.ndarray:
+    """(n + 1, K) rows A^k·v, k = 0..n: row k times π is the forecast π·A^k·v (identity without A)."""
+    rows = [np.asarray(v, dtype=float)]
+    if transmat is not None:
+        A = np.asarray(transmat, dtype=float)
+        if A.shape != (v.size, v.size):
+            raise ValueError(f"transmat has shape {A.shape}, the mode statistics {v.size} modes")
+        for _ in range(int(steps)):
+            rows.append(A @ rows[-1])
+    return np.array(rows)
+
+
+class ModeCostGate:
+    """The expected-cost whole-mode rule (module docstring)."""
+
+    overrides = True
+
+    def __init__(self, v: np.ndarray, transmat: np.ndarray | None, model_dt: float, settings: dict[str, float],
+                 min_dwell_s: float) -> None:
+        self.settings = s = settings
+        self.forecast = mode_forecast(v, transmat, round(s["lead_s"] / model_dt) if model_dt > 0 else 0)
+        self.min_dwell_s = float(min_dwell_s)
+        self.reset()
+
+    def reset(self) -> None:
+        """The robot leads unless the modes say otherwise."""
+        self.wearer = False
+        self._below_since = math.inf
+        self._push = 0.0
+        self._last_t = -math.inf
+        self._pi: np.ndarray | None = None
+        self._score = math.nan
+
+    def score(self, mode_proba: np.ndarray | None) -> float:
+        """s = max_k π·A^k·v (NaN without mode probabilities); recomputed only for a new π object (the
+        controller replaces π on its 10 Hz ticks)."""
+        if mode_proba is self._pi:
+            return self._score
+        self._pi = mode_proba
+        if mode_proba is None or np.shape(mode_proba) != (self.forecast.shape[1],):
+            self._score = math.nan
+        else:
+            self._score = float(np.max(self.forecast @ mode_proba))
+        return self._score
+
+    def _pushing(self, t: float, inputs: StepInputs) -> bool:
+        """Leaky integral of the wearer pushing against the robot above push_mps (module docstring)."""
+        s = self.settings
+        if not math.isfinite(s["push_mps"]) or inputs.u_v is None:
+            return False
+        dt = min(max(t - self._last_t, 0.0), 0.1) if math.isfinite(self._last_t) else 0.0
+        u_v, u_r = inputs.u_v, inputs.u_r
+        against = u_r is None or float(u_v @ u_r) < 0.0
+        push = against and float(u_v @ u_v) > s["push_mps"] ** 2
+        tau = max(s["push_s"], 1e-6)
+        self._push = self._push + dt * ((1.0 if push else 0.0) - self._push / tau) if tau > 0 else float(push)
+        return self._push >= 0.63 * tau  # a sustained push: the integral has reached 1 − 1/e of its limit
+
+    def decide(self, t: float, inputs: StepInputs, arbiter: ArbiterView) -> Target:
+        s = self.settings
+        score = self.score(inputs.mode_proba)
+        pushed = self._pushing(t, inputs)
+        self._last_t = t
+        dwell_ok = t - arbiter.last_switch_t >= self.min_dwell_s
+        wants = (math.isfinite(score) and score >= s["share_on"]) or pushed
+        if wants:
+            self._below_since = math.inf
+            if not self.wearer and dwell_ok:
+                self.wearer = True
+        elif self.wearer:
+            low = not (math.isfinite(score) and score >= s["share_off"])
+            if low and not math.isfinite(self._below_since):
+                self._below_since = t
+            if not low:
+                self._below_since = math.inf
+            elif t - self._below_since >= s["hold_s"] and dwell_ok:
+                self.wearer = False
+        why = "the wearer pushes" if pushed else f"wearer-mode score {score:.2f}"
+        reason = why + (": the wearer leads" if self.wearer else ": the robot leads")
+        return Target(0.0 if self.wearer else 1.0, reason, ramp=True)
+
+
+class _PaperFallback(PaperGate):
+    """The paper's gate, for bundles without per-mode figures (its reasons say so)."""
+
+    def decide(self, t: float, inputs: StepInputs, arbiter: ArbiterView) -> Target:
+        d = super().decide(t, inputs, arbiter)
+        return Target(d.alpha, "no per-mode figures in the bundle, the paper's gate: " + d.reason, ramp=d.ramp)
+
+
+def make(ctx: StrategyContext) -> ModeCostGate | PaperGate:
+    """The rule from the context's mode statistics, transition matrix and settings."""
+    settings = check_settings(ctx.options)
+    n = None if ctx.transmat is None else int(np.shape(ctx.transmat)[0])
+    v = voluntary_shares(ctx.mode_stats, n)
+    if v is None:
+        return _PaperFallback(ctx.on_threshold, ctx.off_threshold, ctx.min_dwell_s)
+    return ModeCostGate(v, ctx.transmat, ctx.model_dt, settings, ctx.min_dwell_s)
+
+
+SPECS = (StrategySpec("gate", "The default shared strategy: whole modes the robot cannot predict go to the wearer, "
+                      "handed over before they begin and held after they end.", tunable=True, color="C0",
+                      factory=make, order=4),)

@@ -320,3 +320,21 @@ def test_construction_misuse():
     with pytest.raises(TypeError, match="robot must be"):
         SharedController.from_bundle(bundle, robot="ur5", use_mpc=False)
     assert dataclasses.is_dataclass(SharedController.from_bundle(bundle, use_mpc=False).config)
+
+
+@pytest.mark.parametrize("share", [0.0, 0.9])
+def test_the_default_gate_reads_the_modes_and_the_bundles_per_mode_figures(share):
+    """Every mode of the bundle's held-out figures unpredictable: the wearer keeps the lead; none: the robot
+    leads once the window is full. The decision needs the mode probabilities the controller passes."""
+    demos, b = demos_and_bundle(0)
+    per_mode = {str(j): {"n": 100, "n_positive": round(100 * (1 - share))} for j in range(3)}
+    bundle = SimpleNamespace(**vars(b), metrics={"gate": {"per_mode": per_mode}})
+    ctl = SharedController.from_bundle(bundle, strategy="gate", use_mpc=False)
+    cmds = _run(ctl, demos.trials[0], 300)
+    for c in cmds:
+        _safe(c)
+    alphas = np.array([c.alpha for c in cmds])
+    if share:
+        assert np.all(alphas == 0.0) and ctl.handovers == []
+    else:
+        assert alphas[-1] == 1.0 and len(ctl.handovers) == 1 and "robot leads" in ctl.handovers[0].reason

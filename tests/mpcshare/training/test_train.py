@@ -139,12 +139,17 @@ def data_file(demos, tmp_path_factory):
 def test_cli_trains_a_bundle_and_prints_the_metrics(data_file, demos, tmp_path, capsys):
     out = tmp_path / "model"
     argv = ["train", str(data_file), "--percentile", "70", "--out", str(out), "--modes", "3",
-            "--epochs", "2", "--hmm-restarts", "1", "--quiet"]
+            "--epochs", "2", "--hmm-restarts", "1", "--quiet", "--rule-duration", "2"]
     assert main(argv, commands=(TRAIN_COMMAND,)) == 0
     text = capsys.readouterr().out
     assert "K = " in text and "percentile 70" in text and "gate: accuracy" in text and str(out) in text
     b = load_bundle(out, expect_obs_names=demos.obs_names, expect_act_names=demos.act_names)
     assert b.percentile == 70 and b.n_modes == 3 and b.config["max_epochs"] == 2
+    # the hand-over rule chosen in the closed loop on the last held-out trial, recorded with why
+    choice = b.metrics["rule_choice"]
+    assert b.metrics["rule_settings"] == choice["settings"] and choice["trials"] == b.heldout_trials[-1:]
+    assert "hand-over rule: the wearer leads modes" in text and choice["why"] in text
+    assert choice["why"] in (out / "training.md").read_text()
 
 
 def test_cli_refuses_unusable_data_and_outputs_with_one_message(demos, data_file, tmp_path, capsys):

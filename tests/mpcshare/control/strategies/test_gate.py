@@ -1,0 +1,94 @@
+"""The default gate: whole wearer modes, anticipated from the transition matrix, held after, the push."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mpcshare.control.arbitration import Arbiter
+from mpcshare.control.strategies.gate import DEFAULTS, check_settings, mode_forecast
+
+V = [0.05, 0.7, 0.0]  # mode 1 is a stroke mode: 70 % of its held-out points unpredictable
+A = np.array([[0.8, 0.2, 0.0], [0.0, 0.9, 0.1], [0.1, 0.0, 0.9]])  # 0 → 1 → 2 → 0
+
+
+def _arbiter(**options) -> Arbiter:
+    return Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.0, mode_stats={"voluntary_share": V},
+                   transmat=A, model_dt=0.1, options=options)
+
+
+def _onehot(j: int) -> np.ndarray:
+    return np.eye(3)[j]
+
+
+def test_the_forecast_is_the_matrix_power_against_brute_force():
+    F = mode_forecast(np.array(V), A, 4)
+    for k in range(5):
+        np.testing.assert_allclose(F[k], np.linalg.matrix_power(A, k) @ V, atol=1e-15)
+    pi = np.array([0.2, 0.3, 0.5])
+    assert max(pi @ np.linalg.matrix_power(A, k) @ V for k in range(5)) == pytest.approx(np.max(F @ pi))
+
+
+def test_a_stroke_mode_goes_to_the_wearer_whole_and_is_held_after():
+    arb = _arbiter(lead_s=0.0, hold_s=0.5)
+    assert arb.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 1.0  # the robot leads mode 0
+    # mode 1 with a gate probability that flickers around 0.5: the whole mode goes to the wearer
+    alphas = [arb.decide(0.1 * k, 0.5 + 0.1 * (-1) ** k, mode_proba=_onehot(1)).alpha for k in range(1, 30)]
+    assert set(alphas) == {0.0}
+    # the mode ends: the wearer keeps the lead for hold_s, then the robot takes it back
+    after = {round(0.1 * k, 1): arb.decide(3.0 + 0.1 * k, 0.9, mode_proba=_onehot(2)).alpha for k in range(10)}
+    assert after[0.0] == after[0.4] == 0.0 and after[0.5] == after[0.9] == 1.0
+    assert len(arb.handovers) == 3  # robot at the start, wearer, robot
+
+
+def test_anticipation_hands_over_before_the_stroke_mode():
+    """π·A^k·v looks lead_s ahead: mode 0 leads into mode 1 (0.1 per tick), so a lead of 1 s hands the
+    wearer the lead while mode 0 is still certain; without a lead it does not."""
+    no_lead, lead = _arbiter(lead_s=0.0), _arbiter(lead_s=1.0, share_off=0.25)
+    assert no_lead.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 1.0
+    d = lead.decide(0.0, 0.9, mode_proba=_onehot(0))
+    expected = max(np.linalg.matrix_power(A, k)[0] @ V for k in range(11))
+    assert d.alpha == 0.0 and expected >= DEFAULTS["share_on"] and f"{expected:.2f}" in d.reason
+    assert lead.decide(0.1, 0.9, mode_proba=_onehot(2)).alpha == 0.0  # held ...
+    assert lead.decide(1.0, 0.9, mode_proba=_onehot(2)).alpha == 1.0  # ... then back to the robot
+
+
+def test_the_wearer_pushing_against_the_robot_takes_the_lead():
+    arb = _arbiter(push_mps=0.05, push_s=0.3, hold_s=0.5, lead_s=0.0)
+    u_r = np.array([0.1, 0.0, 0.0])
+    for k in range(50):  # a gentle push, then a strong one along the robot: the robot keeps leading
+        u_v = np.array([-0.03, 0, 0]) if k < 25 else np.array([0.2, 0, 0])
+        assert arb.decide(0.01 * k, 0.9, mode_proba=_onehot(0), u_r=u_r, u_v=u_v).alpha == 1.0
+    alphas = [arb.decide(0.5 + 0.01 * k, 0.9, mode_proba=_onehot(0), u_r=u_r, u_v=np.array([-0.1, 0, 0])).alpha
+              for k in range(60)]
+    first = alphas.index(0.0)
+    assert 0.25 <= 0.01 * first <= 0.35  # after ≈ push_s of pushing (1 − 1/e of the leaky integral)
+    rest = [arb.decide(1.1 + 0.01 * k, 0.9, mode_proba=_onehot(0), u_r=u_r, u_v=np.zeros(3)).alpha
+            for k in range(100)]
+    assert rest[0] == 0.0 and rest[-1] == 1.0 and 0.5 <= 0.01 * rest.index(1.0) <= 0.8  # fades, then hold_s
+
+
+def test_overrides_dwell_and_fallback():
+    arb = Arbiter("gate", beta=0.5, min_dwell_s=1.0, novelty_threshold=5.0, mode_stats={"voluntary_share": V},
+                  transmat=A, options={"lead_s": 0.0, "hold_s": 0.0})
+    assert arb.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 1.0
+    assert arb.decide(0.5, 0.9, mode_proba=_onehot(1)).alpha == 1.0  # within the dwell
+    assert arb.decide(1.0, 0.9, mode_proba=_onehot(1)).alpha == 0.0
+    d = arb.decide(2.5, 0.9, novelty=9.0, mode_proba=_onehot(0))
+    assert d.alpha == 0.0 and d.reason.startswith("novelty")
+    paper = Arbiter("gate", beta=0.5, min_dwell_s=0.0)  # no per-mode figures: the paper's gate, said so
+    d = paper.decide(0.0, 0.9, mode_proba=_onehot(1))
+    assert d.alpha == 1.0 and d.reason.startswith("no per-mode figures")
+    assert math.isnan(Arbiter("gate", mode_stats={"voluntary_share": V}).policy.score(None))
+
+
+def test_settings_are_checked():
+    assert check_settings({}) == DEFAULTS
+    with pytest.raises(ValueError, match="unknown gate setting.*valid: share_on"):
+        _arbiter(lead=1.0)
+    with pytest.raises(ValueError, match="share_off <= share_on"):
+        _arbiter(share_on=0.2, share_off=0.5)
+    with pytest.raises(ValueError, match="voluntary_share must be K shares"):
+        Arbiter("gate", mode_stats={"voluntary_share": [0.5, 1.5]})
