@@ -28,6 +28,7 @@ import numpy as np
 from learning.data import Demonstrations
 from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedule, random_handover_schedules
 from sim.closed_loop import run_episode
+from sim.keepout_metrics import KEEPOUT_KEYS, episode_keepout_metrics
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
 from sim.task_metrics import TASK_KEYS, episode_task_metrics
@@ -177,6 +178,31 @@ def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np
             "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode, **_pool_wearer_share(metrics)}
 
 
+def pool_keepout_metrics(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Pool the keep-out figures (:mod:`sim.keepout_metrics`): the least clearance (per zone too), the
+    deepest intrusion and the highest speed near the person over episodes; times and steps summed."""
+    def values(key: str) -> list[float]:
+        return [float(m[key]) for m in metrics if m.get(key) is not None]
+
+    def pick(key: str, f: Callable[[list[float]], float]) -> float | None:
+        v = values(key)
+        return f(v) if v else None
+
+    zones = sorted({z for m in metrics for z in (m.get("keepout_min_clearance_by_zone_m") or {})})
+    by_zone = {}
+    for z in zones:
+        v = [m["keepout_min_clearance_by_zone_m"][z] for m in metrics
+             if (m.get("keepout_min_clearance_by_zone_m") or {}).get(z) is not None]
+        by_zone[z] = min(v) if v else None
+    return {"keepout_min_clearance_m": pick("keepout_min_clearance_m", min),
+            "keepout_max_depth_m": pick("keepout_max_depth_m", max),
+            "keepout_time_inside_s": pick("keepout_time_inside_s", sum),
+            "keepout_steps_driven_in": int(sum(values("keepout_steps_driven_in"))),
+            "keepout_inside_zone_moving_s": pick("keepout_inside_zone_moving_s", sum),
+            "keepout_near_speed_mps": pick("keepout_near_speed_mps", max),
+            "keepout_min_clearance_by_zone_m": by_zone}
+
+
 def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """The wearer's share per mode pooled over episodes, weighted by each episode's steps in that mode."""
     shares: dict[str, float] = {}
@@ -206,6 +232,7 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
     true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
     m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
                                   true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
+    m.update(episode_keepout_metrics(episode))
     return episode, m
 
 
@@ -283,13 +310,14 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             steps += trial_steps
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
                 {**pool_metrics(trial_metrics, trial_steps, seconds[-len(trial_metrics):]),
-                 **pool_task_metrics(trial_metrics, trial_steps)}
-            per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS}
+                 **pool_task_metrics(trial_metrics, trial_steps), **pool_keepout_metrics(trial_metrics)}
+            per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS + KEEPOUT_KEYS}
             if log is not None:
                 log(f"  {run.name:12s} trial {tid}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
                     f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
-        pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
+        pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps),
+                            **pool_keepout_metrics(metrics)}
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
                       wearer=describe_wearer(wearer),

@@ -34,6 +34,11 @@ internal_error              an unexpected exception (or a learned part raised): 
                             toward the smoothed reference within limits; a failing
                             gate/predictor only sets α = 0
 invalid_joint_state         q or v NaN / wrong shape: the QP holds its last command
+keepout_robot               the knife moved into a body zone's margin (never expected: the
+                            keep-out rows forbid it; :mod:`mpcshare.control.keepout`)
+keepout_retreat             the keep-out rows and the limits cannot all be met: the safest
+                            feasible action (retreat, else stop)
+keepout_person              the wearer moved onto a knife that was not moving into them
 time_went_backwards         t ≤ previous t (or NaN): nothing is updated, brake and hold
 no_observation              no fork sample ever measured: brake and hold
 stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β = 1 (the
@@ -41,6 +46,7 @@ stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β =
 invalid_shoulder            shoulder angles NaN / wrong shape: û = 0, reference held
 qp_failed                   both QPs failed: the QP's brake (torque limits hold)
 mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
+keepout_stale_zone          fork marker lost: the hand and forearm zones grow with its age
 invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
 missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
 invalid_base_pose           the last valid base pose is kept
@@ -60,12 +66,15 @@ import numpy as np
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
+from mpcshare.control.keepout import make_keepout_qp
 from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc
 from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
 from robot.kinematics import ReachShell, TipKinematics
-from robot.qp import QPConfig, QPController, QPStatus
+from robot.limits import JointLimits
+from robot.model_files import build_pinocchio_model
+from robot.qp import QPConfig, QPStatus
 from robot.shoulder import ShoulderMap
 from robot.smoothing import ReferenceSmoother
 from robot.superlimb import TOOL_FRAME, SuperLimbParams
@@ -109,7 +118,10 @@ class SharedController:
             raise TypeError(f"robot must be a robot.superlimb.SuperLimbParams or None, got {type(robot).__name__}")
         self.dt = 1.0 / float(bundle.rate_hz)
         qp_cfg = cfg.qp if abs(cfg.qp.dt - self.dt) < 1e-12 else QPConfig(**{**cfg.qp.__dict__, "dt": self.dt})
-        self.qp = QPController.for_superlimb(self.params, qp_cfg)
+        self.qp, self.keepout = make_keepout_qp(build_pinocchio_model(self.params).model,
+                                                JointLimits.from_superlimb(self.params), qp_cfg, cfg.keepout)
+        if self.keepout is not None:
+            self.keepout.bind(bundle.obs_names)
         self.mpc = mpc if mpc is not None else (make_mpc(self.params, self.dt) if use_mpc else None)
         self.mpc_follower = None if self.mpc is None else \
             MPCFollower(self.mpc, self.dt, cfg.mpc_deadline_s, cfg.mpc_every)
@@ -161,6 +173,8 @@ class SharedController:
     def reset(self) -> None:
         """Start a new episode: filters, predictor state, reference and logs forgotten."""
         self.frontend.reset()
+        if self.keepout is not None:
+            self.keepout.reset()
         self.arbiter.reset()
         self.qp.reset()
         if self.mpc_follower is not None:
@@ -210,6 +224,8 @@ class SharedController:
         else:
             p_hold = self.tip.position(q) if _finite(q) else None
         res = self.qp.step(q, v, p_hold, np.zeros(3), np.zeros(3))
+        if self.keepout is not None and _finite(q) and _finite(v):
+            res = self.keepout.check(self.qp, q, v, res, faults)
         if res.status is QPStatus.SOLVER_FAILED:
             faults.append(("qp_failed", res.reason))
         return self._command(res, 0.0, 1.0, faults, timings, t0)
@@ -288,6 +304,9 @@ class SharedController:
             faults.append(("no_observation", f"{exc}: holding"))
             return None
         self._fork_vel = fe.fork_velocity
+        if self.keepout is not None:
+            self.keepout.update(o, fe.fork_velocity, fe.predicting_for_s <= 0.0, fe.predicting_for_s, self._pose,
+                                faults)
         if fe.stale and not fe.predicting_for_s > self.config.stale_after_s:
             faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
         return fe
@@ -359,6 +378,8 @@ class SharedController:
             timings["mpc"] = time.perf_counter() - ta
         ta = time.perf_counter()
         res = self.qp.step(q, v, p_qp, v_qp, a_qp)
+        if self.keepout is not None:
+            res = self.keepout.check(self.qp, q, v, res, faults)
         timings["qp"] = time.perf_counter() - ta
         if res.status is QPStatus.SOLVER_FAILED:
             faults.append(("qp_failed", res.reason))

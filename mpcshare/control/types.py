@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mpcshare.control.keepout import KeepOutSettings
 from mpcshare.control.workspace import DEFAULT_WORKSPACE, WorkspaceBox
 from robot.qp import QPConfig
 
@@ -18,9 +19,10 @@ SMOOTHER_TARGETS: tuple[str, ...] = ("position", "state")
 
 #: Status names, most severe first.
 STATUSES: tuple[str, ...] = (
-    "internal_error", "invalid_joint_state", "time_went_backwards", "no_observation", "stale_fork_sensor",
-    "invalid_shoulder", "qp_failed", "mpc_timeout", "mpc_failed", "invalid_observation_shape",
-    "missing_observation", "invalid_base_pose", "reference_unreachable", "ok")
+    "internal_error", "invalid_joint_state", "time_went_backwards", "no_observation", "keepout_robot",
+    "keepout_retreat", "keepout_person", "stale_fork_sensor", "invalid_shoulder", "qp_failed", "mpc_timeout",
+    "mpc_failed", "keepout_stale_zone", "invalid_observation_shape", "missing_observation", "invalid_base_pose",
+    "reference_unreachable", "ok")
 
 
 @dataclass
@@ -67,7 +69,8 @@ class ControllerConfig:
     forecast (else the smoothed reference extrapolated at constant velocity); forecast_fade_s [s]:
     cross-fade between successive forecasts (None: one model period; 0: none, measured best);
     smoother_target (:data:`SMOOTHER_TARGETS`) and smoother_lead_s [s]; handover_s [s]: the
-    gate's α ramp between the robot and the wearer (see ``Arbiter``).
+    gate's α ramp between the robot and the wearer (see ``Arbiter``); keepout: the wearer's body
+    zones kept out of the knife's way (:class:`~mpcshare.control.keepout.KeepOutSettings`; None: off).
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
@@ -102,6 +105,7 @@ class ControllerConfig:
     forecast_fade_s: float | None = 0.0
     smoother_lead_s: float = 0.05
     handover_s: float = 0.5
+    keepout: KeepOutSettings | None = field(default_factory=KeepOutSettings)
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:
