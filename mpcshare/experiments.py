@@ -87,11 +87,14 @@ class Comparison:
     video: str | None = None
     offline_wearer_share_by_mode: dict[str, float] | None = None  # the bundle's held-out voluntary share per mode
     wearer: dict[str, Any] | None = None  # {"preset": name or None, "settings": WearerConfig.to_dict()}
+    scenario: str | None = None  # the conflict scenario (mpcshare.conflicts), None: the trials as they are
+    keepout: bool = True  # whether the controllers kept the wearer's body zones out
 
     def to_dict(self) -> dict[str, Any]:
         return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
                 "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video,
-                "wearer": self.wearer, "offline_wearer_share_by_mode": self.offline_wearer_share_by_mode}
+                "wearer": self.wearer, "offline_wearer_share_by_mode": self.offline_wearer_share_by_mode,
+                "scenario": self.scenario, "keepout": self.keepout}
 
 
 def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
@@ -219,15 +222,23 @@ def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
 def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: StrategyRun, options: dict[str, Any],
                      *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
                      mode_names: Sequence[str] | None,
-                     make_controller: Callable[..., Any] | None = None) -> tuple[Any, dict[str, Any]]:
+                     make_controller: Callable[..., Any] | None = None,
+                     scenario: Any = None) -> tuple[Any, dict[str, Any]]:
     """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
-    its metrics: :func:`sim.metrics.episode_metrics` and the task figures of :mod:`sim.task_metrics`."""
+    its metrics: :func:`sim.metrics.episode_metrics`, the task figures of :mod:`sim.task_metrics`
+    and the keep-out figures of :mod:`sim.keepout_metrics`. ``scenario``: a
+    :class:`mpcshare.conflicts.Scenario` that transforms the trial (and the bundle's predictor) first."""
     make_controller = make_controller or _from_bundle
+    fork_truth = None
+    if scenario is not None:
+        st = scenario.apply(trial, duration_s)
+        trial, fork_truth = st.trial, st.fork_truth
+        bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
     if run.oracle:
         options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
     controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
     episode = run_episode(controller, trial, duration_s=duration_s, seed=seed, wearer=wearer,
-                          obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+                          obs_names=list(demos.obs_names), act_names=list(demos.act_names), fork_truth=fork_truth)
     m = episode_metrics(episode)
     true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
     m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
@@ -242,7 +253,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        make_controller: Callable[..., Any] | None = None,
                        log: Callable[[str], None] | None = print,
                        mode_names: Sequence[str] | None = None, mcap: bool = False,
-                       wearer: WearerConfig | None = None) -> Comparison:
+                       wearer: WearerConfig | None = None, scenario: Any = None,
+                       controller_options: dict[str, Any] | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -255,9 +267,12 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     with them (and labels in the data) each run also gets the task figures of
     :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
     simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
-    the comparison records them and the preset's name.
+    the comparison records them and the preset's name. ``scenario``: a conflict scenario
+    (:class:`mpcshare.conflicts.Scenario`) applied to every trial; ``controller_options``: added to
+    every controller's options (e.g. ``config``).
     """
     make_controller = make_controller or _from_bundle
+    extra = dict(controller_options or {})
     known = set(demos.trial_ids)
     missing = [int(t) for t in trial_ids if int(t) not in known]
     if missing or not len(trial_ids):
@@ -275,9 +290,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     cache: dict[tuple[str, int], Any] = {}  # episodes the scheduled runs are computed from
 
     def simulate(run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-        episode, m = simulate_episode(bundle, demos, by_id[tid], run, options, beta=beta, duration_s=duration_s,
-                                      seed=seed, wearer=wearer, mode_names=mode_names,
-                                      make_controller=make_controller)
+        episode, m = simulate_episode(bundle, demos, by_id[tid], run, {**extra, **options}, beta=beta,
+                                      duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names,
+                                      make_controller=make_controller, scenario=scenario)
         if run.name in _SOURCES:
             cache[(run.name, tid)] = episode
         return episode, m
@@ -304,7 +319,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                     path = runs_dir / f"{run.name}_trial{tid}{suffix}.npz"
                     episode.save(path)
                     if mcap:
-                        write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork_poses(by_id[tid], demos.obs_names))
+                        fork = None if episode.fork_pose is not None else fork_poses(by_id[tid], demos.obs_names)
+                        write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork)
                     files[run.name].append(str(path.relative_to(Path(out))))
             metrics += trial_metrics
             steps += trial_steps
@@ -321,7 +337,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
                       wearer=describe_wearer(wearer),
-                      offline_wearer_share_by_mode=_offline_share(bundle, mode_names))
+                      offline_wearer_share_by_mode=_offline_share(bundle, mode_names),
+                      scenario=getattr(scenario, "name", None),
+                      keepout=getattr(extra.get("config"), "keepout", True) is not None)
 
 
 _SOURCES = {name for names in SCHEDULE_SOURCES.values() for name in names}
@@ -360,7 +378,8 @@ def describe_wearer(wearer: WearerConfig | None) -> dict[str, Any]:
 def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
                 strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = 0.5,
                 make_controller: Callable[..., Any] | None = None,
-                wearer: WearerConfig | None = None) -> tuple[str | None, str | None]:
+                wearer: WearerConfig | None = None, scenario: Any = None,
+                controller_options: dict[str, Any] | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
 
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
@@ -370,7 +389,13 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
     trial = next((tr for tr in demos.trials if tr.trial_id == int(trial_id)), None)
     if trial is None:
         raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
-    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta)
+    fork_truth = None
+    if scenario is not None:  # the scenario's events fall in the clip: they are placed by its length
+        st = scenario.apply(trial, seconds)
+        trial, fork_truth = st.trial, st.fork_truth
+        bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
+    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta,
+                                 **(controller_options or {}))
     episode = run_episode(controller, trial, duration_s=seconds, seed=seed, render=path, record=False, wearer=wearer,
-                          obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+                          obs_names=list(demos.obs_names), act_names=list(demos.act_names), fork_truth=fork_truth)
     return episode.info.get("video"), episode.info.get("render_message")

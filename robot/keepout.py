@@ -22,7 +22,10 @@ v_b⁺ = v_b + dt·(J_b·a + J̇_b·v).  Two rows per zone (``G·a ≤ h``):
   −n·v_b⁺ ≤ max(0, min((d − v_h·T_h)/T_r, v_cap + max(0, d − d_near)/T_r)), with
   v_h = max(0, n·v_z) the body part's speed toward the knife, T_r the robot's reaction
   and stopping time, T_h the time the body part is assumed to keep coming, v_cap the
-  zone's speed cap near the person; it reaches 0 (a protective stop) at d = 0.
+  zone's speed cap near the person; it reaches 0 (a protective stop) at d = 0. A zone's
+  uncertainty (a lost marker, :class:`Zone`) counts as distance lost and its growth as the
+  zone's approach speed; inside the uncertain region the knife backs away gently
+  (−n·v_b⁺ ≤ max(−v_cap, d_u/T_r), d_u < 0 the clearance to the uncertain region).
 
 Rows of zones farther than ``KeepOutConfig.active_distance`` are ``0·a ≤ 1e6`` (the
 row count is fixed: ``2·max_zones``).  :func:`retreat` is the safest feasible action
@@ -55,7 +58,12 @@ _FREE = 1e6  # h of an inactive row
 
 class Zone(NamedTuple):
     """A capsule from ``a`` to ``b`` (3,) [m] of ``radius`` [m] moving at ``velocity`` (3,) [m/s];
-    ``speed_cap`` [m/s]: the knife's speed toward it near the person (speed and separation)."""
+    ``speed_cap`` [m/s]: the knife's speed toward it near the person (speed and separation);
+    ``uncertainty`` [m] growing at ``uncertainty_rate`` [m/s]: where the body part may have gone
+    since it was last measured (a lost marker). The barrier keeps the knife out of the part as
+    last measured; the separation row counts the uncertainty as distance lost and its rate as
+    the part's approach speed, so the knife comes to a protective stop (never a flight) as the
+    uncertain region reaches it."""
 
     name: str
     a: np.ndarray
@@ -63,6 +71,8 @@ class Zone(NamedTuple):
     radius: float
     velocity: np.ndarray
     speed_cap: float
+    uncertainty: float = 0.0
+    uncertainty_rate: float = 0.0
 
 
 class ZoneClearance(NamedTuple):
@@ -230,7 +240,7 @@ class KeepOutLimit:
             self.clearances.append(c)
             self.approach.append(-float(n @ vb))
             d = c.distance - cfg.margin
-            if d > cfg.active_distance_m:
+            if d - z.uncertainty > cfg.active_distance_m:
                 continue
             Jb = (1.0 - s) * tip.J + s * heel.J
             ab = (1.0 - s) * tip.drift + s * heel.drift
@@ -240,9 +250,13 @@ class KeepOutLimit:
             s_rel = -float(n @ (vb - z.velocity))
             u_barrier = _viable_bound_scalar(d, s_rel, dt, cfg.brake_acceleration)
             G[2 * i], h[2 * i] = nJ, u_barrier + own - nz
-            v_h = max(0.0, nz)
-            u_ssm = max(0.0, min((d - v_h * cfg.human_time_s) / cfg.reaction_time_s,
-                                 z.speed_cap + max(0.0, d - cfg.near_distance_m) / cfg.reaction_time_s))
+            v_h = max(0.0, nz) + z.uncertainty_rate
+            d_ssm = d - z.uncertainty
+            u_ssm = min((d_ssm - v_h * cfg.human_time_s) / cfg.reaction_time_s,
+                        z.speed_cap + max(0.0, d_ssm - cfg.near_distance_m) / cfg.reaction_time_s)
+            # a protective stop; inside an uncertain region, a gentle retreat (at most the zone's cap)
+            u_ssm = max(-z.speed_cap, d_ssm / cfg.reaction_time_s) if z.uncertainty > 0.0 and d_ssm < 0.0 \
+                else max(0.0, u_ssm)
             G[2 * i + 1], h[2 * i + 1] = nJ, u_ssm + own
         G.flags.writeable = False
         h.flags.writeable = False

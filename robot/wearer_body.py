@@ -22,9 +22,10 @@ as the scene draws them. Speed caps of the knife toward a body part near it: 0.1
 (hand, forearm, torso) and 0.06 m/s (head and face): the figures a robot-assisted
 feeding system uses away from and near the mouth (as quoted in issue 30; ADA, Nanavati
 et al., "An Adaptable, Safe, and Portable Robot-Assisted Feeding System", HRI 2024,
-arXiv:2403.04134). A lost fork marker makes the hand and forearm grow by the hand's top
-speed times the marker's age: 2.0 m/s, the approach speed of a reaching hand and arm that
-ISO 13855 assumes for safety distances (its whole-body figure is 1.6 m/s).
+arXiv:2403.04134). A lost fork marker gives the hand and forearm an uncertainty of the
+hand's top speed times the marker's age (:class:`robot.keepout.Zone`): 2.0 m/s, the approach
+speed of a reaching hand and arm that ISO 13855 assumes for safety distances (its whole-body
+figure is 1.6 m/s).
 """
 
 from __future__ import annotations
@@ -101,24 +102,26 @@ def body_zones(body: WearerBody, fork_pose: np.ndarray | None, base_pose: np.nda
     ``fork_pose`` (6,) plate frame (None or non-finite: no hand or forearm zone);
     ``base_pose`` 4×4 T_plate_torso; ``fork_rate`` (6,) its time derivative [m/s, rad/s]
     (the hand's velocity; None: at rest); ``marker_age_s`` [s] since the fork was last
-    measured: the hand and forearm grow by ``hand_top_speed·marker_age_s``.
+    measured: the hand and forearm get an uncertainty of ``hand_top_speed·marker_age_s`` growing at
+    ``hand_top_speed`` (:class:`robot.keepout.Zone`).
     """
     R, t = base_pose[:3, :3], base_pose[:3, 3]
     zones: list[Zone] = []
     zero = np.zeros(3)
     hand_ok = fork_pose is not None and np.isfinite(fork_pose).all()
-    grow = body.hand_top_speed * max(0.0, float(marker_age_s))
+    age = max(0.0, float(marker_age_s))
+    grow, rate = body.hand_top_speed * age, (body.hand_top_speed if age > 0.0 else 0.0)
     if hand_ok and ("hand" in parts or "forearm" in parts):
         hand = R.T @ (hand_center(body, fork_pose) - t)
         rate_ok = fork_rate is not None and np.isfinite(fork_rate).all()
         vel = R.T @ _hand_velocity(body, fork_pose, fork_rate) if rate_ok else zero
         if "hand" in parts:
-            zones.append(Zone("hand", hand, hand, body.hand_radius + grow, vel, body.hand_speed_cap))
+            zones.append(Zone("hand", hand, hand, body.hand_radius, vel, body.hand_speed_cap, grow, rate))
         if "forearm" in parts:
             to_elbow = np.asarray(body.elbow) - hand
             dist = float(np.linalg.norm(to_elbow))
             end = hand + to_elbow * (min(1.0, body.forearm_length / dist) if dist > 1e-9 else 0.0)
-            zones.append(Zone("forearm", hand, end, body.forearm_radius + grow, vel, body.hand_speed_cap))
+            zones.append(Zone("forearm", hand, end, body.forearm_radius, vel, body.hand_speed_cap, grow, rate))
     if "head" in parts:
         c = np.asarray(body.head_center, dtype=float)
         zones.append(Zone("head", c, c, body.head_radius, zero, body.head_speed_cap))

@@ -6,7 +6,8 @@ torso), moves them into the arm's model frame with the base pose and hands them 
 QP's :class:`robot.keepout.KeepOutLimit` (barrier and speed-and-separation rows on the
 knife's tip–heel segment). The hand's velocity is the front end's Kalman velocity of the
 fork pose; while the marker is lost the zone stays where it was last measured and grows
-by the hand's top speed times the marker's age (fault ``keepout_stale_zone``).
+by the hand's top speed times the marker's age, where the knife comes to a protective stop
+rather than flee (fault ``keepout_stale_zone``).
 
 After the QP, :meth:`KeepOut.check` makes keep-out rank above tracking:
 
@@ -111,7 +112,7 @@ class KeepOut:
             if self._pose is not None and self.age_s > 0.0:
                 grow = self.settings.body.hand_top_speed * self.age_s
                 faults.append(("keepout_stale_zone", f"fork marker {self.age_s:.2f} s old: hand and forearm "
-                                                     f"zones grown by {grow * 1e3:.0f} mm"))
+                                                     f"uncertain by {grow * 1e3:.0f} mm (protective stop there)"))
         zones = body_zones(self.settings.body, self._pose, base_pose, rate, self.age_s, self.settings.parts)
         self.limit.set_zones(zones)
 
