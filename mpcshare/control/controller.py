@@ -14,14 +14,16 @@ Per :meth:`SharedController.step`:
    p_ref (plate frame), clamped to the workspace box and the reach shell
    (:mod:`mpcshare.control.workspace`), then moved into the arm's model frame with the base pose;
 3. ``robot.smoothing.ReferenceSmoother`` (ruckig, jerk-limited) toward (p_ref, û, α·p̈̂(t + τ));
-4. optional MPC (``robot.mpc.tip_mpc.TipMPC``) over its horizon on the preview
+4. optional MPC (``robot.mpc.tip_mpc.TipMPC``; with the keep-out, ``KeepOutTipMPC``: the wearer's
+   body zones as constraints over its horizon, moving with the hand's forecast) over its horizon on the preview
    r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (the robot's share from the forecast,
    the wearer's extrapolated; ``mpc_preview=False``: the smoothed reference p_s extrapolated at
    its velocity), solved every ``mpc_every`` steps and followed in between
    (:class:`~mpcshare.control.mpc_follow.MPCFollower`); its planned tip at t + dt (position,
    central-difference velocity and acceleration) is the reference of
 5. ``robot.qp.QPController``, which enforces joint position, velocity, acceleration and
-   torque limits at the control rate. When the MPC fails or runs out of time, the QP
+   torque limits at the control rate and, ranked above tracking, keeps the knife's blade out of
+   the wearer's body zones (:mod:`mpcshare.control.keepout`). When the MPC fails or runs out of time, the QP
    tracks the smoothed reference alone.
 
 ``step`` never raises: every fault gives a safe command and a status (:data:`STATUSES`,
@@ -66,7 +68,7 @@ import numpy as np
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
-from mpcshare.control.keepout import make_keepout_qp
+from mpcshare.control.keepout import make_keepout_mpc, make_keepout_qp
 from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc
 from mpcshare.control.types import STATUSES, ControlCommand, ControllerConfig
@@ -122,7 +124,9 @@ class SharedController:
                                                 JointLimits.from_superlimb(self.params), qp_cfg, cfg.keepout)
         if self.keepout is not None:
             self.keepout.bind(bundle.obs_names)
-        self.mpc = mpc if mpc is not None else (make_mpc(self.params, self.dt) if use_mpc else None)
+        zoned = cfg.keepout is not None and cfg.keepout.mpc_zones
+        self.mpc = mpc if mpc is not None else None if not use_mpc else \
+            make_keepout_mpc(self.params, self.dt, cfg.keepout) if zoned else make_mpc(self.params, self.dt)
         self.mpc_follower = None if self.mpc is None else \
             MPCFollower(self.mpc, self.dt, cfg.mpc_deadline_s, cfg.mpc_every)
         self.tip = TipKinematics(self.qp.model, TOOL_FRAME)
@@ -372,6 +376,8 @@ class SharedController:
         p_qp, v_qp, a_qp = sm.position, sm.velocity, sm.acceleration
         if self.mpc_follower is not None:
             ta = time.perf_counter()
+            if self.keepout is not None and callable(getattr(self.mpc, "set_zones", None)):
+                self.mpc.set_zones(self.keepout.limit.zones)  # the MPC's horizon sees the zones moving
             refs = self.mpc_follower.step(q, v, lambda H: self._mpc_preview(sm, H), faults)
             if refs is not None:
                 p_qp, v_qp, a_qp = refs

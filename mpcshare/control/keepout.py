@@ -34,7 +34,7 @@ from robot.qp import QPController, QPResult, QPStatus
 from robot.superlimb import TOOL_FRAME
 from robot.wearer_body import BODY_PARTS, WearerBody, body_zones
 
-__all__ = ["FORK_POSE_CHANNELS", "KeepOut", "KeepOutSettings", "make_keepout_qp"]
+__all__ = ["FORK_POSE_CHANNELS", "KeepOut", "KeepOutSettings", "make_keepout_mpc", "make_keepout_qp"]
 
 FORK_POSE_CHANNELS = ("fork_x", "fork_y", "fork_z", "fork_roll", "fork_pitch", "fork_yaw")
 
@@ -44,13 +44,15 @@ class KeepOutSettings:
     """The controller's keep-out: the body, the rows' settings, the knife's heel offset in the
     tool frame [m] (the SuperLimb's blade: 9 cm back along the tool x axis), the parts kept out,
     and ``driven_speed`` [m/s]: a knife inside a margin moving toward the zone faster than this
-    was driven in (issue 30's definition)."""
+    was driven in (issue 30's definition); ``mpc_zones``: the MPC (when on) also holds the zones
+    over its horizon, moving with the hand's forecast (:class:`robot.mpc.keepout_mpc.KeepOutTipMPC`)."""
 
     body: WearerBody = field(default_factory=WearerBody)
     limit: KeepOutConfig = field(default_factory=KeepOutConfig)
     heel_offset: tuple[float, float, float] = (-BLADE_LENGTH, 0.0, 0.0)
     parts: tuple[str, ...] = BODY_PARTS
     driven_speed: float = 0.05
+    mpc_zones: bool = True
 
     def __post_init__(self) -> None:
         bad = [p for p in self.parts if p not in BODY_PARTS]
@@ -68,6 +70,15 @@ def make_keepout_qp(model, limits: JointLimits, qp_config, settings: KeepOutSett
     limit = KeepOutLimit(model, frame, settings.heel_offset, settings.limit)
     qp = QPController(model, frame, limits, qp_config, constraints=[TorqueLimit(limits), limit])
     return qp, KeepOut(settings, limit)
+
+
+def make_keepout_mpc(params, dt: float, settings: KeepOutSettings):
+    """The tip MPC with the body zones over its horizon (``robot.mpc.keepout_mpc``), imported when used."""
+    from robot.mpc.keepout_mpc import KeepOutTipMPC
+
+    lim = settings.limit
+    return KeepOutTipMPC(params=params, dt=dt, max_zones=lim.max_zones, margin=lim.margin,
+                         active_distance=lim.active_distance_m)
 
 
 class KeepOut:
