@@ -309,8 +309,7 @@ class SharedController:
             return None
         self._fork_vel = fe.fork_velocity
         if self.keepout is not None:
-            self.keepout.update(o, fe.fork_velocity, fe.predicting_for_s <= 0.0, fe.predicting_for_s, self._pose,
-                                faults)
+            self.keepout.update(t, o, fe.fork_velocity, fe.stale, self._pose, faults)
         if fe.stale and not fe.predicting_for_s > self.config.stale_after_s:
             faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
         return fe

@@ -99,6 +99,7 @@ class KeepOut:
 
     def reset(self) -> None:
         self._pose: np.ndarray | None = None  # last measured fork pose (plate frame)
+        self._t_seen = 0.0  # when it was measured [s]
         self.age_s = 0.0
 
     def _fork(self, obs: object, fork_velocity: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -111,16 +112,18 @@ class KeepOut:
         rate = np.where(cols >= 0, fork_velocity[take], 0.0) if fork_velocity.size > int(cols.max()) else None
         return (pose, rate) if np.isfinite(pose).all() else (None, None)
 
-    def update(self, obs: object, fork_velocity: np.ndarray, measured: bool, age_s: float,
-               base_pose: np.ndarray, faults: list[tuple[str, str]]) -> None:
-        """The zones of this step from the raw sample ``obs`` (used when ``measured``), the fork's
-        Kalman velocity, the marker's age [s] and the base pose (T_plate_torso)."""
-        pose, rate = self._fork(obs, fork_velocity) if measured else (None, None)
+    def update(self, t: float, obs: object, fork_velocity: np.ndarray, repeated: bool, base_pose: np.ndarray,
+               faults: list[tuple[str, str]]) -> None:
+        """The zones of this step at time t [s] from the raw sample ``obs`` (its fork pose counts as
+        measured when finite and not a ``repeated`` (frozen) sample), the fork's Kalman velocity and
+        the base pose (T_plate_torso)."""
+        pose, rate = (None, None) if repeated else self._fork(obs, fork_velocity)
         if pose is not None:
-            self._pose, self.age_s = pose, 0.0
+            self._pose, self._t_seen, self.age_s = pose, float(t), 0.0
         else:
-            self.age_s, rate = max(0.0, float(age_s)), None
-            if self._pose is not None and self.age_s > 0.0:
+            rate = None
+            self.age_s = max(0.0, float(t) - self._t_seen) if self._pose is not None else 0.0
+            if self._pose is not None:
                 grow = self.settings.body.hand_top_speed * self.age_s
                 faults.append(("keepout_stale_zone", f"fork marker {self.age_s:.2f} s old: hand and forearm "
                                                      f"uncertain by {grow * 1e3:.0f} mm (protective stop there)"))
