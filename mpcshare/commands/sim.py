@@ -66,6 +66,8 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
                         "points into the hand)")
     p.add_argument("--no-keepout", action="store_true",
                    help="run without the keep-out of the wearer's body zones (for comparison only)")
+    p.add_argument("--no-mpc-zones", action="store_true",
+                   help="the MPC (gate_mpc) without the zones over its horizon: the QP's keep-out rows alone hold them")
     add_wearer_argument(p)
 
 
@@ -119,6 +121,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
                    trial_ids: list[int]) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
     from mpcshare.conflicts import Scenario
+    from mpcshare.control.keepout import KeepOutSettings
     from mpcshare.control.types import ControllerConfig
     from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
     from mpcshare.reports.comparison import write_comparison
@@ -133,9 +136,14 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     scenario_name = getattr(args, "scenario", None)
     scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names)
-    options = {"config": ControllerConfig(keepout=None)} if getattr(args, "no_keepout", False) else None
+    options = None
+    if getattr(args, "no_keepout", False):
+        options = {"config": ControllerConfig(keepout=None)}
+    elif getattr(args, "no_mpc_zones", False):
+        options = {"config": ControllerConfig(keepout=KeepOutSettings(mpc_zones=False))}
     if scenario is not None or options is not None:
-        print(f"scenario: {scenario_name or 'none'}; keep-out {'off' if options else 'on'}")
+        guard = "off" if getattr(args, "no_keepout", False) else "on" if options is None else "on, MPC without zones"
+        print(f"scenario: {scenario_name or 'none'}; keep-out {guard}")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
                               mcap=getattr(args, "mcap", False), wearer=wearer, scenario=scenario,
