@@ -136,8 +136,14 @@ class KeepOut:
         if not self.limit.zones or res.status is QPStatus.INVALID_STATE:
             return res
         self._attribute(faults)
-        if res.status is not QPStatus.SOLVER_FAILED and self._holds(qp, q, v, res):
+        failed = res.status is QPStatus.SOLVER_FAILED
+        if not failed and self._holds(qp, q, v, res):
             return res
+        rows = self.limit.rows
+        if failed and (rows is None or not (rows.h < 1e5).any()):
+            return res  # no zone near: the QP's brake is the stop
+        if failed:
+            faults.append(("qp_failed", f"{res.reason}; a zone is near: the keep-out's retreat instead"))
         act = retreat(qp, self.limit, q, v)
         if act is None:
             faults.append(("keepout_retreat", "keep-out and limits cannot be met: braking (the QP's brake)"))

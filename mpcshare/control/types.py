@@ -19,9 +19,9 @@ SMOOTHER_TARGETS: tuple[str, ...] = ("position", "state")
 
 #: Status names, most severe first.
 STATUSES: tuple[str, ...] = (
-    "internal_error", "invalid_joint_state", "time_went_backwards", "no_observation", "keepout_robot",
-    "keepout_retreat", "keepout_person", "stale_fork_sensor", "invalid_shoulder", "qp_failed", "mpc_timeout",
-    "mpc_failed", "keepout_stale_zone", "invalid_observation_shape", "missing_observation", "invalid_base_pose",
+    "internal_error", "invalid_joint_state", "time_went_backwards", "no_observation", "qp_failed", "keepout_robot",
+    "keepout_retreat", "keepout_person", "stale_fork_sensor", "invalid_shoulder", "mpc_timeout",
+    "mpc_failed", "invalid_observation_shape", "missing_observation", "keepout_stale_zone", "invalid_base_pose",
     "reference_unreachable", "ok")
 
 
