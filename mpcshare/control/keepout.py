@@ -13,15 +13,15 @@ After the QP, :meth:`KeepOut.check` makes keep-out rank above tracking:
 
 * the QP failed (its brake ignores the zones) or its answer breaks a keep-out row →
   :func:`robot.keepout.retreat`, the safest feasible action (fault ``keepout_retreat``);
-* the knife is inside a zone's margin: whose doing is it? If the knife's own speed toward
-  the zone is at most ``driven_speed`` (0.05 m/s) and the zone comes toward the knife, the
-  person moved onto it (``keepout_person``), else the knife was driven in
-  (``keepout_robot``: never expected, the rows forbid it).
+* the knife is inside a zone's margin: whose doing is it? If the knife moves toward the zone
+  faster than ``driven_speed`` (0.05 m/s), both on its own and relative to the zone, it was
+  driven in (``keepout_robot``: never expected, the rows forbid it); else, if the zone comes
+  toward the knife, the person moved onto it (``keepout_person``); a knife sliding along the
+  margin of a zone that moves away is neither.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -171,9 +171,9 @@ class KeepOut:
                 continue
             zone_in = float(c.normal @ z.velocity)
             depth = (margin - c.distance) * 1e3
-            if own <= self.settings.driven_speed and (zone_in > 0.0 or own <= 0.0):
+            if own > self.settings.driven_speed and own + zone_in > self.settings.driven_speed:
+                faults.append(("keepout_robot", f"knife moving into the {z.name} at {own:.3f} m/s (relative "
+                                                f"{own + zone_in:.3f} m/s), {depth:.0f} mm into its margin"))
+            elif zone_in > 0.0:
                 faults.append(("keepout_person", f"{z.name} {depth:.0f} mm into its margin, knife's own approach "
                                                  f"{own:.3f} m/s, {z.name} approaching at {zone_in:.3f} m/s"))
-            elif math.isfinite(own):
-                faults.append(("keepout_robot", f"knife moving into the {z.name} at {own:.3f} m/s, "
-                                                f"{depth:.0f} mm into its margin"))
