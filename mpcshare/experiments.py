@@ -34,6 +34,7 @@ from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedules, 
 from mpcshare.line_ratio import add_line_ratios
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
 from sim.closed_loop import run_episode
+from sim.keepout_metrics import KEEPOUT_KEYS, episode_keepout_metrics
 from sim.metrics import episode_metrics
 from sim.run_mcap import fork_poses, write_run_mcap
 from sim.scene import SceneConfig
@@ -65,11 +66,14 @@ class Comparison:
     video: str | None = None
     offline_wearer_share_by_mode: dict[str, float] | None = None  # the bundle's held-out voluntary share per mode
     wearer: dict[str, Any] | None = None  # {"preset": name or None, "settings": WearerConfig.to_dict()}
+    scenario: str | None = None  # the conflict scenario (mpcshare.conflicts), None: the trials as they are
+    keepout: bool = True  # whether the controllers kept the wearer's body zones out
 
     def to_dict(self) -> dict[str, Any]:
         return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
                 "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video,
-                "wearer": self.wearer, "offline_wearer_share_by_mode": self.offline_wearer_share_by_mode}
+                "wearer": self.wearer, "offline_wearer_share_by_mode": self.offline_wearer_share_by_mode,
+                "scenario": self.scenario, "keepout": self.keepout}
 
 
 def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
@@ -156,6 +160,31 @@ def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np
             "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode, **_pool_wearer_share(metrics)}
 
 
+def pool_keepout_metrics(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Pool the keep-out figures (:mod:`sim.keepout_metrics`): the least clearance (per zone too), the
+    deepest intrusion and the highest speed near the person over episodes; times and steps summed."""
+    def values(key: str) -> list[float]:
+        return [float(m[key]) for m in metrics if m.get(key) is not None]
+
+    def pick(key: str, f: Callable[[list[float]], float]) -> float | None:
+        v = values(key)
+        return f(v) if v else None
+
+    zones = sorted({z for m in metrics for z in (m.get("keepout_min_clearance_by_zone_m") or {})})
+    by_zone = {}
+    for z in zones:
+        v = [m["keepout_min_clearance_by_zone_m"][z] for m in metrics
+             if (m.get("keepout_min_clearance_by_zone_m") or {}).get(z) is not None]
+        by_zone[z] = min(v) if v else None
+    return {"keepout_min_clearance_m": pick("keepout_min_clearance_m", min),
+            "keepout_max_depth_m": pick("keepout_max_depth_m", max),
+            "keepout_time_inside_s": pick("keepout_time_inside_s", sum),
+            "keepout_steps_driven_in": int(sum(values("keepout_steps_driven_in"))),
+            "keepout_inside_zone_moving_s": pick("keepout_inside_zone_moving_s", sum),
+            "keepout_near_speed_mps": pick("keepout_near_speed_mps", max),
+            "keepout_min_clearance_by_zone_m": by_zone}
+
+
 def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """The wearer's share per mode pooled over episodes, weighted by each episode's steps in that mode."""
     shares: dict[str, float] = {}
@@ -173,23 +202,31 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
                      *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
                      mode_names: Sequence[str] | None,
                      make_controller: Callable[..., Any] | None = None,
-                     scene: SceneConfig | None = None) -> tuple[Any, dict[str, Any]]:
+                     scene: SceneConfig | None = None, scenario: Any = None) -> tuple[Any, dict[str, Any]]:
     """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
-    its metrics: :func:`sim.metrics.episode_metrics` and the task figures of :mod:`sim.task_metrics`.
-    ``scene``: the world and its arm (default ``SceneConfig()``, the SuperLimb); the controller is
-    given the scene's arm (``robot=``)."""
+    its metrics: :func:`sim.metrics.episode_metrics`, the task figures of :mod:`sim.task_metrics`
+    and the keep-out figures of :mod:`sim.keepout_metrics`. ``scene``: the world and its arm (default
+    ``SceneConfig()``, the SuperLimb); the controller is given the scene's arm (``robot=``).
+    ``scenario``: a :class:`mpcshare.conflicts.Scenario` that transforms the trial (and the bundle's
+    predictor) first."""
     make_controller = make_controller or _from_bundle
+    fork_truth = None
+    if scenario is not None:
+        st = scenario.apply(trial, duration_s)
+        trial, fork_truth = st.trial, st.fork_truth
+        bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
     if run.oracle:
         options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
     if scene is not None:
         options = {**options, "robot": scene.robot}
     controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
     episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
-                          obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+                          obs_names=list(demos.obs_names), act_names=list(demos.act_names), fork_truth=fork_truth)
     m = episode_metrics(episode)
     true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
     m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
                                   true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
+    m.update(episode_keepout_metrics(episode))
     return episode, m
 
 
@@ -200,7 +237,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        log: Callable[[str], None] | None = print,
                        mode_names: Sequence[str] | None = None, mcap: bool = False,
                        wearer: WearerConfig | None = None, scene: SceneConfig | None = None,
-                       mcap_rate_hz: float | None = None) -> Comparison:
+                       mcap_rate_hz: float | None = None, scenario: Any = None,
+                       controller_options: dict[str, Any] | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -215,8 +253,11 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
     the comparison records them and the preset's name. ``scene``: the arm's world (:func:`simulate_episode`).
     ``mcap_rate_hz``: the MCAP's joint states at about this rate (default: every physics step).
+    ``scenario``: a conflict scenario (:class:`mpcshare.conflicts.Scenario`) applied to every trial;
+    ``controller_options``: added to every controller's options (e.g. ``config``).
     """
     make_controller = make_controller or _from_bundle
+    extra = dict(controller_options or {})
     known = set(demos.trial_ids)
     missing = [int(t) for t in trial_ids if int(t) not in known]
     if missing or not len(trial_ids):
@@ -234,9 +275,9 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     cache: dict[tuple[str, int], tuple[Any, dict[str, Any]]] = {}  # episodes the scheduled runs are computed from
 
     def simulate(run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-        episode, m = simulate_episode(bundle, demos, by_id[tid], run, options, beta=beta, duration_s=duration_s,
-                                      seed=seed, wearer=wearer, mode_names=mode_names,
-                                      make_controller=make_controller, scene=scene)
+        episode, m = simulate_episode(bundle, demos, by_id[tid], run, {**extra, **options}, beta=beta,
+                                      duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names,
+                                      make_controller=make_controller, scene=scene, scenario=scenario)
         if run.name in _SOURCES:
             cache[(run.name, tid)] = (episode, m)
         return episode, m
@@ -252,7 +293,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
         path = runs_dir / f"{run.name}_trial{tid}{f'_draw{j}' if n_draws > 1 else ''}.npz"
         episode.save(path)
         if mcap:
-            write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork_poses(by_id[tid], demos.obs_names),
+            fork = None if episode.fork_pose is not None else fork_poses(by_id[tid], demos.obs_names)
+            write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork,
                            joint_stride=_joint_stride(episode, mcap_rate_hz))
         files[run.name].append(str(path.relative_to(Path(out))))
 
@@ -277,20 +319,23 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             metrics, steps, seconds = metrics + trial_metrics, steps + trial_steps, seconds + trial_seconds
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
                 {**pool_metrics(trial_metrics, trial_steps, trial_seconds),
-                 **pool_task_metrics(trial_metrics, trial_steps)}
-            per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS}
+                 **pool_task_metrics(trial_metrics, trial_steps), **pool_keepout_metrics(trial_metrics)}
+            per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS + KEEPOUT_KEYS}
             if log is not None:
                 log(f"  {run.name:12s} trial {tid}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
                     f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
-        pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps)}
+        pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps),
+                            **pool_keepout_metrics(metrics)}
     add_line_ratios(pooled)
     for tid in (str(int(t)) for t in trial_ids):
         add_line_ratios({name: per_trial[name][tid] for name in per_trial})
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
                       wearer=describe_wearer(wearer),
-                      offline_wearer_share_by_mode=_offline_share(bundle, mode_names))
+                      offline_wearer_share_by_mode=_offline_share(bundle, mode_names),
+                      scenario=getattr(scenario, "name", None),
+                      keepout=getattr(extra.get("config"), "keepout", True) is not None)
 
 
 def _joint_stride(episode: Any, rate_hz: float | None) -> int:
@@ -357,7 +402,8 @@ def describe_wearer(wearer: WearerConfig | None) -> dict[str, Any]:
 def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path: str | Path, *, seconds: float = 10.0,
                 strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = DEFAULT_BETA,
                 make_controller: Callable[..., Any] | None = None, wearer: WearerConfig | None = None,
-                scene: SceneConfig | None = None) -> tuple[str | None, str | None]:
+                scene: SceneConfig | None = None, scenario: Any = None,
+                controller_options: dict[str, Any] | None = None) -> tuple[str | None, str | None]:
     """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
 
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
@@ -367,9 +413,15 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
     trial = next((tr for tr in demos.trials if tr.trial_id == int(trial_id)), None)
     if trial is None:
         raise ValueError(f"trial {trial_id} not in the data (it has {demos.trial_ids[:20]})")
+    fork_truth = None
+    if scenario is not None:  # the scenario's events fall in the clip: they are placed by its length
+        st = scenario.apply(trial, seconds)
+        trial, fork_truth = st.trial, st.fork_truth
+        bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
     robot = {} if scene is None else {"robot": scene.robot}
-    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta, **robot)
+    controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta, **robot,
+                                 **(controller_options or {}))
     episode = run_episode(controller, trial, scene=scene, duration_s=seconds, seed=seed, render=path, record=False,
-                          wearer=wearer,
-                          obs_names=list(demos.obs_names), act_names=list(demos.act_names))
+                          wearer=wearer, obs_names=list(demos.obs_names), act_names=list(demos.act_names),
+                          fork_truth=fork_truth)
     return episode.info.get("video"), episode.info.get("render_message")

@@ -4,7 +4,9 @@ Per control step k (t_k = k·T, T = 10 ms):
 
 1. the torso is put at its sway pose, ``mj_step1`` gives the kinematics of the
    state (q, v); the knife tip p(t_k) and the base pose ``T_plate_torso`` are read;
-2. the fork (mocap) is put at the demonstration's fork pose of sample k;
+2. the fork (mocap) is put at the demonstration's fork pose of sample k (or, with ``fork_truth``,
+   at that pose: the world's fork while the controller's marker reads otherwise), the
+   wearer's forearm with it;
 3. the wearer (any :class:`sim.wearer_protocol.Wearer`; by default :mod:`sim.wearer`: their
    plan and the delayed tip error against the intent) gives the shoulder angles; the α of
    the previous step's command is their cue of who leads (NaN before the first command or
@@ -31,6 +33,7 @@ Typical use::
 
 from __future__ import annotations
 
+import json
 import time
 import warnings
 from pathlib import Path
@@ -94,8 +97,10 @@ class _Loop:
     """
 
     def __init__(self, controller: Controller, trial: Trial, sc: SceneConfig, person: Wearer,
-                 servo: ServoConfig | None, seed: int, n_ctrl: int, fork_cols: list[int], record: bool) -> None:
+                 servo: ServoConfig | None, seed: int, n_ctrl: int, fork_cols: list[int], record: bool,
+                 fork_truth: np.ndarray | None = None) -> None:
         self.controller, self.trial, self.sc, self.person, self.fork_cols = controller, trial, sc, person, fork_cols
+        self.fork_truth = trial.obs[:, fork_cols] if fork_truth is None else fork_truth
         self.n_ctrl, self.record = n_ctrl, record
         self.world = EatingScene(sc, seed=seed)
         robot = sc.robot
@@ -103,10 +108,11 @@ class _Loop:
         q0 = robot.inverse_kinematics(self.world.plate_to_torso(self.world.base_pose(0.0),
                                                                 self.person.intent[0][None])[0])
         self.world.set_state(q0, np.zeros(n), 0.0)
-        self.world.set_fork(trial.obs[0, fork_cols])
+        self.world.set_fork(self.fork_truth[0], 0.0)
         self.servo = JointServo(self.world.model, self.world.data, robot, servo)
         # control-rate log
-        self.out = {k: np.full((n_ctrl, 3), np.nan) for k in ("tip", "tip_reference", "voluntary")}
+        self.out = {k: np.full((n_ctrl, 3), np.nan) for k in ("tip", "tip_reference", "voluntary", "knife_heel")}
+        self.fork_pose = np.full((n_ctrl, 6), np.nan)
         self.alpha, self.beta, self.novelty = (np.full(n_ctrl, np.nan) for _ in range(3))
         self.mode = np.full(n_ctrl, -1, dtype=int)
         self.status = np.empty(n_ctrl, dtype=object)
@@ -128,9 +134,10 @@ class _Loop:
         sc, world, d = self.sc, self.world, self.world.data
         t_k = k * sc.control_period
         world.set_time(t_k)
-        world.set_fork(self.trial.obs[k, self.fork_cols])
+        world.set_fork(self.fork_truth[k], t_k)
         mujoco.mj_step1(world.model, d)
         tip = world.tip_in_plate().copy()
+        self.out["knife_heel"][k], self.fork_pose[k] = world.knife_heel_in_plate(), world.fork_pose
         base = world.base_pose(t_k)
         cue = self.alpha[k - 1] if k > 0 else None  # what the controller showed at the previous step
         theta = self.person.step(k, tip, alpha_cue=cue)
@@ -220,6 +227,7 @@ class _Loop:
             "servo_fallback_steps": srv.fallback_steps, "brake_infeasible_steps": srv.brake_infeasible,
             **self.person.info(),
             "video": None, "render_message": None,
+            "body_zones": json.dumps({**sc.body.to_dict(), "blade_length": sc.blade_length}),
         }
 
     def episode(self, info: dict[str, Any]) -> Episode:
@@ -227,7 +235,8 @@ class _Loop:
         t = np.arange(self.n_ctrl) * self.sc.control_period
         return Episode(self.rec_t, self.rec_q, self.rec_v, self.rec_tau, t, self.alpha, self.beta, self.mode,
                        o["tip"], o["tip_reference"], self.person.intent[:self.n_ctrl].copy(), o["voluntary"],
-                       self.status.astype(str), self.step_time, self.base_poses, self.novelty, info)
+                       self.status.astype(str), self.step_time, self.base_poses, self.novelty, info,
+                       fork_pose=self.fork_pose, knife_heel=o["knife_heel"])
 
 
 def _check_inputs(controller: Controller, trial: Trial, sc: SceneConfig, obs_names: list[str],
@@ -263,7 +272,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
                 wearer: Wearer | WearerFactory | None = None, duration_s: float | None = None, seed: int = 0,
                 record: bool = True, render: str | Path | None = None, progress: bool = False,
                 obs_names: list[str] | None = None, act_names: list[str] | None = None,
-                servo: ServoConfig | None = None) -> Episode:
+                servo: ServoConfig | None = None, fork_truth: np.ndarray | None = None) -> Episode:
     """Run ``controller`` beside a simulated wearer whose intent is ``trial``'s knife (module docstring).
 
     Args:
@@ -280,6 +289,9 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         record: keep the physics-rate arrays (False: empty arrays, metrics still work).
         render: path of a video (.mp4 if ffmpeg is available, else a .gif beside it).
         progress: show a tqdm bar.
+        fork_truth: (T, 6) the world's fork pose per sample (plate frame) when it differs from
+            what the controller reads in ``trial.obs`` (a lost or faulty marker); default: the
+            trial's fork channels.
     """
     from sim.demonstrator import ACT_NAMES, OBS_NAMES
 
@@ -287,8 +299,12 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     obs_names = list(OBS_NAMES) if obs_names is None else list(obs_names)
     act_names = list(ACT_NAMES) if act_names is None else list(act_names)
     fork_cols, intent_raw, n_ctrl = _check_inputs(controller, trial, sc, obs_names, act_names, duration_s)
+    if fork_truth is not None:
+        fork_truth = np.asarray(fork_truth, dtype=float)
+        if fork_truth.shape != (len(trial), 6):
+            raise ValueError(f"fork_truth must have shape ({len(trial)}, 6), got {fork_truth.shape}")
     person = make_wearer(DEFAULT_WEARER if wearer is None else wearer, intent_raw, 1.0 / sc.control_period, seed)
-    loop = _Loop(controller, trial, sc, person, servo, seed, n_ctrl, fork_cols, record)
+    loop = _Loop(controller, trial, sc, person, servo, seed, n_ctrl, fork_cols, record, fork_truth)
     if callable(getattr(controller, "reset", None)):
         controller.reset()
     renderer = bar = None

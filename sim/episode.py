@@ -10,13 +10,15 @@ import numpy as np
 
 from learning.atomic import atomic_open
 
-__all__ = ["CONTROL_KEYS", "PHYSICS_KEYS", "Episode", "run_file_bytes_estimate"]
+__all__ = ["CONTROL_KEYS", "OPTIONAL_KEYS", "PHYSICS_KEYS", "Episode", "run_file_bytes_estimate"]
 
 
 #: run-file arrays: physics rate, then control rate (the keys of issue 12, plus base_pose and novelty)
 PHYSICS_KEYS = ("t_physics", "q", "v", "tau")
 CONTROL_KEYS = ("t", "alpha", "beta", "mode", "tip", "tip_reference", "tip_intent", "voluntary", "status",
                 "step_time", "base_pose", "novelty")
+#: control-rate arrays of the keep-out (issue 30), absent from older run files
+OPTIONAL_KEYS = ("fork_pose", "knife_heel")
 
 #: the run file's size per physics step (10 float64, barely compressible) and per control step [bytes],
 #: measured on the default scene
@@ -39,10 +41,13 @@ class Episode:
     int (argmax of ``mode_proba``, −1 if none), ``tip``, ``tip_reference``,
     ``tip_intent`` (Nc, 3) [m] plate frame, ``voluntary`` (Nc, 3) [rad], ``status``
     (Nc,) str, ``step_time`` (Nc,) [s], ``base_pose`` (Nc, 4, 4), ``novelty`` (Nc,)
-    (the command's ``novelty`` where it has one, else NaN).
+    (the command's ``novelty`` where it has one, else NaN); ``fork_pose`` (Nc, 6) the fork
+    pose the scene showed (x, y, z [m], roll, pitch, yaw [rad], plate frame: the truth, also
+    while the controller's marker is lost), ``knife_heel`` (Nc, 3) [m] the blade's heel (plate
+    frame; the knife body is the segment tip–heel); None in older run files.
     ``info``: scalars — limit_violations (physics steps with any limit exceeded),
     the largest excesses, servo counters, wall_time_s, shoulder gain/deadband, the
-    trial id, render result.
+    trial id, render result, ``body_zones`` (JSON: the wearer's body zones, ``robot.wearer_body``).
     """
 
     t_physics: np.ndarray
@@ -62,6 +67,8 @@ class Episode:
     base_pose: np.ndarray
     novelty: np.ndarray
     info: dict[str, Any] = field(default_factory=dict)
+    fork_pose: np.ndarray | None = None
+    knife_heel: np.ndarray | None = None
 
     def save(self, path: str | Path) -> Path:
         """Write the run file (NPZ, atomic): every array above plus ``info_<name>`` scalars."""
@@ -70,6 +77,7 @@ class Episode:
             raise ValueError(f"run file must end in .npz, got {path.name!r}")
         arrays = {k: getattr(self, k) for k in PHYSICS_KEYS + CONTROL_KEYS}
         arrays["status"] = np.asarray(self.status, dtype=str)
+        arrays.update({k: getattr(self, k) for k in OPTIONAL_KEYS if getattr(self, k) is not None})
         for k, v in self.info.items():
             arrays[f"info_{k}"] = np.asarray("" if v is None else v)
         with atomic_open(path, "wb") as fh:
@@ -83,6 +91,6 @@ class Episode:
             missing = [k for k in PHYSICS_KEYS + CONTROL_KEYS if k not in z.files]
             if missing:
                 raise ValueError(f"{path}: not a run file, missing {missing}")
-            arrays = {k: z[k] for k in PHYSICS_KEYS + CONTROL_KEYS}
+            arrays = {k: z[k] for k in PHYSICS_KEYS + CONTROL_KEYS + OPTIONAL_KEYS if k in z.files}
             info = {k[5:]: z[k].item() for k in z.files if k.startswith("info_")}
         return cls(**arrays, info=info)

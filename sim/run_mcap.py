@@ -178,6 +178,8 @@ def write_run_mcap(episode: Episode, path: str | Path, *, fork: np.ndarray | Non
     if joint_stride < 1:
         raise ValueError(f"joint_stride must be >= 1, got {joint_stride}")
     nc = len(episode.t)
+    if fork is None and episode.fork_pose is not None:
+        fork = episode.fork_pose  # the pose the scene showed (the run file's fork_pose)
     if fork is not None:
         fork = np.asarray(fork, dtype=float)
         if fork.ndim != 2 or fork.shape[0] < nc or fork.shape[1] != len(FORK_CHANNELS):

@@ -41,7 +41,9 @@ import mujoco
 import numpy as np
 
 from robot.description import RobotDescription, as_description
+from robot.keepout import BLADE_LENGTH
 from robot.superlimb import rpy_to_matrix, superlimb_description
+from robot.wearer_body import WearerBody, body_zones
 
 __all__ = ["EatingScene", "SceneConfig", "build_scene_xml", "pose_matrix"]
 
@@ -52,6 +54,10 @@ def pose_matrix(R: np.ndarray, p: np.ndarray) -> np.ndarray:
     T[:3, :3] = R
     T[:3, 3] = p
     return T
+
+
+def _v(x) -> str:
+    return " ".join(repr(float(e)) for e in x)
 
 
 def _rot_y(a: float) -> np.ndarray:
@@ -79,6 +85,10 @@ class SceneConfig:
         posture_hz, posture_amplitude_m, posture_pitch_rad: slow postural sway.
         timestep: physics step [s] (1 kHz).
         control_period: controller period [s] (100 Hz), a multiple of ``timestep``.
+        body: the wearer's body zones (:mod:`robot.wearer_body`): the trunk, head, fork hand and
+            forearm are drawn from it (skin coloured; the forearm is a mocap body that
+            :meth:`EatingScene.set_fork` moves with the hand).
+        blade_length: the knife's blade [m], tip to heel along the tool frame's −x.
     """
 
     robot: RobotDescription = field(default_factory=superlimb_description)
@@ -93,6 +103,8 @@ class SceneConfig:
     posture_pitch_rad: float = 0.015
     timestep: float = 0.001
     control_period: float = 0.01
+    body: WearerBody = field(default_factory=WearerBody)
+    blade_length: float = BLADE_LENGTH
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "robot", as_description(self.robot))
@@ -141,7 +153,7 @@ _FOOD = ((-0.03, 0.03), (0.04, -0.02), (0.0, -0.05), (0.05, 0.05))  # piece cent
 def build_scene_xml(config: SceneConfig | None = None) -> str:
     """The scene's MJCF (see module docstring): torso (mocap) with the arm, table, plate, food, fork (mocap)."""
     c = config or SceneConfig()
-    robot = c.robot
+    robot, b = c.robot, c.body
     px, py, pz = c.plate_position
     food = "".join(
         f'      <geom name="food{i}" type="box" size="0.012 0.012 0.008" pos="{x} {y} 0.008" rgba="0.8 0.55 0.3 1"/>\n'
@@ -167,15 +179,22 @@ def build_scene_xml(config: SceneConfig | None = None) -> str:
       <site name="plate_frame" pos="0 0 0" size="0.005" rgba="0 0 1 1"/>
 {food}    </body>
     <body name="torso" mocap="true" pos="0 0 0">
-      <geom name="trunk" type="capsule" fromto="-0.05 0 0.08 -0.05 0 0.55" size="0.14" rgba="0.4 0.5 0.7 0.6"/>
-      <geom name="head" type="sphere" size="0.1" pos="-0.03 0 0.8" rgba="0.9 0.75 0.65 0.6"/>
-      <geom name="left_arm" type="capsule" fromto="-0.05 0.2 0.5 0.25 0.15 0.3" size="0.04" rgba="0.9 0.75 0.65 0.6"/>
+      <geom name="trunk" type="capsule" fromto="{_v(b.torso_a)} {_v(b.torso_b)}" size="{b.torso_radius!r}"
+            rgba="0.4 0.5 0.7 0.6"/>
+      <geom name="head" type="sphere" size="{b.head_radius!r}" pos="{_v(b.head_center)}" rgba="0.9 0.75 0.65 0.6"/>
+      <geom name="upper_arm" type="capsule" fromto="-0.05 0.2 0.5 {_v(b.elbow)}" size="0.045"
+            rgba="0.9 0.75 0.65 0.6"/>
 {arm}    </body>
+    <body name="forearm" mocap="true" pos="0 0 0">
+      <geom name="forearm" type="capsule" fromto="0 0 0 0 0 {b.forearm_length!r}" size="{b.forearm_radius!r}"
+            rgba="0.9 0.75 0.65 0.6"/>
+    </body>
     <body name="fork" mocap="true" pos="{px} {py} {pz}">
       <geom name="fork_handle" type="capsule" fromto="-0.04 0.07 0.13 -0.008 0.014 0.026" size="0.006"
             rgba="0.3 0.3 0.3 1"/>
       <geom name="fork_tines" type="box" size="0.012 0.01 0.002" pos="-0.004 0.007 0.013" rgba="0.8 0.8 0.85 1"/>
       <site name="fork_tip" pos="0 0 0" size="0.004" rgba="0 1 0 1"/>
+      <geom name="hand" type="sphere" size="{b.hand_radius!r}" pos="{_v(b.hand_offset)}" rgba="0.9 0.75 0.65 0.6"/>
     </body>
   </worldbody>
   <actuator>
@@ -209,6 +228,8 @@ class EatingScene:
         self.plate_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "plate")
         self.torso_mocap = int(m.body_mocapid[self.torso_body])
         self.fork_mocap = int(m.body_mocapid[self.fork_body])
+        self.forearm_mocap = int(m.body_mocapid[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "forearm")])
+        self.fork_pose = np.full(6, np.nan)
         self.tip_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, c.robot.tip_frame)
         self.plate_p = np.array(c.plate_position, dtype=float)  # plate frame = world axes, shifted
         self.phases = np.random.default_rng(seed).uniform(0.0, 2.0 * math.pi, 2)
@@ -236,17 +257,44 @@ class EatingScene:
         half = 0.5 * c.posture_pitch_rad * sp
         self.data.mocap_quat[self.torso_mocap] = (math.cos(half), 0.0, math.sin(half), 0.0)
 
-    def set_fork(self, pose: np.ndarray) -> None:
-        """Place the fork tip at ``pose`` = (x, y, z [m], roll, pitch, yaw [rad]) in the plate frame.
+    def set_fork(self, pose: np.ndarray, t: float | None = None) -> None:
+        """Place the fork tip at ``pose`` = (x, y, z [m], roll, pitch, yaw [rad]) in the plate frame,
+        and, with the time t [s] (the torso's pose), the forearm from the hand toward the elbow.
 
-        Non-finite entries (a lost marker) leave the fork where it was.
+        Non-finite entries (a lost marker) leave the fork where it was; :attr:`fork_pose` is
+        the pose shown.
         """
         pose = np.asarray(pose, dtype=float)
         if pose.shape != (6,) or not np.isfinite(pose).all():
             return
+        self.fork_pose = pose.copy()
         mujoco.mju_mat2Quat(self._quat, rpy_to_matrix(pose[3:]).reshape(-1))
         self.data.mocap_pos[self.fork_mocap] = pose[:3] + self.plate_p
         self.data.mocap_quat[self.fork_mocap] = self._quat
+        if t is not None:
+            self._place_forearm(pose, t)
+
+    def _place_forearm(self, pose: np.ndarray, t: float) -> None:
+        """The forearm mocap body: its local z along the forearm zone's axis (hand → elbow)."""
+        base = self.base_pose(t)
+        zone = body_zones(self.config.body, pose, base, parts=("forearm",))[0]
+        a = base[:3, :3] @ zone.a + base[:3, 3] + self.plate_p
+        b = base[:3, :3] @ zone.b + base[:3, 3] + self.plate_p
+        axis = b - a
+        length = float(np.linalg.norm(axis))
+        if length < 1e-9:
+            return
+        z = axis / length
+        quat = np.zeros(4)
+        mujoco.mju_quatZ2Vec(quat, z)
+        self.data.mocap_pos[self.forearm_mocap] = a
+        self.data.mocap_quat[self.forearm_mocap] = quat
+
+    def knife_heel_in_plate(self) -> np.ndarray:
+        """The blade's heel [m] in the plate frame: ``blade_length`` back from the tip along the
+        tool frame's x (valid after mj_step1 / mj_forward)."""
+        R = self.data.site_xmat[self.tip_site].reshape(3, 3)
+        return self.data.site_xpos[self.tip_site] - self.config.blade_length * R[:, 0] - self.plate_p
 
     def tip_in_plate(self) -> np.ndarray:
         """Knife tip [m] in the plate frame from MuJoCo's kinematics (valid after mj_step1 / mj_forward)."""

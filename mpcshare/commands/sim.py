@@ -29,6 +29,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.robot_options import add_robot_arguments, scene_from_args
+from mpcshare.conflicts import SCENARIOS
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.run_table import RUN_NAMES
 from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
@@ -64,6 +65,15 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"β while the robot acts (default {DEFAULT_BETA:g})")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of the torso sway and the wearer (default 0)")
     p.add_argument("--video", action="store_true", help="render the gate on the first trial (offscreen OpenGL)")
+    p.add_argument("--scenario", choices=SCENARIOS, default=None,
+                   help="a conflict scenario applied to every trial (mpcshare.conflicts): push (a command into the "
+                        "hand), sweep (the hand sweeps into the knife), face (an approach to the face), marker_lost "
+                        "(the fork marker lost while the hand nears the knife), predictor_fault (the predictor "
+                        "points into the hand)")
+    p.add_argument("--no-keepout", action="store_true",
+                   help="run without the keep-out of the wearer's body zones (for comparison only)")
+    p.add_argument("--no-mpc-zones", action="store_true",
+                   help="the MPC (gate_mpc) without the zones over its horizon: the QP's keep-out rows alone hold them")
     add_wearer_argument(p)
 
 
@@ -141,6 +151,9 @@ def cutting_steps(demos: Demonstrations, trial_id: int) -> Any:
 def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
                    trial_ids: list[int]) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
+    from mpcshare.conflicts import Scenario
+    from mpcshare.control.keepout import KeepOutSettings
+    from mpcshare.control.types import ControllerConfig
     from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
     from mpcshare.reports.comparison import write_comparison
     from sim.wearer_presets import wearer_preset
@@ -157,17 +170,29 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
         print(f"arm: {arm.name} ({arm.n} joints, tip {arm.tip_frame}) from {arm.source}")
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
+    scenario_name = getattr(args, "scenario", None)
+    scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names)
+    options = None
+    if getattr(args, "no_keepout", False):
+        options = {"config": ControllerConfig(keepout=None)}
+    elif getattr(args, "no_mpc_zones", False):
+        options = {"config": ControllerConfig(keepout=KeepOutSettings(mpc_zones=False))}
+    if scenario is not None or options is not None:
+        guard = "off" if getattr(args, "no_keepout", False) else "on" if options is None else "on, MPC without zones"
+        print(f"scenario: {scenario_name or 'none'}; keep-out {guard}")
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
                               mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene,
-                              mcap_rate_hz=getattr(args, "mcap_rate", None))
+                              mcap_rate_hz=getattr(args, "mcap_rate", None), scenario=scenario,
+                              controller_options=options)
     shown = next((r for r in runs if r.name == "gate"), next((r for r in runs if r.schedule is None), None))
     if args.video and shown is None:
         print("no video: only replayed schedules were run (add --runs gate)")
     elif args.video and shown is not None:
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
                                      strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
-                                     beta=args.beta, wearer=wearer, scene=scene)
+                                     beta=args.beta, wearer=wearer, scene=scene, scenario=scenario,
+                                     controller_options=options)
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
     return write_comparison(comp, out, cutting=cutting_steps(demos, trial_ids[0]))

@@ -15,14 +15,16 @@ Per :meth:`SharedController.step`:
    p_ref (plate frame), clamped to the workspace box and the reach shell
    (:mod:`mpcshare.control.workspace`), then moved into the arm's model frame with the base pose;
 3. ``robot.smoothing.ReferenceSmoother`` (ruckig, jerk-limited) toward (p_ref, û, α·p̈̂(t + τ));
-4. optional MPC (``robot.mpc.tip_mpc.TipMPC``) over its horizon on the preview
+4. optional MPC (``robot.mpc.tip_mpc.TipMPC``; with the keep-out, ``KeepOutTipMPC``: the wearer's
+   body zones as constraints over its horizon, moving with the hand's forecast) over its horizon on the preview
    r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (the robot's share from the forecast,
    the wearer's extrapolated; ``mpc_preview=False``: the smoothed reference p_s extrapolated at
    its velocity), solved every ``mpc_every`` steps and followed in between
    (:class:`~mpcshare.control.mpc_follow.MPCFollower`); its planned tip at t + dt (position,
    central-difference velocity and acceleration) is the reference of
 5. ``robot.qp.QPController``, which enforces joint position, velocity, acceleration and
-   torque limits at the control rate. When the MPC fails or runs out of time, the QP
+   torque limits at the control rate and, ranked above tracking, keeps the knife's blade out of
+   the wearer's body zones (:mod:`mpcshare.control.keepout`). When the MPC fails or runs out of time, the QP
    tracks the smoothed reference alone.
 
 ``step`` never raises: every fault gives a safe command and a status (:data:`STATUSES`,
@@ -37,13 +39,19 @@ internal_error              an unexpected exception (or a learned part raised): 
 invalid_joint_state         q or v NaN / wrong shape: the QP holds its last command
 time_went_backwards         t ≤ previous t (or NaN): nothing is updated, brake and hold
 no_observation              no fork sample ever measured: brake and hold
+qp_failed                   both QPs failed: the QP's brake (torque limits hold)
+keepout_robot               the knife moved into a body zone's margin (never expected: the
+                            keep-out rows forbid it; :mod:`mpcshare.control.keepout`)
+keepout_retreat             the keep-out rows and the limits cannot all be met: the safest
+                            feasible action (retreat, else stop)
+keepout_person              the wearer moved onto a knife that was not moving into them
 stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β = 1 (the
                             wearer has control), the reactive term is dropped
 invalid_shoulder            shoulder angles NaN / wrong shape: û = 0, reference held
-qp_failed                   both QPs failed: the QP's brake (torque limits hold)
 mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
 invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
 missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
+keepout_stale_zone          fork marker lost: the hand and forearm zones grow with its age
 invalid_base_pose           the last valid base pose is kept
 reference_unreachable       the reference is clamped to the workspace box / reach shell
 ==========================  ==========================================================
@@ -61,8 +69,9 @@ import numpy as np
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
+from mpcshare.control.keepout import make_keepout_mpc, make_keepout_qp
 from mpcshare.control.mpc_follow import MPCFollower
-from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc, make_qp
+from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
 from mpcshare.errors import ControllerTypeError
@@ -108,8 +117,12 @@ class SharedController:
         self.shoulder = shoulder if shoulder is not None else ShoulderMap()
         self.robot = as_description(robot)  # TypeError naming the choices for anything else
         self.dt = 1.0 / float(bundle.rate_hz)
-        self.qp = make_qp(self.robot, cfg.qp, self.dt)
-        self.mpc = mpc if mpc is not None else (make_mpc(self.robot, self.dt) if use_mpc else None)
+        self.qp, self.keepout = make_keepout_qp(self.robot, cfg.qp, self.dt, cfg.keepout)
+        if self.keepout is not None:
+            self.keepout.bind(bundle.obs_names)
+        zoned = cfg.keepout is not None and cfg.keepout.mpc_zones
+        self.mpc = mpc if mpc is not None else None if not use_mpc else \
+            make_keepout_mpc(self.robot, self.dt, cfg.keepout) if zoned else make_mpc(self.robot, self.dt)
         self.mpc_follower = None if self.mpc is None else \
             MPCFollower(self.mpc, self.dt, cfg.mpc_deadline_s, cfg.mpc_every)
         self.tip = TipKinematics(self.qp.model, self.robot.tip_frame)
@@ -161,6 +174,8 @@ class SharedController:
     def reset(self) -> None:
         """Start a new episode: filters, predictor state, reference and logs forgotten."""
         self.frontend.reset()
+        if self.keepout is not None:
+            self.keepout.reset()
         self.arbiter.reset()
         self.qp.reset()
         if self.mpc_follower is not None:
@@ -210,6 +225,8 @@ class SharedController:
         else:
             p_hold = self.tip.position(q) if _finite(q) else None
         res = self.qp.step(q, v, p_hold, np.zeros(3), np.zeros(3))
+        if self.keepout is not None and _finite(q) and _finite(v):
+            res = self.keepout.check(self.qp, q, v, res, faults)
         if res.status is QPStatus.SOLVER_FAILED:
             faults.append(("qp_failed", res.reason))
         return self._command(res, 0.0, 1.0, faults, timings, t0)
@@ -288,6 +305,8 @@ class SharedController:
             faults.append(("no_observation", f"{exc}: holding"))
             return None
         self._fork_vel = fe.fork_velocity
+        if self.keepout is not None:
+            self.keepout.update(t, o, fe.fork_velocity, fe.stale, self._pose, faults)
         if fe.stale and not fe.predicting_for_s > self.config.stale_after_s:
             faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
         return fe
@@ -355,12 +374,16 @@ class SharedController:
         p_qp, v_qp, a_qp = sm.position, sm.velocity, sm.acceleration
         if self.mpc_follower is not None:
             ta = time.perf_counter()
+            if self.keepout is not None and callable(getattr(self.mpc, "set_zones", None)):
+                self.mpc.set_zones(self.keepout.limit.zones)  # the MPC's horizon sees the zones moving
             refs = self.mpc_follower.step(q, v, lambda H: self._mpc_preview(sm, H), faults)
             if refs is not None:
                 p_qp, v_qp, a_qp = refs
             timings["mpc"] = time.perf_counter() - ta
         ta = time.perf_counter()
         res = self.qp.step(q, v, p_qp, v_qp, a_qp)
+        if self.keepout is not None:
+            res = self.keepout.check(self.qp, q, v, res, faults)
         timings["qp"] = time.perf_counter() - ta
         if res.status is QPStatus.SOLVER_FAILED:
             faults.append(("qp_failed", res.reason))

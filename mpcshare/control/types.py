@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mpcshare.control.keepout import KeepOutSettings
 from mpcshare.control.workspace import DEFAULT_WORKSPACE, WorkspaceBox
 from mpcshare.errors import ControllerSetupError
 from robot.qp import QPConfig
@@ -23,9 +24,10 @@ SMOOTHER_TARGETS: tuple[str, ...] = ("position", "state")
 
 #: Status names, most severe first.
 STATUSES: tuple[str, ...] = (
-    "internal_error", "invalid_joint_state", "time_went_backwards", "no_observation", "stale_fork_sensor",
-    "invalid_shoulder", "qp_failed", "mpc_timeout", "mpc_failed", "invalid_observation_shape",
-    "missing_observation", "invalid_base_pose", "reference_unreachable", "ok")
+    "internal_error", "invalid_joint_state", "time_went_backwards", "no_observation", "qp_failed", "keepout_robot",
+    "keepout_retreat", "keepout_person", "stale_fork_sensor", "invalid_shoulder", "mpc_timeout",
+    "mpc_failed", "invalid_observation_shape", "missing_observation", "keepout_stale_zone", "invalid_base_pose",
+    "reference_unreachable", "ok")
 
 
 @dataclass
@@ -73,7 +75,9 @@ class ControllerConfig:
     cross-fade between successive forecasts (None: one model period; 0: none, measured best);
     smoother_target (:data:`SMOOTHER_TARGETS`) and smoother_lead_s [s]; handover_s [s]: the
     gate's α ramp between the robot and the wearer (see ``Arbiter``); strategy_options: settings
-    of the strategy's rule that override the bundle's choice (``mpcshare.control.strategies.gate``).
+    of the strategy's rule that override the bundle's choice (``mpcshare.control.strategies.gate``);
+    keepout: the wearer's body zones kept out of the knife's way
+    (:class:`~mpcshare.control.keepout.KeepOutSettings`; None: off).
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
@@ -109,6 +113,7 @@ class ControllerConfig:
     smoother_lead_s: float = 0.05
     handover_s: float = 0.5
     strategy_options: dict[str, float] = field(default_factory=dict)
+    keepout: KeepOutSettings | None = field(default_factory=KeepOutSettings)
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:

@@ -41,6 +41,13 @@ _TASK_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
                  ("saw_amplitude_ratio", "sawing amplitude", 1.0, "{:.2f}"),
                  ("saw_correlation", "sawing correlation", 1.0, "{:.2f}"),
                  ("stroke_share", "strokes executed [%]", 100.0, "{:.0f}"))
+#: how close the knife came to the wearer (sim.keepout_metrics)
+_KEEPOUT_COLUMNS = (("keepout_min_clearance_m", "min clearance [mm]", 1e3, "{:.1f}"),
+                    ("keepout_time_inside_s", "time inside [s]", 1.0, "{:.2f}"),
+                    ("keepout_max_depth_m", "deepest [mm]", 1e3, "{:.1f}"),
+                    ("keepout_steps_driven_in", "steps driven in", 1.0, "{:.0f}"),
+                    ("keepout_inside_zone_moving_s", "inside, the body part coming [s]", 1.0, "{:.2f}"),
+                    ("keepout_near_speed_mps", "speed toward the person within 5 cm [m/s]", 1.0, "{:.3f}"))
 
 
 def _ratio(a: float, b: float) -> float:
@@ -176,6 +183,12 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
         lines += ["The task: the knife's lag behind the wearer's intent (the time shift that minimises the RMS) "
                   "and, while cutting, its motion in the stroke band (0.8–3 Hz) against the intended stroke:", "",
                   *_table(comp.strategies, _TASK_COLUMNS), ""]
+    if any(m.get("keepout_min_clearance_m") is not None for m in comp.strategies.values()):
+        what = f"scenario `{comp.scenario}`" if comp.scenario else "normal runs"
+        guard = "on" if comp.keepout else "OFF"
+        lines += [f"The person first ({what}, keep-out {guard}): the knife's blade (tip to heel) against the "
+                  "wearer's hand, forearm, head and torso (the body parts, without the controller's margin):", "",
+                  *_table(comp.strategies, _KEEPOUT_COLUMNS), ""]
     lines += _who_leads_table(comp)
     lines += [*[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
     if plot_name:

@@ -108,6 +108,9 @@ def test_mcap_run_matches_the_run_file(trial, run_file, tmp_path):
 
 def test_steps_without_a_reference_and_without_fork(trial, tmp_path):
     ep = run_episode(IdleController(), trial, duration_s=0.3, seed=0)
+    messages, _, _ = _read(write_run_mcap(ep, tmp_path / "recorded.mcap", joint_stride=10))
+    assert len(messages["/fork/pose"]) == 30  # the run file's own fork_pose by default
+    ep.fork_pose = None  # an older run file
     messages, _, _ = _read(write_run_mcap(ep, tmp_path / "idle.mcap", joint_stride=10))
     assert "/knife/reference" not in messages and "/fork/pose" not in messages  # NaN reference: left out
     assert len(messages["/knife/tip"]) == 30 and len(messages["/arm/joint_states"]) == 30

@@ -1,0 +1,321 @@
+"""Keep-out zones as QP rows: the knife (tip and blade segment) stays out of moving capsules.
+
+A *zone* is a capsule (a sphere when its two ends coincide) with a velocity, in the
+model's world frame.  The knife is the segment from its tip to the blade's heel, two
+frames of any Pinocchio model (the heel is a frame added at a fixed offset from the tip
+frame).  For each zone the closest points of the blade segment and the zone's axis give
+the clearance and the unit normal n (zone → knife):
+
+    d = ‖p_b(s*) − c_z‖ − r_z − margin            [m]   (s* the blade parameter, 0 = tip)
+
+The blade point p_b(s) = (1 − s)·p_tip + s·p_heel is a point of one rigid body, so its
+Jacobian, velocity and drift are the same interpolation of the tip's and heel's (exact).
+With a constant acceleration a over dt, the point's next velocity is
+v_b⁺ = v_b + dt·(J_b·a + J̇_b·v).  Two rows per zone (``G·a ≤ h``):
+
+* **barrier** (control barrier function on the distance, second order, with the zone's
+  velocity v_z): the approach speed s⁺ = −n·(v_b⁺ − v_z) must let the knife still stop
+  relative to the zone before d = 0 braking at A (the viable bound of
+  :func:`robot.constraints.viable_velocity_bound` with gap d):  s⁺ ≤ u_A(d, s);
+* **speed and separation monitoring** (ISO/TS 15066, 5.5.4, in the form of Marvel &
+  Norcross 2017, RCIM 44:144): the knife's *own* speed toward the zone
+  −n·v_b⁺ ≤ max(0, min((d − v_h·T_h)/T_r, v_cap + max(0, d − d_near)/T_r)), with
+  v_h = max(0, n·v_z) the body part's speed toward the knife, T_r the robot's reaction
+  and stopping time, T_h the time the body part is assumed to keep coming, v_cap the
+  zone's speed cap near the person; it reaches 0 (a protective stop) at d = 0. A zone's
+  uncertainty (a lost marker, :class:`Zone`) counts as distance lost and its growth as the
+  zone's approach speed; inside the uncertain region the knife backs away gently
+  (−n·v_b⁺ ≤ max(−v_cap, d_u/T_r), d_u < 0 the clearance to the uncertain region).
+
+Rows of zones farther than ``KeepOutConfig.active_distance`` are ``0·a ≤ 1e6`` (the
+row count is fixed: ``2·max_zones``).  :func:`retreat` is the safest feasible action
+when the rows cannot all be met: the QP with the keep-out rows softened (slack
+penalised far above the cost of stopping), the other limits hard.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple, Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from .constraints import Constraint, _viable_bound_scalar, intersect_by_priority
+from .errors import ControllerConfigError, FrameNotFoundError
+from .state import ControlState
+
+__all__ = ["BLADE_LENGTH", "KeepOutConfig", "KeepOutLimit", "RetreatAction", "Zone", "ZoneClearance",
+           "closest_segment_points", "retreat", "segment_zone_clearance"]
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+#: [m] the SuperLimb's blade, tip to heel along the tool frame's −x (of its 0.14 m knife, the
+#: rest is the handle stub in the holder): the knife body is this segment
+BLADE_LENGTH = 0.09
+_FREE = 1e6  # h of an inactive row
+
+
+class Zone(NamedTuple):
+    """A capsule from ``a`` to ``b`` (3,) [m] of ``radius`` [m] moving at ``velocity`` (3,) [m/s];
+    ``speed_cap`` [m/s]: the knife's speed toward it near the person (speed and separation);
+    ``uncertainty`` [m] growing at ``uncertainty_rate`` [m/s]: where the body part may have gone
+    since it was last measured (a lost marker). The barrier keeps the knife out of the part as
+    last measured; the separation row counts the uncertainty as distance lost and its rate as
+    the part's approach speed, so the knife comes to a protective stop (never a flight) as the
+    uncertain region reaches it."""
+
+    name: str
+    a: np.ndarray
+    b: np.ndarray
+    radius: float
+    velocity: np.ndarray
+    speed_cap: float
+    uncertainty: float = 0.0
+    uncertainty_rate: float = 0.0
+
+
+class ZoneClearance(NamedTuple):
+    """Clearance ``distance`` [m] (surface to surface, negative inside), blade parameter ``s``
+    (0 tip, 1 heel), ``normal`` (3,) zone → knife, the closest points on the blade and the zone axis."""
+
+    distance: float
+    s: float
+    normal: np.ndarray
+    blade_point: np.ndarray
+    zone_point: np.ndarray
+
+
+def _dot(x: tuple[float, float, float], y: tuple[float, float, float]) -> float:
+    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+
+
+def closest_segment_points(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
+                           ) -> tuple[float, float]:
+    """Parameters (s, t) ∈ [0, 1]² of the closest points p0 + s·(p1 − p0), q0 + t·(q1 − q0)
+    of two segments (Ericson, *Real-Time Collision Detection*, 5.1.9; degenerate segments allowed).
+
+    Plain floats: for 3-vectors they are several times faster than numpy calls (it runs per
+    zone and step)."""
+    P0, P1, Q0, Q1 = p0.tolist(), p1.tolist(), q0.tolist(), q1.tolist()
+    d1 = (P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2])
+    d2 = (Q1[0] - Q0[0], Q1[1] - Q0[1], Q1[2] - Q0[2])
+    r = (P0[0] - Q0[0], P0[1] - Q0[1], P0[2] - Q0[2])
+    a, e, f = _dot(d1, d1), _dot(d2, d2), _dot(d2, r)
+    eps = 1e-18
+    if a <= eps and e <= eps:
+        return 0.0, 0.0
+    if a <= eps:
+        return 0.0, min(max(f / e, 0.0), 1.0)
+    c = _dot(d1, r)
+    if e <= eps:
+        return min(max(-c / a, 0.0), 1.0), 0.0
+    b = _dot(d1, d2)
+    denom = a * e - b * b
+    s = min(max((b * f - c * e) / denom, 0.0), 1.0) if denom > eps else 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        t, s = 0.0, min(max(-c / a, 0.0), 1.0)
+    elif t > 1.0:
+        t, s = 1.0, min(max((b - c) / a, 0.0), 1.0)
+    return s, t
+
+
+def segment_zone_clearance(tip: np.ndarray, heel: np.ndarray, zone: Zone) -> ZoneClearance:
+    """Clearance of the blade segment tip–heel to ``zone`` (surface distance, no margin)."""
+    s, t = closest_segment_points(tip, heel, zone.a, zone.b)
+    pb = tip + s * (heel - tip)
+    pz = zone.a + t * (zone.b - zone.a)
+    diff = pb - pz
+    dist = math.sqrt(_dot(diff.tolist(), diff.tolist()))
+    if dist > 1e-12:
+        normal = diff / dist
+    else:  # on the axis: push along the blade's perpendicular nearest to world up
+        axis = heel - tip
+        normal = np.cross(axis, np.cross(np.array([0.0, 0.0, 1.0]), axis))
+        nn = float(np.linalg.norm(normal))
+        normal = normal / nn if nn > 1e-12 else np.array([0.0, 0.0, 1.0])
+    return ZoneClearance(dist - zone.radius, s, normal, pb, pz)
+
+
+@dataclass(frozen=True)
+class KeepOutConfig:
+    """Settings of the keep-out rows.
+
+    margin [m] kept beyond each zone's surface (the intrusion allowance C of ISO/TS 15066);
+    brake_acceleration A [m/s²] of the barrier row (the knife's braking toward a zone, well
+    inside what the arm's joint limits give near the plate); reaction_time_s T_r and
+    human_time_s T_h [s] of the separation row; near_distance_m [m] within which the zone's
+    speed cap applies in full; active_distance_m [m] beyond which a zone gives no rows;
+    max_zones: the row budget (2 rows per zone).
+    """
+
+    margin: float = 0.02
+    brake_acceleration: float = 2.0
+    reaction_time_s: float = 0.1
+    human_time_s: float = 0.1
+    near_distance_m: float = 0.05
+    active_distance_m: float = 0.25
+    max_zones: int = 4
+
+    def __post_init__(self) -> None:
+        for name in ("margin", "human_time_s"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"KeepOutConfig.{name} must be finite and >= 0, got {getattr(self, name)!r}")
+        for name in ("brake_acceleration", "reaction_time_s", "near_distance_m", "active_distance_m"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise ValueError(f"KeepOutConfig.{name} must be finite and > 0, got {getattr(self, name)!r}")
+        if int(self.max_zones) < 1:
+            raise ValueError(f"KeepOutConfig.max_zones must be >= 1, got {self.max_zones!r}")
+
+
+class _Point(NamedTuple):
+    p: np.ndarray
+    v: np.ndarray
+    J: np.ndarray
+    drift: np.ndarray
+
+
+class KeepOutLimit:
+    """Keep-out rows ``G·a ≤ h`` (module docstring) for any Pinocchio model and tool frame.
+
+    ``heel_offset`` (3,) [m]: the blade's heel in the tool frame (the SuperLimb's knife runs
+    along the tool frame's x: ``(−blade_length, 0, 0)``). Give the zones of each step with
+    :meth:`set_zones` (model world frame) before the QP's step; :attr:`clearances` holds the
+    step's :class:`ZoneClearance` per zone, :attr:`approach` the knife's own speed toward it [m/s]
+    and :attr:`rows` the last rows computed.
+    """
+
+    name = "keepout"
+
+    def __init__(self, model, frame: str | int, heel_offset: Sequence[float],
+                 config: KeepOutConfig | None = None) -> None:
+        self.config = config or KeepOutConfig()
+        if isinstance(frame, str):
+            if not model.existFrame(frame):
+                raise FrameNotFoundError(f"frame {frame!r} not in model {model.name!r}")
+            frame = model.getFrameId(frame)
+        heel = np.asarray(heel_offset, dtype=float)
+        if heel.shape != (3,) or not np.isfinite(heel).all() or np.linalg.norm(heel) < 1e-6:
+            raise ControllerConfigError(f"heel_offset must be a non-zero finite (3,) vector [m], got {heel_offset!r}")
+        self.model = model.copy()
+        tool = self.model.frames[int(frame)]
+        placement = tool.placement * pin.SE3(np.eye(3), heel)
+        self.tip_id = int(frame)
+        self.heel_id = self.model.addFrame(pin.Frame("keepout_heel", tool.parentJoint, int(frame), placement,
+                                                     pin.FrameType.OP_FRAME))
+        self.data = self.model.createData()
+        self.zones: list[Zone] = []
+        self.clearances: list[ZoneClearance] = []
+        self.approach: list[float] = []
+        self.rows: Constraint | None = None
+        self._zero = np.zeros(self.model.nv)
+
+    def num_rows(self, n: int) -> int:
+        return 2 * int(self.config.max_zones)
+
+    def set_zones(self, zones: Sequence[Zone]) -> None:
+        """The zones of this step (model world frame); at most ``config.max_zones``."""
+        if len(zones) > self.config.max_zones:
+            raise ControllerConfigError(f"{len(zones)} zones given, KeepOutConfig.max_zones is "
+                                        f"{self.config.max_zones}")
+        self.zones = list(zones)
+
+    def _point(self, fid: int) -> _Point:
+        m, d = self.model, self.data
+        p = d.oMf[fid].translation.copy()
+        v = pin.getFrameVelocity(m, d, fid, _LWA).linear.copy()
+        drift = pin.getFrameClassicalAcceleration(m, d, fid, _LWA).linear.copy()
+        J = pin.getFrameJacobian(m, d, fid, _LWA)[:3].copy()
+        return _Point(p, v, J, drift)
+
+    def knife(self, q: np.ndarray, v: np.ndarray | None = None) -> tuple[_Point, _Point]:
+        """(tip, heel) positions [m], velocities [m/s], Jacobians and drifts J̇·v [m/s²] at (q, v)."""
+        m, d = self.model, self.data
+        pin.forwardKinematics(m, d, q, self._zero if v is None else v, self._zero)
+        pin.updateFramePlacements(m, d)
+        pin.computeJointJacobians(m, d)
+        return self._point(self.tip_id), self._point(self.heel_id)
+
+    def compute_qp_inequalities(self, state: ControlState) -> Constraint:
+        cfg, dt = self.config, state.dt
+        rows = 2 * cfg.max_zones
+        G, h = np.zeros((rows, state.q.size)), np.full(rows, _FREE)
+        tip, heel = self.knife(state.q, state.v)
+        self.clearances, self.approach = [], []
+        for i, z in enumerate(self.zones):
+            c = segment_zone_clearance(tip.p, heel.p, z)
+            s, n = c.s, c.normal
+            vb = (1.0 - s) * tip.v + s * heel.v
+            self.clearances.append(c)
+            self.approach.append(-float(n @ vb))
+            d = c.distance - cfg.margin
+            if d - z.uncertainty > cfg.active_distance_m:
+                continue
+            Jb = (1.0 - s) * tip.J + s * heel.J
+            ab = (1.0 - s) * tip.drift + s * heel.drift
+            nJ = -dt * (n @ Jb)
+            own = float(n @ vb) + dt * float(n @ ab)  # −(the knife's own approach speed after a = 0)
+            nz = float(n @ z.velocity)
+            s_rel = -float(n @ (vb - z.velocity))
+            u_barrier = _viable_bound_scalar(d, s_rel, dt, cfg.brake_acceleration)
+            G[2 * i], h[2 * i] = nJ, u_barrier + own - nz
+            v_h = max(0.0, nz) + z.uncertainty_rate
+            d_ssm = d - z.uncertainty
+            u_ssm = min((d_ssm - v_h * cfg.human_time_s) / cfg.reaction_time_s,
+                        z.speed_cap + max(0.0, d_ssm - cfg.near_distance_m) / cfg.reaction_time_s)
+            # a protective stop; inside an uncertain region, a gentle retreat (at most the zone's cap)
+            u_ssm = max(-z.speed_cap, d_ssm / cfg.reaction_time_s) if z.uncertainty > 0.0 and d_ssm < 0.0 \
+                else max(0.0, u_ssm)
+            G[2 * i + 1], h[2 * i + 1] = nJ, u_ssm + own
+        G.flags.writeable = False
+        h.flags.writeable = False
+        self.rows = Constraint(G, h)
+        return self.rows
+
+
+class RetreatAction(NamedTuple):
+    """The retreat: acceleration a [rad/s²], torque τ [N·m], the largest keep-out slack [m/s]."""
+
+    a: np.ndarray
+    tau: np.ndarray
+    slack: float
+
+
+def retreat(qp, limit: KeepOutLimit, q: np.ndarray, v: np.ndarray) -> RetreatAction | None:
+    """The safest feasible action when the keep-out rows cannot all be met (module docstring).
+
+    Minimise ½·w‖a + v/dt‖² + ρ₁·Σσ + ½ρ₂‖σ‖² over (a, σ ≥ 0) s.t. the QP's box (by
+    priority), its other rows hard, keep-out rows ``G·a − σ/dt·… ≤ h + σ``: as close to
+    every zone row as the arm can get (retreat), stopping where nothing pulls. Returns None
+    when even that fails (the caller then brakes). ``qp``: a :class:`robot.qp.QPController`
+    whose ``constraints`` hold ``limit``.
+    """
+    from .solvers import make_backend
+
+    state = qp.evaluate(q, v)
+    n = state.q.size
+    lo, hi, _ = intersect_by_priority([c.bounds(state) for c in qp.box_constraints])
+    Gk, hk = limit.compute_qp_inequalities(state)
+    others = [c.compute_qp_inequalities(state) for c in qp.constraints if c is not limit]
+    Go = np.concatenate([r.G for r in others]) if others else np.zeros((0, n))
+    ho = np.concatenate([r.h for r in others]) if others else np.zeros(0)
+    mk = Gk.shape[0]
+    scale = 1.0 / max(1.0, float(np.abs(Gk).max()))  # rows in m/s; slack in the same unit
+    P = np.zeros((n + mk, n + mk))
+    P[:n, :n] = np.eye(n) * state.dt ** 2
+    P[n:, n:] = 1e2 * np.eye(mk)
+    c = np.concatenate([state.v * state.dt, np.full(mk, 1e3)])
+    G = np.vstack([np.hstack([Gk * scale, -np.eye(mk)]), np.hstack([Go, np.zeros((Go.shape[0], mk))])])
+    h = np.concatenate([hk * scale, ho])
+    lb = np.concatenate([lo, np.zeros(mk)])
+    ub = np.concatenate([hi, np.full(mk, 1e30)])
+    out = make_backend(qp.config.solver, n + mk, G.shape[0], qp.config.eps).solve(P, c, lb, ub, G, h)
+    if out.x is None:
+        return None
+    a = np.minimum(np.maximum(out.x[:n], lo), hi)
+    tau = state.M @ a + state.h
+    torque = getattr(qp, "_torque", None)
+    if torque is not None and (np.abs(tau) > torque.tau_max + 1e-9).any():
+        return None
+    return RetreatAction(a, tau, float(np.max(out.x[n:], initial=0.0)) / scale)

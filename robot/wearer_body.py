@@ -1,0 +1,137 @@
+"""The wearer's body as keep-out zones: the fork hand, the forearm, the head and the torso.
+
+Frames as in :mod:`sim.scene`: the *torso* frame is the arm's model world frame (the
+SuperLimb is worn on it), the *plate* frame is the data's frame; ``T_plate_torso`` (4×4,
+``p_plate = R·p_torso + t``) is the controller's base pose. The fork pose is
+(x, y, z [m], roll, pitch, yaw [rad]) of the fork tip in the plate frame (ZYX, URDF).
+
+* **hand** — a sphere at the fork handle's upper end (the fist around the handle), fixed
+  in the fork frame, moving with the fork;
+* **forearm** — a capsule from the hand toward the elbow: the elbow is held at a fixed
+  point of the torso frame (the upper arm hangs from the shoulder beside the trunk), the
+  forearm runs ``forearm_length`` from the hand toward it;
+* **head** (with the face) — a sphere fixed to the torso;
+* **torso** — a capsule fixed to the torso.
+
+Defaults (sizes [m] are the body part's own, the controller's margin comes on top):
+hand radius 0.045 (issue 30: a 4.5 cm sphere; a fist's half-breadth, hand breadth
+≈ 0.09 m in adult anthropometry, Winter, *Biomechanics and Motor Control of Human
+Movement*, 4th ed., table 4.1 proportions for a 1.75 m adult); forearm 0.25 m long
+(0.146·H for H = 1.75 m, Winter), radius 0.04; head radius 0.10 and trunk radius 0.14,
+as the scene draws them. Speed caps of the knife toward a body part near it: 0.15 m/s
+(hand, forearm, torso) and 0.06 m/s (head and face): the figures a robot-assisted
+feeding system uses away from and near the mouth (as quoted in issue 30; ADA, Nanavati
+et al., "An Adaptable, Safe, and Portable Robot-Assisted Feeding System", HRI 2024,
+arXiv:2403.04134). A lost fork marker gives the hand and forearm an uncertainty of the
+hand's top speed times the marker's age (:class:`robot.keepout.Zone`): 2.0 m/s, the approach
+speed of a reaching hand and arm that ISO 13855 assumes for safety distances (its whole-body
+figure is 1.6 m/s).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from .keepout import Zone
+from .superlimb import rpy_to_matrix
+
+__all__ = ["BODY_PARTS", "WearerBody", "body_zones", "hand_center", "zones_to_plate"]
+
+BODY_PARTS: tuple[str, ...] = ("hand", "forearm", "head", "torso")
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class WearerBody:
+    """Sizes [m], anchors [m] and speed caps [m/s] of the body zones (module docstring).
+
+    hand_offset: the hand's centre in the fork frame (the handle's upper end);
+    elbow: the elbow in the torso frame; head_center, torso_a, torso_b: torso frame;
+    hand_top_speed [m/s]: growth rate of the hand and forearm zones while the fork
+    marker is lost (ISO 13855's 2.0 m/s hand and arm approach speed).
+    """
+
+    hand_offset: Vec3 = (-0.04, 0.07, 0.13)
+    hand_radius: float = 0.045
+    elbow: Vec3 = (0.10, 0.22, 0.28)
+    forearm_length: float = 0.25
+    forearm_radius: float = 0.04
+    head_center: Vec3 = (-0.03, 0.0, 0.80)
+    head_radius: float = 0.10
+    torso_a: Vec3 = (-0.05, 0.0, 0.08)
+    torso_b: Vec3 = (-0.05, 0.0, 0.55)
+    torso_radius: float = 0.14
+    hand_speed_cap: float = 0.15
+    head_speed_cap: float = 0.06
+    hand_top_speed: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("hand_radius", "forearm_length", "forearm_radius", "head_radius", "torso_radius",
+                     "hand_speed_cap", "head_speed_cap", "hand_top_speed"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"WearerBody.{name} must be finite and >= 0, got {v!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def hand_center(body: WearerBody, fork_pose: np.ndarray) -> np.ndarray:
+    """The hand's centre [m] in the frame of ``fork_pose`` (6,) (x, y, z, roll, pitch, yaw)."""
+    return fork_pose[:3] + rpy_to_matrix(fork_pose[3:6]) @ np.asarray(body.hand_offset)
+
+
+def _hand_velocity(body: WearerBody, fork_pose: np.ndarray, fork_rate: np.ndarray, hand: np.ndarray) -> np.ndarray:
+    """d/dt of :func:`hand_center` (= ``hand``) for the pose's time derivative ``fork_rate`` (6,):
+    a forward difference over 1 ms (the rotation's curvature over it is far below the rate's noise)."""
+    eps = 1e-3
+    return (hand_center(body, fork_pose + eps * fork_rate) - hand) / eps
+
+
+def body_zones(body: WearerBody, fork_pose: np.ndarray | None, base_pose: np.ndarray,
+               fork_rate: np.ndarray | None = None, marker_age_s: float = 0.0,
+               parts: Sequence[str] = BODY_PARTS) -> list[Zone]:
+    """The zones of ``parts`` in the **torso** frame.
+
+    ``fork_pose`` (6,) plate frame (None or non-finite: no hand or forearm zone);
+    ``base_pose`` 4×4 T_plate_torso; ``fork_rate`` (6,) its time derivative [m/s, rad/s]
+    (the hand's velocity; None: at rest); ``marker_age_s`` [s] since the fork was last
+    measured: the hand and forearm get an uncertainty of ``hand_top_speed·marker_age_s`` growing at
+    ``hand_top_speed`` (:class:`robot.keepout.Zone`).
+    """
+    R, t = base_pose[:3, :3], base_pose[:3, 3]
+    zones: list[Zone] = []
+    zero = np.zeros(3)
+    hand_ok = fork_pose is not None and np.isfinite(fork_pose).all()
+    age = max(0.0, float(marker_age_s))
+    grow, rate = body.hand_top_speed * age, (body.hand_top_speed if age > 0.0 else 0.0)
+    if hand_ok and ("hand" in parts or "forearm" in parts):
+        hand_plate = hand_center(body, fork_pose)
+        hand = R.T @ (hand_plate - t)
+        rate_ok = fork_rate is not None and np.isfinite(fork_rate).all()
+        vel = R.T @ _hand_velocity(body, fork_pose, fork_rate, hand_plate) if rate_ok else zero
+        if "hand" in parts:
+            zones.append(Zone("hand", hand, hand, body.hand_radius, vel, body.hand_speed_cap, grow, rate))
+        if "forearm" in parts:
+            to_elbow = np.asarray(body.elbow) - hand
+            dist = float(np.linalg.norm(to_elbow))
+            end = hand + to_elbow * (min(1.0, body.forearm_length / dist) if dist > 1e-9 else 0.0)
+            zones.append(Zone("forearm", hand, end, body.forearm_radius, vel, body.hand_speed_cap, grow, rate))
+    if "head" in parts:
+        c = np.asarray(body.head_center, dtype=float)
+        zones.append(Zone("head", c, c, body.head_radius, zero, body.head_speed_cap))
+    if "torso" in parts:
+        zones.append(Zone("torso", np.asarray(body.torso_a, dtype=float), np.asarray(body.torso_b, dtype=float),
+                          body.torso_radius, zero, body.hand_speed_cap))
+    return zones
+
+
+def zones_to_plate(zones: Sequence[Zone], base_pose: np.ndarray) -> list[Zone]:
+    """The same zones in the plate frame (``p_plate = R·p + t``, velocities rotated)."""
+    R, t = base_pose[:3, :3], base_pose[:3, 3]
+    return [z._replace(a=R @ z.a + t, b=R @ z.b + t, velocity=R @ z.velocity) for z in zones]

@@ -1,0 +1,97 @@
+"""How close the knife came to the wearer: keep-out figures of one episode (``comparison.json`` keys).
+
+Per control step k the wearer's body zones (:func:`robot.wearer_body.body_zones`: hand,
+forearm, head, torso; the body parts themselves, no controller margin) are placed with the
+fork pose the scene showed (``Episode.fork_pose``, the truth) and the base pose; the knife
+is the segment from its tip to the blade's heel (``Episode.knife_heel``). With c_k,z the
+clearance (surface distance, negative inside) of the blade to zone z, n its normal (zone →
+knife) and ṗ_b the knife's own velocity at the closest blade point (backward difference):
+
+* ``keepout_min_clearance_m`` = min_k,z c_k,z;  ``keepout_max_depth_m`` = max(0, −that);
+* ``keepout_time_inside_s`` = Δ·#{k: min_z c_k,z < 0};
+* ``keepout_steps_driven_in`` = #{k: some zone with c < 0 and the knife's own speed toward
+  it −n·ṗ_b > 0.05 m/s} (issue 30's "driven in");
+* ``keepout_inside_zone_moving_s`` = Δ·#{inside steps where the zone comes toward the knife
+  faster than the knife toward the zone} (the person's own sweep outran the arm);
+* ``keepout_near_speed_mps`` = max of the knife's own speed toward a zone over the steps
+  with c < ``near_m`` (0.05 m) (speed near the person; 0 when never near);
+* ``keepout_min_clearance_by_zone_m``: zone → min_k c_k,z.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+
+from robot.keepout import segment_zone_clearance
+from robot.wearer_body import BODY_PARTS, WearerBody, body_zones, zones_to_plate
+from sim.episode import Episode
+
+__all__ = ["KEEPOUT_KEYS", "episode_keepout_metrics"]
+
+KEEPOUT_KEYS = ("keepout_min_clearance_m", "keepout_max_depth_m", "keepout_time_inside_s",
+                "keepout_steps_driven_in", "keepout_inside_zone_moving_s", "keepout_near_speed_mps",
+                "keepout_min_clearance_by_zone_m")
+DRIVEN_SPEED = 0.05  # [m/s] issue 30: inside and moving toward the zone faster than this = driven in
+
+
+def _body(info: dict[str, Any]) -> WearerBody:
+    raw = info.get("body_zones")
+    if not raw:
+        return WearerBody()
+    fields = json.loads(str(raw))
+    fields.pop("blade_length", None)
+    return WearerBody(**{k: tuple(v) if isinstance(v, list) else v for k, v in fields.items()})
+
+
+def _clearances(episode: Episode, body: WearerBody) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(c, own, zone_in), each (Nc, 4) over :data:`BODY_PARTS` (NaN where a zone is absent)."""
+    n, dt = episode.t.size, float(episode.info.get("control_period_s", 0.01))
+    c, own, zin = (np.full((n, len(BODY_PARTS)), np.nan) for _ in range(3))
+    tip, heel = episode.tip, episode.knife_heel
+    prev_z: dict[str, np.ndarray] = {}
+    for k in range(n):
+        if not (np.isfinite(tip[k]).all() and np.isfinite(heel[k]).all()):
+            continue
+        zones = zones_to_plate(body_zones(body, episode.fork_pose[k], episode.base_pose[k]), episode.base_pose[k])
+        for z in zones:
+            j = BODY_PARTS.index(z.name)
+            cl = segment_zone_clearance(tip[k], heel[k], z)
+            c[k, j] = cl.distance
+            if k > 0 and np.isfinite(tip[k - 1]).all():
+                vb = ((1 - cl.s) * (tip[k] - tip[k - 1]) + cl.s * (heel[k] - heel[k - 1])) / dt
+                own[k, j] = -float(cl.normal @ vb)
+                if z.name in prev_z:
+                    zin[k, j] = float(cl.normal @ (z.a - prev_z[z.name])) / dt
+            prev_z[z.name] = z.a
+    return c, own, zin
+
+
+def episode_keepout_metrics(episode: Episode, near_m: float = 0.05) -> dict[str, Any]:
+    """The keep-out figures of ``episode`` (module docstring); None where the run file has no
+    fork pose or knife heel (an older run file)."""
+    if episode.fork_pose is None or episode.knife_heel is None or episode.t.size == 0:
+        return {k: None for k in KEEPOUT_KEYS}
+    dt = float(episode.info.get("control_period_s", 0.01))
+    c, own, zin = _clearances(episode, _body(episode.info))
+    with np.errstate(invalid="ignore"):
+        inside = c < 0.0
+        driven = inside & (own > DRIVEN_SPEED)
+        moving = inside & (zin > np.nan_to_num(own, nan=0.0))
+        near = c < near_m
+    cmin = np.nanmin(c, axis=1) if np.isfinite(c).any() else np.full(c.shape[0], np.nan)
+    finite = np.isfinite(cmin)
+    min_c = float(np.min(cmin[finite])) if finite.any() else None
+    near_own = own[near & np.isfinite(own)]
+    return {
+        "keepout_min_clearance_m": min_c,
+        "keepout_max_depth_m": max(0.0, -min_c) if min_c is not None else None,
+        "keepout_time_inside_s": float(inside.any(axis=1).sum() * dt),
+        "keepout_steps_driven_in": int(driven.any(axis=1).sum()),
+        "keepout_inside_zone_moving_s": float(moving.any(axis=1).sum() * dt),
+        "keepout_near_speed_mps": float(max(0.0, near_own.max())) if near_own.size else 0.0,
+        "keepout_min_clearance_by_zone_m": {name: (float(np.nanmin(c[:, j])) if np.isfinite(c[:, j]).any() else None)
+                                            for j, name in enumerate(BODY_PARTS)},
+    }
