@@ -12,6 +12,7 @@
   severe hemiparesis).
 - :mod:`sim.closed_loop` — ``run_episode``; :mod:`sim.episode` — its record and run file;
   :mod:`sim.metrics` — episode metrics; :mod:`sim.task_metrics` — lag, sawing and the share per mode;
+  :mod:`sim.keepout_metrics` — how close the knife came to the wearer's body;
   :mod:`sim.run_mcap` — a run as MCAP for Foxglove.
 - :mod:`sim.render` — offscreen video.
 - :mod:`sim.errors` — :class:`~sim.errors.SimError`, the root of the errors ``sim`` raises.

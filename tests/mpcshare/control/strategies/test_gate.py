@@ -71,14 +71,15 @@ def test_the_wearer_pushing_against_the_robot_takes_the_lead():
 
 
 def test_overrides_dwell_and_fallback():
-    arb = Arbiter("gate", beta=0.5, min_dwell_s=1.0, novelty_threshold=5.0, mode_stats={"voluntary_share": V},
+    arb = Arbiter("gate", beta=0.5, min_dwell_s=1.0, handover_s=0.0, novelty_threshold=5.0,
+                  mode_stats={"voluntary_share": V},
                   transmat=A, options={"lead_s": 0.0, "hold_s": 0.0})
     assert arb.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 1.0
     assert arb.decide(0.5, 0.9, mode_proba=_onehot(1)).alpha == 1.0  # within the dwell
     assert arb.decide(1.0, 0.9, mode_proba=_onehot(1)).alpha == 0.0
     d = arb.decide(2.5, 0.9, novelty=9.0, mode_proba=_onehot(0))
     assert d.alpha == 0.0 and d.reason.startswith("novelty")
-    paper = Arbiter("gate", beta=0.5, min_dwell_s=0.0)  # no per-mode figures: the paper's gate, said so
+    paper = Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.0)  # no per-mode figures: the paper's gate, said so
     d = paper.decide(0.0, 0.9, mode_proba=_onehot(1))
     assert d.alpha == 1.0 and d.reason.startswith("no per-mode figures")
     assert math.isnan(Arbiter("gate", mode_stats={"voluntary_share": V}).policy.score(None))
