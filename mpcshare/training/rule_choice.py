@@ -128,7 +128,8 @@ def rule_markdown(choice: dict[str, Any]) -> str:
     """The choice as a Markdown section (for ``training.md``)."""
     dur = "whole trials" if choice["duration_s"] is None else f"the first {choice['duration_s']:g} s"
     lines = ["## Hand-over rule (closed-loop choice)", "",
-             f"Chosen on held-out trials {choice['trials']} ({dur}, the default wearer) in {choice['seconds']:g} s: "
+             f"Chosen on held-out trials {choice['trials']} ({dur}, wearer {choice.get('wearer', 'default')}) in "
+             f"{choice['seconds']:g} s: "
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
              f"Held-out unpredictable share per mode: {[round(x, 3) for x in choice['voluntary_share_by_mode']]}.", "",
