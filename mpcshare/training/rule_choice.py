@@ -103,8 +103,9 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, du
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
         if log is not None:
             r = rows[-1]
+            lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
             log(f"  gate with wearer modes {r['wearer_modes']}: RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
-                f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {r['line_ratio']}")
+                f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
     if not rows:
         raise ValueError(f"every mode has the same held-out unpredictable share {v.tolist()}: nothing to choose")
     ok = [r for r in rows if r["effort_vs_voluntary"] <= max_effort and r["line_ratio"] is not None]
