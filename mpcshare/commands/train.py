@@ -28,6 +28,7 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.data import DATA_HELP
 from mpcshare.training.config import DEFAULT_PERCENTILES, MODES_FROM, TrainConfig
+from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
 __all__ = ["TRAIN_COMMAND"]
 
@@ -78,6 +79,8 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
                    help="held-out trials the choice simulates, the last ones (default: half of them, 1 to 2)")
     r.add_argument("--rule-duration", type=positive_float, default=30.0,
                    help="seconds simulated per trial for the choice (default 30)")
+    r.add_argument("--rule-wearer", choices=list(WEARER_PRESETS), default=DEFAULT_WEARER_PRESET,
+                   help=f"the simulated wearer of the choice (default {DEFAULT_WEARER_PRESET})")
     r.add_argument("--no-rule-choice", action="store_true",
                    help="keep the rule's default settings (no closed-loop choice)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -169,11 +172,14 @@ def _choose_rule(bundle, demos, args: argparse.Namespace) -> dict | None:
     if args.no_rule_choice:
         return None
     from mpcshare.training.rule_choice import choose_rule
+    from sim.wearer_presets import wearer_preset
 
     held = list(bundle.heldout_trials)
     n = args.rule_trials or min(2, max(1, len(held) // 2))
     log = None if args.quiet else print
-    choice = choose_rule(bundle, demos, held[-n:], duration_s=args.rule_duration, log=log)
+    choice = choose_rule(bundle, demos, held[-n:], duration_s=args.rule_duration, log=log,
+                         wearer=wearer_preset(args.rule_wearer))
+    choice["wearer"] = args.rule_wearer
     bundle.metrics["rule_settings"] = choice["settings"]
     bundle.metrics["rule_choice"] = choice
     return choice

@@ -103,8 +103,9 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, du
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
         if log is not None:
             r = rows[-1]
+            lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
             log(f"  gate with wearer modes {r['wearer_modes']}: RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
-                f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {r['line_ratio']}")
+                f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
     if not rows:
         raise ValueError(f"every mode has the same held-out unpredictable share {v.tolist()}: nothing to choose")
     ok = [r for r in rows if r["effort_vs_voluntary"] <= max_effort and r["line_ratio"] is not None]
@@ -128,7 +129,8 @@ def rule_markdown(choice: dict[str, Any]) -> str:
     """The choice as a Markdown section (for ``training.md``)."""
     dur = "whole trials" if choice["duration_s"] is None else f"the first {choice['duration_s']:g} s"
     lines = ["## Hand-over rule (closed-loop choice)", "",
-             f"Chosen on held-out trials {choice['trials']} ({dur}, the default wearer) in {choice['seconds']:g} s: "
+             f"Chosen on held-out trials {choice['trials']} ({dur}, wearer {choice.get('wearer', 'default')}) in "
+             f"{choice['seconds']:g} s: "
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
              f"Held-out unpredictable share per mode: {[round(x, 3) for x in choice['voluntary_share_by_mode']]}.", "",
