@@ -34,7 +34,11 @@ import numpy as np
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import StreamingDecimator
 
-__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd"]
+__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd", "fork_kalman", "kalman_inputs"]
+
+#: the front end's Kalman noise levels per unit of the obs standardiser's scale s_j:
+#: white acceleration 5·s_j per s², measurement 0.02·s_j
+KALMAN_ACCEL_PER_SCALE, KALMAN_MEAS_PER_SCALE = 5.0, 0.02
 
 
 class ForkKalman:
@@ -140,6 +144,21 @@ class ForkKalman:
         return float(t) - self.last_update_t if self.initialized else float("inf")
 
 
+def fork_kalman(scale: np.ndarray, rate_hz: float) -> ForkKalman:
+    """The front end's Kalman filter for channels of standardiser scale ``scale`` (d,) at ``rate_hz``."""
+    scale = np.asarray(scale, dtype=float)
+    return ForkKalman(scale.size, 1.0 / float(rate_hz), KALMAN_ACCEL_PER_SCALE * scale,
+                      KALMAN_MEAS_PER_SCALE * scale)
+
+
+def kalman_inputs(x: np.ndarray, v: np.ndarray, mean: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fast forecast's inputs from the Kalman state: ((x − μ)/s, ẋ·τ_v/s), τ_v =
+    ``learning.predictor.fast.VELOCITY_SCALE_S`` (position and velocity on one unit scale)."""
+    from learning.predictor.fast import VELOCITY_SCALE_S
+
+    return (x - mean) / scale, v * (VELOCITY_SCALE_S / scale)
+
+
 @dataclass
 class ModelTick:
     """What the front end produces on a model-rate (10 Hz) tick.
@@ -160,7 +179,7 @@ class FrontEndOutput:
     """One raw-rate step of the front end.
 
     feature_sample: (d_o,) what went into the decimator (raw where measured, KF where not);
-    fork_velocity: (d_o,) KF velocity [unit/s]; predicting_for_s: time since the last
+    fork_velocity: (d_o,) KF velocity [unit/s]; fork_position: (d_o,) KF position; predicting_for_s: time since the last
     measurement [s]; missing: (d_o,) bool, channels substituted this step; stale: the whole
     sample repeated the previous one; tick: the model-rate outputs, or None between ticks.
     """
@@ -171,6 +190,7 @@ class FrontEndOutput:
     missing: np.ndarray
     stale: bool
     tick: ModelTick | None
+    fork_position: np.ndarray | None = None
 
 
 class StreamingFrontEnd:
@@ -199,8 +219,9 @@ class StreamingFrontEnd:
         self.decimator = StreamingDecimator(self.rate_hz, self.model_hz, d)
         self.lags = window_lags(self.window_s, self.model_hz)
         self._sqrt_l = math.sqrt(self.lags)
-        self.kalman = ForkKalman(d, 1.0 / self.rate_hz, 5.0 * scale if accel_std is None else accel_std,
-                                 0.02 * scale if meas_std is None else meas_std)
+        self.kalman = fork_kalman(scale, self.rate_hz) if accel_std is None and meas_std is None else \
+            ForkKalman(d, 1.0 / self.rate_hz, KALMAN_ACCEL_PER_SCALE * scale if accel_std is None else accel_std,
+                       KALMAN_MEAS_PER_SCALE * scale if meas_std is None else meas_std)
         self.detect_stale = bool(detect_stale)
         self._mean = np.asarray(obs_standardizer.mean_, dtype=float)
         self._scale = scale
@@ -251,4 +272,5 @@ class StreamingFrontEnd:
                 novelty = float("inf")
             tick = ModelTick(std, window, np.array(proba, dtype=float), float(novelty))
             self.last_tick = tick
-        return FrontEndOutput(feat, self.kalman.velocity, self.kalman.predicting_for(t), missing, stale, tick)
+        return FrontEndOutput(feat, self.kalman.velocity, self.kalman.predicting_for(t), missing, stale, tick,
+                              self.kalman.position)

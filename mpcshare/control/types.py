@@ -67,7 +67,9 @@ class ControllerConfig:
     forecast (else the smoothed reference extrapolated at constant velocity); forecast_fade_s [s]:
     cross-fade between successive forecasts (None: one model period; 0: none, measured best);
     smoother_target (:data:`SMOOTHER_TARGETS`) and smoother_lead_s [s]; handover_s [s]: the
-    gate's α ramp between the robot and the wearer (see ``Arbiter``).
+    gate's α ramp between the robot and the wearer (see ``Arbiter``); fast_forecast: use the
+    bundle's control-rate forecast when it has one (else, or False: the 10 Hz forecast alone);
+    fast_lead_s [s]: the aim ahead with the control-rate forecast (replaces forecast_lead_s).
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
@@ -102,11 +104,13 @@ class ControllerConfig:
     forecast_fade_s: float | None = 0.0
     smoother_lead_s: float = 0.05
     handover_s: float = 0.5
+    fast_forecast: bool = True
+    fast_lead_s: float = 0.1
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:
             raise ValueError(f"smoother_target {self.smoother_target!r} not in {list(SMOOTHER_TARGETS)}")
-        for name in ("forecast_lead_s", "smoother_lead_s", "handover_s"):
+        for name in ("forecast_lead_s", "smoother_lead_s", "handover_s", "fast_lead_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v <= 1.0):
                 raise ValueError(f"ControllerConfig.{name} must be in [0, 1] s, got {v!r}")
