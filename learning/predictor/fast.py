@@ -69,20 +69,22 @@ def _base(P: np.ndarray, V: np.ndarray, lagged: list[np.ndarray]) -> np.ndarray:
 
 
 def fast_design(P: np.ndarray, V: np.ndarray, proba: np.ndarray, slow: np.ndarray,
-                lags: tuple[int, ...] = DEFAULT_LAGS) -> np.ndarray:
-    """Feature rows φ (T, n_features) of one trial (module docstring).
+                lags: tuple[int, ...] = DEFAULT_LAGS, rows: np.ndarray | None = None) -> np.ndarray:
+    """Feature rows φ (n, n_features) of one trial (module docstring).
 
     Args:
         P, V: (T, d_o) standardised Kalman position and velocity per raw step.
         proba: (T, K) mode posterior of the last tick at each step.
         slow: (T, H+1, d_y) interpolated slow forecast at each step.
         lags: position lags [raw steps]; before the trial's start the first row is repeated.
+        rows: the steps to build (None: all T).
     """
-    T = P.shape[0]
-    lagged = [P[np.maximum(np.arange(T) - int(lag), 0)] for lag in lags]
-    b = _base(P, V, lagged)
-    kron = (proba[:, :, None] * b[:, None, :]).reshape(T, -1)
-    return np.hstack([kron, slow.reshape(T, -1)])
+    idx = np.arange(P.shape[0]) if rows is None else np.asarray(rows)
+    lagged = [P[np.maximum(idx - int(lag), 0)] for lag in lags]
+    b = _base(P[idx], V[idx], lagged)
+    n = idx.size
+    kron = (proba[idx][:, :, None] * b[:, None, :]).reshape(n, -1)
+    return np.hstack([kron, slow[idx].reshape(n, -1)])
 
 
 class FastInputStream:

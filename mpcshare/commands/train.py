@@ -144,8 +144,11 @@ def _run(args: argparse.Namespace) -> int:
         save_bundle(bundle, out)
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
+    from mpcshare.reports.training import write_training_md
+
+    md = write_training_md(bundle.metrics, Path(out) / "training.md")
     print_metrics(bundle.metrics)
-    print(f"bundle: {out}")
+    print(f"bundle: {out} (summary: {md})")
     return 0
 
 

@@ -34,7 +34,7 @@ import numpy as np
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import StreamingDecimator
 
-__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd", "fork_kalman", "kalman_inputs"]
+__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd", "fork_kalman", "kalman_batch", "kalman_inputs"]
 
 #: the front end's Kalman noise levels per unit of the obs standardiser's scale s_j:
 #: white acceleration 5·s_j per s², measurement 0.02·s_j
@@ -149,6 +149,44 @@ def fork_kalman(scale: np.ndarray, rate_hz: float) -> ForkKalman:
     scale = np.asarray(scale, dtype=float)
     return ForkKalman(scale.size, 1.0 / float(rate_hz), KALMAN_ACCEL_PER_SCALE * scale,
                       KALMAN_MEAS_PER_SCALE * scale)
+
+
+def kalman_batch(kf: ForkKalman, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`ForkKalman.step` over a whole record Z (T, d) sampled every ``kf.dt``: (positions, velocities).
+
+    For offline use on recorded trials: every sample measured (a NaN row, e.g. padding after
+    a trial's end, turns the rest of that channel into NaN). The same arithmetic as ``step``
+    (its covariance recursion gives the gains; once they reach a fixed point they are reused),
+    so the result equals stepping the filter (tests/mpcshare/control/test_frontend.py).
+    """
+    Z = np.asarray(Z, dtype=float)
+    T, dt, r, q = Z.shape[0], kf.dt, kf.meas_var, kf.accel_var
+    X, V = np.empty_like(Z), np.empty_like(Z)
+    x, v = Z[0].copy(), np.zeros(Z.shape[1])
+    p00, p11 = kf.initial_covariance()
+    p01 = np.zeros_like(p00)
+    X[0], V[0] = x, v
+    k0 = k1 = None
+    fixed = False
+    dt2 = dt * dt
+    for i in range(1, T):
+        if not fixed:
+            p00 = p00 + dt * (2.0 * p01 + dt * p11) + (0.25 * dt2 * dt2) * q
+            p01 = p01 + dt * p11 + (0.5 * dt2 * dt) * q
+            p11 = p11 + dt2 * q
+            s = p00 + r
+            n0, n1 = p00 / s, p01 / s
+            fixed = k0 is not None and bool(np.array_equal(n0, k0) and np.array_equal(n1, k1))
+            k0, k1 = n0, n1
+            a = 1.0 - k0
+            p00, p01, p11 = (a * p00 * a + k0 * r * k0, a * (p01 - p00 * k1) + k0 * r * k1,
+                             k1 * (p00 * k1 - p01) - k1 * p01 + p11 + k1 * r * k1)
+        x = x + dt * v
+        y = Z[i] - x
+        x = x + k0 * y
+        v = v + k1 * y
+        X[i], V[i] = x, v
+    return X, V
 
 
 def kalman_inputs(x: np.ndarray, v: np.ndarray, mean: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -105,7 +105,7 @@ class ControllerConfig:
     smoother_lead_s: float = 0.05
     handover_s: float = 0.5
     fast_forecast: bool = True
-    fast_lead_s: float = 0.1
+    fast_lead_s: float = 0.03
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:

@@ -23,13 +23,13 @@ only up to the horizons where its skill against the hold, on the validation tria
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 import numpy as np
 
 from learning.preprocessing.resample import decimation_factor
 from learning.predictor.fast import FastForecaster, fast_design, interpolate_slow
-from mpcshare.control.frontend import fork_kalman, kalman_inputs
+from mpcshare.control.frontend import fork_kalman, kalman_batch, kalman_inputs
 from mpcshare.training.data import SplitData, TrainingData
 
 if TYPE_CHECKING:  # annotations only
@@ -59,61 +59,63 @@ class FastRows:
 
 
 def _kalman_states(raw: Demonstrations, scale: np.ndarray, mean: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Per trial the standardised Kalman position and velocity (T_i, d_o), as the front end's."""
+    """Per trial the standardised Kalman position and velocity (T_i, d_o), as the front end's
+    (all trials in one batch of independent channels, padded with NaN past a trial's end)."""
     trials = raw.trials
     d, n, T = raw.obs_dim, len(trials), max(len(tr) for tr in trials)
-    kf = fork_kalman(np.tile(scale, n), raw.rate_hz)
     Z = np.full((T, n * d), np.nan)
     for k, tr in enumerate(trials):
         Z[:len(tr), k * d:(k + 1) * d] = tr.obs
-    X, V = np.empty((T, n * d)), np.empty((T, n * d))
-    dt = 1.0 / float(raw.rate_hz)
-    for i in range(T):
-        kf.step(i * dt, Z[i])
-        X[i], V[i] = kf.x, kf.v
-    out = []
-    for k, tr in enumerate(trials):
-        cols = slice(k * d, (k + 1) * d)
-        out.append(kalman_inputs(X[:len(tr), cols], V[:len(tr), cols], mean, scale))
-    return out
+    X, V = kalman_batch(fork_kalman(np.tile(scale, n), raw.rate_hz), Z)
+    return [kalman_inputs(X[:len(tr), k * d:(k + 1) * d], V[:len(tr), k * d:(k + 1) * d], mean, scale)
+            for k, tr in enumerate(trials)]
 
 
 def trial_designs(raw: Demonstrations, sequences: list[np.ndarray], posteriors: list[np.ndarray],
-                  predictor: ReactivePredictor, pre, tip: list[int], model_hz: float, lags: tuple[int, ...]
+                  predictor: ReactivePredictor, pre, tip: list[int], model_hz: float, lags: tuple[int, ...],
+                  rows: Callable[[int], np.ndarray] | None = None
                   ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Per raw trial (φ (T, p), interpolated slow forecast (T, H+1, 3), tick posterior (T, K)), every
-    raw step: what the controller's fast path sees online. ``sequences``/``posteriors``: the
-    trials' model-rate LSTM inputs concat(o, p) and causal mode posteriors."""
+    """Per raw trial (φ (n, p), interpolated slow forecast (n, H+1, 3), tick posterior (n, K)) at the
+    steps ``rows(T)`` (None: every raw step): what the controller's fast path sees online.
+    ``sequences``/``posteriors``: the trials' model-rate LSTM inputs concat(o, p) and causal mode
+    posteriors."""
     f = decimation_factor(raw.rate_hz, model_hz)
     states = _kalman_states(raw, np.asarray(pre.obs.scale_, dtype=float), np.asarray(pre.obs.mean_, dtype=float))
     for tr, seq, p, (P, V) in zip(raw.trials, sequences, posteriors, states):
         F = predictor.forecast(seq)[:, :, tip]  # (T10, H+1, 3) standardised
-        i = np.arange(len(tr))
+        i = np.arange(len(tr)) if rows is None else rows(len(tr))
         tick, frac = i // f, (i % f) / f
         slow = interpolate_slow(F[tick], frac)
-        yield fast_design(P, V, p[tick], slow, lags), slow, p[tick]
+        full = np.zeros((len(tr), *slow.shape[1:]))
+        full[i] = slow  # fast_design reads the steps i only
+        yield fast_design(P, V, p[np.arange(len(tr)) // f], full, lags, i), slow, p[tick]
 
 
 def fast_rows(raw: Demonstrations, side: SplitData, predictor: ReactivePredictor, pre, tip: list[int],
               model_hz: float, lags: tuple[int, ...]) -> FastRows:
-    """The fast path's rows of one side (module docstring): every raw step from the first full
-    window on whose horizon lies inside its trial."""
+    """The fast path's rows of one side (module docstring): every ``stride``-th raw step (half a
+    model step: consecutive steps are nearly the same row) from the first full window on, whose
+    horizon lies inside its trial."""
     f = decimation_factor(raw.rate_hz, model_hz)
+    stride = f // 2 if f % 2 == 0 else 1
+    n_h = int(predictor.horizons) + 1
+    warm = side.windows.lags * f
+
+    def steps(T: int) -> np.ndarray:
+        return np.arange(warm, T - (n_h - 1) * f, stride)
+
     act_mean, act_scale = np.asarray(pre.act.mean_), np.asarray(pre.act.scale_)
     post = np.split(side.posterior, np.cumsum(side.lengths)[:-1])
     parts: dict[str, list[np.ndarray]] = {k: [] for k in ("phi", "slow", "truth", "mode", "trial", "prev")}
     offset = 0
-    warm = side.windows.lags * f
-    designs = trial_designs(raw, side.sequences(), post, predictor, pre, tip, model_hz, lags)
+    designs = trial_designs(raw, side.sequences(), post, predictor, pre, tip, model_hz, lags, steps)
     for tr, (phi, slow, p) in zip(raw.trials, designs):
-        T, n_h = len(tr), slow.shape[1]
-        i = np.arange(T)
         Y = (tr.act[:, tip] - act_mean[tip]) / act_scale[tip]
-        rows = i[(i >= warm) & (i + (n_h - 1) * f < T)]
-        parts["phi"].append(phi[rows])
-        parts["slow"].append(slow[rows])
+        rows = steps(len(tr))
+        parts["phi"].append(phi)
+        parts["slow"].append(slow)
         parts["truth"].append(Y[rows[:, None] + f * np.arange(n_h)[None, :]])
-        parts["mode"].append(np.argmax(p[rows], axis=1))
+        parts["mode"].append(np.argmax(p, axis=1))
         parts["trial"].append(np.full(rows.size, tr.trial_id))
         prev = np.searchsorted(rows, rows - f)
         ok = (rows - f >= rows[0]) & (prev < rows.size)
