@@ -38,7 +38,8 @@ def skill_lines(fast: dict[str, Any] | None, mode_names: dict[str, str] | None =
     out = ["Held-out RMSE of the knife tip per horizon and the forecast's skill (1 − RMSE / RMSE of the "
            "baseline; above 0: better than the baseline):", "",
            f"| horizon [s] | forecast [{unit}] | 10 Hz LSTM [{unit}] | hold [{unit}] | constant velocity [{unit}] "
-           "| skill vs hold | skill vs constant velocity | 10 Hz LSTM skill vs hold |", "|---|---|---|---|---|---|---|---|"]
+           "| skill vs hold | skill vs constant velocity | 10 Hz LSTM skill vs hold |",
+           "|---|---|---|---|---|---|---|---|"]
     for k, h in enumerate(hs):
         out.append(f"| {h:g} | {_f(r['forecast'][k], mm)} | {_f(r['slow_lstm'][k], mm)} | {_f(r['hold'][k], mm)} | "
                    f"{_f(r['constant_velocity'][k], mm)} | {_skill(s['vs_hold'][k])} | "

@@ -132,5 +132,5 @@ class TrainConfig:
         return int(round(self.forecast_s * self.model_hz))
 
     def to_dict(self) -> dict[str, Any]:
-        """The settings as a JSON-able dict (field name → value)."""
-        return asdict(self)
+        """The settings as a JSON-able dict (field name → value; tuples as lists, as JSON reads them back)."""
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}

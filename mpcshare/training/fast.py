@@ -27,8 +27,8 @@ from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 import numpy as np
 
-from learning.preprocessing.resample import decimation_factor
 from learning.predictor.fast import FastForecaster, fast_design, interpolate_slow
+from learning.preprocessing.resample import decimation_factor
 from mpcshare.control.frontend import fork_kalman, kalman_batch, kalman_inputs
 from mpcshare.training.data import SplitData, TrainingData
 

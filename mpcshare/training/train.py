@@ -115,8 +115,8 @@ def train_bundles(demos: Demonstrations, config: TrainConfig | None = None,
     ps = [float(p) for p in (percentiles if percentiles is not None else [config.percentile])]
     check_training_data(demos, config)
     tags = [f" p{p:g}" if len(ps) > 1 else "" for p in ps]  # one percentile: the stages of train_bundle
-    names = ["preprocess", "modes", "quotients"] + [stage + tag for tag in tags
-                                                    for stage in ("gates", "predictor", "fast", "baselines", "evaluation")]
+    per_k = ("gates", "predictor", "fast", "baselines", "evaluation")
+    names = ["preprocess", "modes", "quotients"] + [stage + tag for tag in tags for stage in per_k]
     stages = Stages(names, progress)
     t0 = time.perf_counter()
     try:
