@@ -19,6 +19,10 @@ Per control step (one raw sample of the fork, ``rate_hz``):
    model-rate sample; novelty = −log p(o_t | o_<t) (``inf`` when the sample is
    impossible under every mode).
 
+The Kalman state itself (``FrontEndOutput.fork_position``, ``fork_velocity``: no anti-aliasing
+filter, no 10 Hz hold) is the input of the control-rate forecast (:mod:`mpcshare.control.fastpath`);
+:func:`kalman_batch` runs the same filter over a recorded trial for training.
+
 A recorded trial streamed sample by sample gives the offline windows,
 posteriors and novelty scores (tests/mpcshare/control/test_frontend.py, 1e-9).
 """
