@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from learning.predictor.fast import FastInputStream, interpolate_slow
 from learning.preprocessing.resample import decimation_factor
 from mpcshare.control.frontend import kalman_inputs
 
@@ -37,6 +36,11 @@ class FastPath:
     """
 
     def __init__(self, bundle: ModelBundle, layout: BundleLayout) -> None:
+        # here, not at the top: importing learning.predictor pulls in torch, which the controller's
+        # module must not need (a bundle with a fast forecaster has loaded it already)
+        from learning.predictor.fast import VELOCITY_SCALE_S, FastInputStream, interpolate_slow
+
+        self._interpolate, self._tau_v = interpolate_slow, VELOCITY_SCALE_S
         fast = bundle.fast
         H1 = int(getattr(bundle.predictor, "horizons", 0)) + 1
         lags = tuple(int(v) for v in fast.lags)
@@ -80,11 +84,11 @@ class FastPath:
         """
         if not ticked:
             self._since_tick += 1
-        P, V = kalman_inputs(fork_position, fork_velocity, self._obs_mean, self._obs_scale)
+        P, V = kalman_inputs(fork_position, fork_velocity, self._obs_mean, self._obs_scale, self._tau_v)
         if self._slow is None:
             self.inputs.step(P, V, mode_proba, np.zeros((self.model.n_horizons_, 3)))  # keep the lag history
             return None
-        slow = interpolate_slow(self._slow[None], np.array([self._since_tick / self.factor]))[0]
+        slow = self._interpolate(self._slow[None], np.array([self._since_tick / self.factor]))[0]
         phi = self.inputs.step(P, V, mode_proba, slow)
         return self.model.predict_one(phi, slow) * self._scale + self._mean
 

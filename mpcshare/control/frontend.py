@@ -193,12 +193,11 @@ def kalman_batch(kf: ForkKalman, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return X, V
 
 
-def kalman_inputs(x: np.ndarray, v: np.ndarray, mean: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The fast forecast's inputs from the Kalman state: ((x − μ)/s, ẋ·τ_v/s), τ_v =
+def kalman_inputs(x: np.ndarray, v: np.ndarray, mean: np.ndarray, scale: np.ndarray,
+                  tau_v: float) -> tuple[np.ndarray, np.ndarray]:
+    """The fast forecast's inputs from the Kalman state: ((x − μ)/s, ẋ·τ_v/s), τ_v [s] =
     ``learning.predictor.fast.VELOCITY_SCALE_S`` (position and velocity on one unit scale)."""
-    from learning.predictor.fast import VELOCITY_SCALE_S
-
-    return (x - mean) / scale, v * (VELOCITY_SCALE_S / scale)
+    return (x - mean) / scale, v * (tau_v / scale)
 
 
 @dataclass

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 import numpy as np
 
-from learning.predictor.fast import FastForecaster, fast_design, interpolate_slow
+from learning.predictor.fast import VELOCITY_SCALE_S, FastForecaster, fast_design, interpolate_slow
 from learning.preprocessing.resample import decimation_factor
 from mpcshare.control.frontend import fork_kalman, kalman_batch, kalman_inputs
 from mpcshare.training.data import SplitData, TrainingData
@@ -67,7 +67,8 @@ def _kalman_states(raw: Demonstrations, scale: np.ndarray, mean: np.ndarray) -> 
     for k, tr in enumerate(trials):
         Z[:len(tr), k * d:(k + 1) * d] = tr.obs
     X, V = kalman_batch(fork_kalman(np.tile(scale, n), raw.rate_hz), Z)
-    return [kalman_inputs(X[:len(tr), k * d:(k + 1) * d], V[:len(tr), k * d:(k + 1) * d], mean, scale)
+    return [kalman_inputs(X[:len(tr), k * d:(k + 1) * d], V[:len(tr), k * d:(k + 1) * d], mean, scale,
+                          VELOCITY_SCALE_S)
             for k, tr in enumerate(trials)]
 
 
