@@ -9,7 +9,9 @@ comparable figures):
 * ``step_no_mpc``: the whole step without MPC; targets median ≤ 1 ms, p99 ≤ 3 ms;
 * ``step_mpc``: the whole step with ``robot.mpc.tip_mpc.TipMPC`` (when it can be imported);
   target p99 ≤ 5 ms; ``step_mpc_every_2``: the MPC solved every 2nd step
-  (``ControllerConfig.mpc_every``), the QP following its plan in between.
+  (``ControllerConfig.mpc_every``), the QP following its plan in between;
+* ``*_10hz_path``: the same steps with the control-rate forecast off (``ControllerConfig(fast_forecast=False)``:
+  the 10 Hz forecast alone, the path before it), and ``ratio_p99_to_10hz_path`` on the steps with it.
 
 Per-stage medians and p99 (``ControlCommand.timings``, wall clock) and the statuses seen are
 reported too, with the load average of the machine before and after, and the step's
@@ -100,10 +102,13 @@ def main() -> None:
     demos = generate_demonstrations(n_subjects=1, minutes=2.5, seed=0, config=GeneratorConfig(trial_minutes=0.5))
     bundle = args.bundle or small_bundle(demos.select(demos.trial_ids[:3]))
     trials = demos.trials[3:]
-    variants = {"step_no_mpc": SharedController.from_bundle(bundle, use_mpc=False)}
+    slow = ControllerConfig(fast_forecast=False)
+    variants = {"step_no_mpc": SharedController.from_bundle(bundle, use_mpc=False),
+                "step_no_mpc_10hz_path": SharedController.from_bundle(bundle, use_mpc=False, config=slow)}
     mpc_error = None
     try:
         variants["step_mpc"] = SharedController.from_bundle(bundle, use_mpc=True)
+        variants["step_mpc_10hz_path"] = SharedController.from_bundle(bundle, use_mpc=True, config=slow)
         variants["step_mpc_every_2"] = SharedController.from_bundle(
             bundle, use_mpc=True, config=ControllerConfig(mpc_every=2))
     except (RuntimeError, ImportError) as exc:
@@ -125,6 +130,7 @@ def main() -> None:
     results = {k: _stats(v) for k, v in samples.items()}
     base = results["baseline_qp_step"]["p50_us"]
     targets = {"step_no_mpc": (1000.0, 3000.0), "step_mpc": (None, 5000.0), "step_mpc_every_2": (None, 5000.0)}
+    targets.update({f"{k}_10hz_path": v for k, v in targets.items()})
     for name in variants:
         r = results[name]
         r["ratio_p50_to_qp"] = round(r["p50_us"] / base, 2)
@@ -134,6 +140,10 @@ def main() -> None:
         p50_t, p99_t = targets[name]
         r["target_p50_us"], r["target_p99_us"] = p50_t, p99_t
         r["meets_target"] = (p50_t is None or r["p50_us"] <= p50_t) and r["p99_us"] <= p99_t
+        r["control_rate_forecast"] = variants[name].fast is not None
+        if f"{name}_10hz_path" in variants:
+            r["ratio_p99_to_10hz_path"] = round(r["p99_us"] / results[f"{name}_10hz_path"]["p99_us"], 2)
+            r["ratio_p50_to_10hz_path"] = round(r["p50_us"] / results[f"{name}_10hz_path"]["p50_us"], 2)
     out = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
            "python": platform.python_version(), "load_avg_before": [round(x, 2) for x in load_before],
            "load_avg_after": [round(x, 2) for x in os.getloadavg()],

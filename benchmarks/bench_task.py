@@ -14,7 +14,13 @@ Prints one JSON object:
 * ``latency_budget``: per stage, the time shift (s) that minimises the RMS between that stage's
   signal and the signal it follows (:func:`sim.task_metrics.time_lag`), measured in the closed
   loop on the first held-out trial under ``reactive`` (the robot's path) and ``voluntary``
-  (the wearer's path). Cumulative shifts against the intent are in ``cumulative_s``.
+  (the wearer's path). Cumulative shifts against the intent are in ``cumulative_s``. The input
+  side has two paths: the Kalman state of the fork (the control-rate forecast's input, every
+  step) and the anti-aliasing filter with its 10 Hz hold (the LSTM's, the modes' and the gates'
+  input); ``path`` says which forecast the controller ran (``control_rate`` or ``10_hz``);
+* ``forecast_skill``: the control-rate forecast's held-out RMSE and skill against the hold and
+  constant velocity, per horizon and per mode (``metrics.json`` → ``fast_forecast``);
+* ``training_s``: the training time when the bundle is trained here.
 
 The bundle: ``--bundle DIR --data NPZ`` (a trained bundle and its data), else one is trained
 here with the default settings (``TrainConfig()``) on generated data (about 1–2 min).
@@ -74,11 +80,12 @@ def latency_budget(bundle, demos: Demonstrations, trial_id: int, duration_s: flo
     """Stage shifts in the closed loop (module docstring)."""
     trial = next(t for t in demos.trials if t.trial_id == trial_id)
     ctl = SharedController.from_bundle(bundle, strategy=strategy)
-    logs: dict[str, list] = {"predicted": [], "smoothed": [], "qp": []}
+    logs: dict[str, list] = {"predicted": [], "smoothed": [], "qp": [], "kalman": []}
     step = ctl.step
 
     def logged(*args, **kw):
         cmd = step(*args, **kw)
+        logs["kalman"].append(ctl.frontend.kalman.position)
         logs["predicted"].append(cmd.predicted_tip.copy())
         logs["smoothed"].append(ctl._to_plate(ctl.smoother.state()[0]))  # noqa: SLF001 (benchmark probe)
         logs["qp"].append(ctl._to_plate(ctl.tip.position(cmd.q_cmd)))  # noqa: SLF001
@@ -89,7 +96,9 @@ def latency_budget(bundle, demos: Demonstrations, trial_id: int, duration_s: flo
                      act_names=list(demos.act_names))
     dt = float(np.median(np.diff(ep.t)))
     n = len(ep.t)
-    fork = trial.obs[:n, [list(demos.obs_names).index(c) for c in ("fork_x", "fork_y", "fork_z")]]
+    fork_cols = [list(demos.obs_names).index(c) for c in ("fork_x", "fork_y", "fork_z")]
+    fork = trial.obs[:n, fork_cols]
+    kalman = np.array(logs["kalman"])[:, fork_cols]
     sos = lowpass_sos(demos.rate_hz, bundle.model_hz)
     filtered = signal.sosfilt(sos, fork - fork[0], axis=0) + fork[0] if len(sos) else fork
     f = decimation_factor(demos.rate_hz, bundle.model_hz)
@@ -98,13 +107,15 @@ def latency_budget(bundle, demos: Demonstrations, trial_id: int, duration_s: flo
                "smoother": np.array(logs["smoothed"]), "QP (commanded tip)": np.array(logs["qp"]),
                "servo and physics (measured tip)": ep.tip}
     cumulative = {k: time_lag(v, ep.tip_intent, dt)[0] for k, v in signals.items()}
-    out = {"filtering (fork, anti-aliasing)": time_lag(filtered, fork, dt)[0],
-           "model rate (10 Hz hold)": time_lag(held, filtered, dt)[0]}
+    out = {"filtering (fork, Kalman state: control-rate path)": time_lag(kalman, fork, dt)[0],
+           "filtering (fork, anti-aliasing: 10 Hz path)": time_lag(filtered, fork, dt)[0],
+           "model rate (10 Hz hold: 10 Hz path)": time_lag(held, filtered, dt)[0]}
     prev = 0.0
     for k, v in cumulative.items():
         out[k] = v - prev
         prev = v
-    return {"strategy": strategy, "trial": int(trial_id), "stage_s": out, "cumulative_s": cumulative}
+    return {"strategy": strategy, "trial": int(trial_id), "path": "control_rate" if ctl.fast else "10_hz",
+            "stage_s": out, "cumulative_s": cumulative}
 
 
 def targets(runs: dict) -> dict:
@@ -115,8 +126,11 @@ def targets(runs: dict) -> dict:
     def add(name, value, ok):
         out[name] = {"value": value, "met": bool(ok) if value is not None else None}
 
-    add("lag_reactive_s<=0.05", r.get("lag_s"), (r.get("lag_s") or 1) <= 0.05)
-    add("lag_gate_s<=0.05", g.get("lag_s"), (g.get("lag_s") or 1) <= 0.05)
+    def within(x, bound):  # a lag of 0.0 is on time (not a missing figure)
+        return x is not None and x <= bound
+
+    add("lag_reactive_s<=0.05", r.get("lag_s"), within(r.get("lag_s"), 0.05))
+    add("lag_gate_s<=0.05", g.get("lag_s"), within(g.get("lag_s"), 0.05))
     add("reactive_rms_vs_before<=0.5", r["tracking_rmse_m"] / BEFORE["reactive_rms_m"],
         r["tracking_rmse_m"] / BEFORE["reactive_rms_m"] <= 0.5)
     if o:
@@ -153,9 +167,11 @@ def main(argv: list[str] | None = None) -> int:
     a = p.parse_args(argv)
     t0 = time.perf_counter()
     bundle, demos = bundle_and_data(a.bundle, a.data, a.data_kind)
+    training_s = None if a.bundle else time.perf_counter() - t0
     trials = list(bundle.heldout_trials[:a.trials])
     result: dict = {"data": a.data_kind if not a.bundle else a.data, "trials": trials, "duration_s": a.duration,
-                    "forecast_rmse": bundle.metrics.get("forecast"), "runs": {}, "targets": {}}
+                    "training_s": training_s, "forecast_rmse": bundle.metrics.get("forecast"),
+                    "forecast_skill": bundle.metrics.get("fast_forecast"), "runs": {}, "targets": {}}
     runs = [r for r in DEFAULT_RUNS if r.name in ("voluntary", "reactive", "gate", "gate_mpc", "oracle_preview",
                                                   "random_handover", "oracle_handover")]
     for preset in a.presets:

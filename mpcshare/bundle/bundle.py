@@ -12,6 +12,9 @@ A bundle (format version :data:`FORMAT_VERSION`) is a folder holding
   as exact JSON numbers (no pickle);
 - ``predictor.pt`` — the reactive predictor's torch state dict, read back with
   ``torch.load(weights_only=True)``; its constructor settings are in ``bundle.json``;
+- ``fast.json`` (format 2) — the control-rate forecast (:class:`learning.predictor.fast.FastForecaster`,
+  its coefficients as exact JSON numbers; ``{"model": null}`` when it was not trained);
+  a version-1 bundle (without it) still loads, and the controller runs its 10 Hz forecast alone;
 - ``modes.joblib``, ``gates.joblib`` — the fitted :class:`~learning.modes.TaskModes`
   and :class:`~learning.gates.gate.ModeGates` (scikit-learn / hmmlearn objects, joblib).
   joblib files are pickles: load bundles you made or trust, like any scikit-learn model.
@@ -54,12 +57,16 @@ if TYPE_CHECKING:  # pragma: no cover - imported lazily (torch and sklearn are s
 __all__ = ["FORMAT_VERSION", "BUNDLE_FILES", "ModelBundle", "BundleError", "save_bundle",
            "load_bundle", "check_bundle_target", "is_bundle"]
 
-#: Version of the folder layout written by :func:`save_bundle`; other versions are refused.
-FORMAT_VERSION = 1
+#: Version of the folder layout written by :func:`save_bundle`; :data:`READ_VERSIONS` are read.
+FORMAT_VERSION = 2
+#: versions :func:`load_bundle` reads (1: before the control-rate forecast, loaded without it)
+READ_VERSIONS = (1, 2)
 MANIFEST = "manifest.json"
 #: Files of a version-1 bundle besides the manifest.
-BUNDLE_FILES: tuple[str, ...] = ("bundle.json", "metrics.json", "preprocessor.json", "predictor.pt",
-                                 "modes.joblib", "gates.joblib")
+BUNDLE_FILES_V1: tuple[str, ...] = ("bundle.json", "metrics.json", "preprocessor.json", "predictor.pt",
+                                    "modes.joblib", "gates.joblib")
+#: Files of a bundle of the current version besides the manifest.
+BUNDLE_FILES: tuple[str, ...] = (*BUNDLE_FILES_V1, "fast.json")
 
 
 class BundleError(MpcshareError, ValueError):
@@ -87,6 +94,7 @@ class ModelBundle:
         train_trials, heldout_trials: trial ids of each side.
         metrics: JSON-able training and held-out metrics.
         config: JSON-able training configuration.
+        fast: the control-rate forecast (``learning.predictor.fast.FastForecaster``) or None.
     """
 
     obs_names: tuple[str, ...]
@@ -106,6 +114,7 @@ class ModelBundle:
     heldout_trials: list[int]
     metrics: dict[str, Any] = field(default_factory=dict)
     config: dict[str, Any] = field(default_factory=dict)
+    fast: Any = None
     format_version: int = FORMAT_VERSION
 
     def __post_init__(self) -> None:
@@ -184,6 +193,7 @@ def _write_files(bundle: ModelBundle, tmp: Path) -> None:
     torch.save(bundle.predictor.state_dict(), tmp / "predictor.pt")
     joblib.dump(bundle.modes, tmp / "modes.joblib")
     joblib.dump(bundle.gates, tmp / "gates.joblib")
+    write_json({"model": None if bundle.fast is None else bundle.fast.to_json()}, tmp / "fast.json")
     files = {}
     for name in BUNDLE_FILES:
         path = tmp / name
@@ -242,24 +252,27 @@ def _read_json(path: Path) -> Any:
 
 
 def _check_version(path: Path, version: Any) -> None:
-    if version != FORMAT_VERSION:
-        raise BundleError(path, f"bundle format version {version!r}; this mpcshare reads version "
-                                f"{FORMAT_VERSION} only (retrain with `mpcshare train`)")
+    if version not in READ_VERSIONS:
+        raise BundleError(path, f"bundle format version {version!r}; this mpcshare reads versions "
+                                f"{list(READ_VERSIONS)} (retrain with `mpcshare train`)")
 
 
-def _verify_manifest(root: Path) -> None:
+def _verify_manifest(root: Path) -> int:
+    """Check the manifest and every file it must list; return the format version."""
     mpath = root / MANIFEST
     if not mpath.is_file():
         raise BundleError(mpath, "missing: not a model bundle (or an incomplete one)")
     manifest = _read_json(mpath)
     if not isinstance(manifest, dict) or "files" not in manifest or "format_version" not in manifest:
         raise BundleError(mpath, "not a bundle manifest (keys 'format_version' and 'files' expected)")
-    _check_version(mpath, manifest["format_version"])
+    version = manifest["format_version"]
+    _check_version(mpath, version)
     files = manifest["files"]
-    missing_entries = [n for n in BUNDLE_FILES if n not in files]
+    names = BUNDLE_FILES_V1 if version == 1 else BUNDLE_FILES
+    missing_entries = [n for n in names if n not in files]
     if missing_entries:
         raise BundleError(mpath, f"does not list {missing_entries[0]}")
-    for name in BUNDLE_FILES:
+    for name in names:
         path = root / name
         if not path.is_file():
             raise BundleError(path, "missing from the bundle")
@@ -269,6 +282,25 @@ def _verify_manifest(root: Path) -> None:
                                     "truncated or replaced")
         if file_sha256(path) != want.get("sha256"):
             raise BundleError(path, "checksum differs from the manifest: the file is corrupt or was edited")
+    return int(version)
+
+
+def _load_fast(root: Path, version: int) -> Any:
+    """The fast forecaster of ``fast.json`` (None in a version-1 bundle or when not trained)."""
+    from learning.predictor.fast import FastForecaster
+
+    if version == 1:
+        return None
+    path = root / "fast.json"
+    d = _read_json(path)
+    if not isinstance(d, dict) or "model" not in d:
+        raise BundleError(path, "expected a JSON object with key 'model'")
+    if d["model"] is None:
+        return None
+    try:
+        return FastForecaster.from_json(d["model"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise BundleError(path, f"not a valid fast forecaster ({exc!r})") from None
 
 
 def _check_names(path: Path, kind: str, have: Sequence[str], expect: Sequence[str] | None) -> None:
@@ -315,12 +347,13 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
         raise BundleError(root, "no such bundle folder")
     if not root.is_dir():
         raise BundleError(root, "is not a folder (a bundle is a folder with manifest.json)")
-    _verify_manifest(root)
+    version = _verify_manifest(root)
     info_path = root / "bundle.json"
     info = _read_json(info_path)
     if not isinstance(info, dict):
         raise BundleError(info_path, "expected a JSON object")
-    _check_version(info_path, info.get("format_version"))
+    if info.get("format_version") != version:
+        raise BundleError(info_path, f"format version {info.get('format_version')!r}, the manifest says {version}")
     _check_names(info_path, "obs", info.get("obs_names", []), expect_obs_names)
     _check_names(info_path, "act", info.get("act_names", []), expect_act_names)
     metrics = _read_json(root / "metrics.json")
@@ -356,7 +389,7 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
             novelty_threshold=float(info["novelty_threshold"]),
             train_trials=[int(i) for i in info["train_trials"]],
             heldout_trials=[int(i) for i in info["heldout_trials"]],
-            metrics=metrics, config=dict(info.get("config", {})),
+            metrics=metrics, config=dict(info.get("config", {})), fast=_load_fast(root, version),
             format_version=int(info["format_version"]))
     except (KeyError, TypeError, ValueError) as exc:
         raise BundleError(info_path, f"missing or invalid field ({exc!r})") from None

@@ -155,14 +155,16 @@ def _run(args: argparse.Namespace) -> int:
         save_bundle(bundle, out)
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
+    from mpcshare.reports.training import write_training_md
+
+    md = write_training_md(bundle.metrics, Path(out) / "training.md")
     print_metrics(bundle.metrics)
     if choice is not None:
         from mpcshare.training.rule_choice import rule_markdown
 
-        (out / "training.md").write_text(rule_markdown(choice))
-        print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']}); "
-              f"{out / 'training.md'}")
-    print(f"bundle: {out}")
+        write_training_md(bundle.metrics, md, extra=rule_markdown(choice))
+        print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']})")
+    print(f"bundle: {out} (summary: {md})")
     return 0
 
 

@@ -7,7 +7,9 @@ Per :meth:`SharedController.step`:
    probable mode (``gates.proba_one``) and the streaming reactive predictor
    (``predictor.make_stream().step(concat(o_t, p_t))``), whose forecast of the tip over
    its horizon becomes a continuous trajectory p̂(·) (:class:`~mpcshare.control.forecast.ForecastTrack`:
-   a spline, cross-faded between ticks; held when the predictor has no forecast);
+   a spline, cross-faded between ticks; held when the predictor has no forecast); with the
+   bundle's control-rate forecast (:mod:`mpcshare.control.fastpath`), the trajectory is
+   re-made every step from the fork's Kalman state, the mode posterior and the LSTM's forecast;
 2. arbitration (:mod:`mpcshare.control.arbitration`, the strategy of :mod:`mpcshare.control.strategies`
    given the gate probability, the mode posterior, û_r and û_v): α, β; û = α·û_r + β·û_v [m/s] with the
    reactive term aimed ``forecast_lead_s`` ahead to cancel the latency after the
@@ -19,7 +21,9 @@ Per :meth:`SharedController.step`:
    body zones as constraints over its horizon, moving with the hand's forecast) over its horizon on the preview
    r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (the robot's share from the forecast,
    the wearer's extrapolated; ``mpc_preview=False``: the smoothed reference p_s extrapolated at
-   its velocity), solved every ``mpc_every`` steps and followed in between
+   its velocity; with the control-rate forecast, the forecast is read only up to the horizons
+   where its skill against the hold is above 0 in the current mode, held beyond), solved every
+   ``mpc_every`` steps and followed in between
    (:class:`~mpcshare.control.mpc_follow.MPCFollower`); its planned tip at t + dt (position,
    central-difference velocity and acceleration) is the reference of
 5. ``robot.qp.QPController``, which enforces joint position, velocity, acceleration and
@@ -67,6 +71,7 @@ from typing import TYPE_CHECKING, Callable
 import numpy as np
 
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
+from mpcshare.control.fastpath import FastPath
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
 from mpcshare.control.keepout import make_keepout_mpc, make_keepout_qp
@@ -139,6 +144,9 @@ class SharedController:
         if preview is not None and not callable(getattr(preview, "sample", None)):
             raise ControllerTypeError(f"preview must be a TipTrajectory (sample(times)), got {type(preview).__name__}")
         self.oracle = preview is not None
+        self.fast = FastPath(bundle, self.layout) if cfg.fast_forecast and getattr(bundle, "fast", None) \
+            is not None and not self.oracle else None
+        self.lead_s = cfg.fast_lead_s if self.fast is not None else cfg.forecast_lead_s
         self.forecast: TipTrajectory = preview if preview is not None else \
             ForecastTrack(1.0 / float(bundle.model_hz), cfg.forecast_fade_s)
         self.reset()
@@ -184,6 +192,9 @@ class SharedController:
                                           self.config.max_jerk)
         self._stream = self.bundle.predictor.make_stream()
         self.forecast.reset()
+        if self.fast is not None:
+            self.fast.reset()
+        self._t_now = math.nan
         self._acc_ff = np.zeros(3)  # α·p̈̂ (plate frame), the smoother's target acceleration
         self._preview = (0.0, 0.0, np.zeros(3), math.nan)  # α, β, û_v (plate), the aimed time t + τ
         K = self.layout.n_modes
@@ -284,6 +295,10 @@ class SharedController:
         if fe.tick is not None:
             self._models_tick(t, fe.tick, faults)
         timings["models"] = time.perf_counter() - ta
+        if self.fast is not None:
+            ta = time.perf_counter()  # 2b. the control-rate forecast
+            self._fast_step(t, fe, faults)
+            timings["fast"] = time.perf_counter() - ta
         ta = time.perf_counter()  # 3. arbitration and the tip reference (plate frame)
         alpha, beta, u, p_model = self._arbitrate(t, dt, q, voluntary, fe, faults)
         timings["arbitration"] = time.perf_counter() - ta
@@ -321,7 +336,8 @@ class SharedController:
         if self._p_ref is None:
             self._p_ref = self._to_plate(self.tip.position(q))
         p_ref = self._p_ref
-        t_aim = t + cfg.forecast_lead_s
+        t_aim = t + self.lead_s
+        self._t_now = t
         p_hat, v_hat, a_hat = self.forecast.at(t_aim) if self.forecast.ready else (np.full(3, np.nan),) * 3
         self._p_pred = p_hat
         pred_ok = _finite(p_hat) and _finite(v_hat) and _finite(a_hat)
@@ -401,10 +417,14 @@ class SharedController:
             f_std = getattr(self._stream, "forecast", None)
             f_std = u_std[None, :] if f_std is None else np.asarray(f_std, dtype=float)
             F = f_std * lay.act_scale + lay.act_mean
-            if not self.oracle:
+            if self.fast is not None:
+                self.fast.on_tick(f_std)
+            elif not self.oracle:
                 self.forecast.update(t, F[:, lay.tip_index])
         except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
-            if not self.oracle:
+            if self.fast is not None:
+                self.fast.on_tick(None)
+            elif not self.oracle:
                 self.forecast.reset()
             faults.append(("internal_error", f"reactive predictor failed: {exc}"))
         if tick.window is None:
@@ -416,13 +436,26 @@ class SharedController:
             self._gate_proba = None
             faults.append(("internal_error", f"gate failed: {exc}"))
 
+    def _fast_step(self, t: float, fe, faults: list[tuple[str, str]]) -> None:
+        """The control-rate forecast of this step becomes the tip trajectory (module docstring, 1)."""
+        try:
+            F = self.fast.step(fe.fork_position, fe.fork_velocity, self._mode_proba, fe.tick is not None)
+            if F is not None:
+                self.forecast.update(t, F)
+        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
+            self.forecast.reset()
+            faults.append(("internal_error", f"control-rate forecast failed: {exc}"))
+
     def _mpc_preview(self, sm, H: int) -> np.ndarray:
         """The MPC's reference (H+1, 3), model frame (module docstring, item 4)."""
         k = np.arange(H + 1)[:, None] * self.dt
         alpha, beta, u_v, t_aim = self._preview
         if not (self.config.mpc_preview and self.forecast.ready and math.isfinite(t_aim)):
             return sm.position[None, :] + k * sm.velocity[None, :]
-        p, _, _ = self.forecast.sample(t_aim + k[:, 0])
+        times = t_aim + k[:, 0]
+        if self.fast is not None:  # the forecast where it has skill, a hold beyond
+            times = np.minimum(times, max(self.fast.preview_until(self._t_now, self._mode_proba), t_aim))
+        p, _, _ = self.forecast.sample(times)
         if not _finite(p):
             return sm.position[None, :] + k * sm.velocity[None, :]
         offset = alpha * (p - p[0]) + beta * k * u_v[None, :]  # plate frame

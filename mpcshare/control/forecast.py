@@ -5,7 +5,8 @@ h = 0 … H (Δ_m = 1/model_hz, :class:`learning.predictor.ReactivePredictor` wi
 ``horizons = H``). :class:`ForecastTrack` turns the latest forecast into a trajectory
 the 100 Hz loop samples anywhere in time:
 
-* a cubic spline through the H + 1 points (scipy's ``CubicSpline``, "natural" ends); past the
+* a cubic spline through the H + 1 points (natural ends, as scipy's ``CubicSpline(bc_type="natural")``,
+  set up directly for the uniform knots: it is re-made every control step with the control-rate forecast); past the
   last point the spline's end velocity is extrapolated (constant velocity), before the
   first the first point is held; with H = 0 (no forecast) the point is held: the
   controller before forecasting;
@@ -20,6 +21,7 @@ wearer's true intent, for the ``oracle_preview`` upper bound; it is not realisab
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -56,6 +58,63 @@ class _Spline:
         if inside.any():
             ti = t[inside]
             p[inside], v[inside], a[inside] = self.cs(ti), self.cs(ti, 1), self.cs(ti, 2)
+        return p, v, a
+
+
+@lru_cache(maxsize=8)
+def _natural_inverse(n: int) -> np.ndarray:
+    """Inverse of the (n−2)×(n−2) tridiagonal [1, 4, 1] matrix of a natural spline on n uniform knots."""
+    m = n - 2
+    A = 4.0 * np.eye(m) + np.eye(m, k=1) + np.eye(m, k=-1)
+    return np.linalg.inv(A)
+
+
+class _UniformSpline(_Spline):
+    """:class:`_Spline` on uniform knots t0 + k·h (the forecast's), without scipy's general set-up.
+
+    Natural cubic spline: second derivatives M with M_0 = M_{n−1} = 0 and
+    M_{k−1} + 4·M_k + M_{k+1} = 6·(y_{k−1} − 2·y_k + y_{k+1})/h² (the inverse is cached per n);
+    on [t_k, t_{k+1}], a = t_{k+1} − t, u = t − t_k:
+    S = (M_k·a³ + M_{k+1}·u³)/(6h) + (y_k/h − M_k·h/6)·a + (y_{k+1}/h − M_{k+1}·h/6)·u.
+    Equal to scipy's ``CubicSpline(..., bc_type="natural")`` (tests/mpcshare/control/test_forecast_track.py).
+    """
+
+    def __init__(self, t0: float, h: float, points: np.ndarray) -> None:
+        n = points.shape[0]
+        self.t0, self.t1, self.h = float(t0), float(t0) + h * (n - 1), float(h)
+        self.first, self.last = points[0].copy(), points[-1].copy()
+        self.cs = None
+        if n < 2:
+            self.M, self.end_velocity = None, np.zeros(points.shape[1])
+            return
+        M = np.zeros_like(points)
+        if n > 2:
+            M[1:-1] = _natural_inverse(n) @ ((points[:-2] - 2.0 * points[1:-1] + points[2:]) * (6.0 / (h * h)))
+        self.M, self.y = M, points
+        self.end_velocity = (points[-1] - points[-2]) / h + M[-2] * (h / 6.0) + M[-1] * (h / 3.0)
+
+    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        t = np.asarray(t, dtype=float)
+        d = self.first.shape[0]
+        p, v, a = np.empty((t.shape[0], d)), np.zeros((t.shape[0], d)), np.zeros((t.shape[0], d))
+        before, after = t <= self.t0, t >= self.t1
+        inside = ~(before | after)
+        p[before] = self.first
+        if self.M is None:
+            p[after] = self.last
+            return p, v, a
+        p[after] = self.last + (t[after] - self.t1)[:, None] * self.end_velocity
+        v[after] = self.end_velocity
+        if inside.any():
+            h, M, y = self.h, self.M, self.y
+            ti = t[inside]
+            k = np.minimum(((ti - self.t0) / h).astype(int), M.shape[0] - 2)
+            u = (ti - (self.t0 + k * h))[:, None]
+            b = h - u
+            c0, c1 = y[k] / h - M[k] * (h / 6.0), y[k + 1] / h - M[k + 1] * (h / 6.0)
+            p[inside] = (M[k] * b ** 3 + M[k + 1] * u ** 3) / (6.0 * h) + c0 * b + c1 * u
+            v[inside] = (M[k + 1] * u ** 2 - M[k] * b ** 2) / (2.0 * h) - c0 + c1
+            a[inside] = (M[k] * b + M[k + 1] * u) / h
         return p, v, a
 
 
@@ -113,9 +172,8 @@ class ForecastTrack(TipTrajectory):
             raise ValueError(f"forecast points must be (H+1, d), got shape {pts.shape}")
         if not np.isfinite(pts).all():
             raise ValueError("forecast points are not finite; track left unchanged")
-        times = float(t_tick) + self.step_s * np.arange(pts.shape[0])
         self._old = self._new
-        self._new = _Spline(times, pts)
+        self._new = _UniformSpline(float(t_tick), self.step_s, pts)
         self._t_tick = float(t_tick)
 
     def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

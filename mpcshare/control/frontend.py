@@ -19,6 +19,10 @@ Per control step (one raw sample of the fork, ``rate_hz``):
    model-rate sample; novelty = −log p(o_t | o_<t) (``inf`` when the sample is
    impossible under every mode).
 
+The Kalman state itself (``FrontEndOutput.fork_position``, ``fork_velocity``: no anti-aliasing
+filter, no 10 Hz hold) is the input of the control-rate forecast (:mod:`mpcshare.control.fastpath`);
+:func:`kalman_batch` runs the same filter over a recorded trial for training.
+
 A recorded trial streamed sample by sample gives the offline windows,
 posteriors and novelty scores (tests/mpcshare/control/test_frontend.py, 1e-9).
 """
@@ -35,7 +39,11 @@ from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import StreamingDecimator
 from mpcshare.errors import ControllerSetupError
 
-__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd"]
+__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd", "fork_kalman", "kalman_batch", "kalman_inputs"]
+
+#: the front end's Kalman noise levels per unit of the obs standardiser's scale s_j:
+#: white acceleration 5·s_j per s², measurement 0.02·s_j
+KALMAN_ACCEL_PER_SCALE, KALMAN_MEAS_PER_SCALE = 5.0, 0.02
 
 
 class ForkKalman:
@@ -141,6 +149,58 @@ class ForkKalman:
         return float(t) - self.last_update_t if self.initialized else float("inf")
 
 
+def fork_kalman(scale: np.ndarray, rate_hz: float) -> ForkKalman:
+    """The front end's Kalman filter for channels of standardiser scale ``scale`` (d,) at ``rate_hz``."""
+    scale = np.asarray(scale, dtype=float)
+    return ForkKalman(scale.size, 1.0 / float(rate_hz), KALMAN_ACCEL_PER_SCALE * scale,
+                      KALMAN_MEAS_PER_SCALE * scale)
+
+
+def kalman_batch(kf: ForkKalman, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`ForkKalman.step` over a whole record Z (T, d) sampled every ``kf.dt``: (positions, velocities).
+
+    For offline use on recorded trials: every sample measured (a NaN row, e.g. padding after
+    a trial's end, turns the rest of that channel into NaN). The same arithmetic as ``step``
+    (its covariance recursion gives the gains; once they reach a fixed point they are reused),
+    so the result equals stepping the filter (tests/mpcshare/control/test_frontend.py).
+    """
+    Z = np.asarray(Z, dtype=float)
+    T, dt, r, q = Z.shape[0], kf.dt, kf.meas_var, kf.accel_var
+    X, V = np.empty_like(Z), np.empty_like(Z)
+    x, v = Z[0].copy(), np.zeros(Z.shape[1])
+    p00, p11 = kf.initial_covariance()
+    p01 = np.zeros_like(p00)
+    X[0], V[0] = x, v
+    k0 = k1 = None
+    fixed = False
+    dt2 = dt * dt
+    for i in range(1, T):
+        if not fixed:
+            p00 = p00 + dt * (2.0 * p01 + dt * p11) + (0.25 * dt2 * dt2) * q
+            p01 = p01 + dt * p11 + (0.5 * dt2 * dt) * q
+            p11 = p11 + dt2 * q
+            s = p00 + r
+            n0, n1 = p00 / s, p01 / s
+            fixed = k0 is not None and bool(np.array_equal(n0, k0) and np.array_equal(n1, k1))
+            k0, k1 = n0, n1
+            a = 1.0 - k0
+            p00, p01, p11 = (a * p00 * a + k0 * r * k0, a * (p01 - p00 * k1) + k0 * r * k1,
+                             k1 * (p00 * k1 - p01) - k1 * p01 + p11 + k1 * r * k1)
+        x = x + dt * v
+        y = Z[i] - x
+        x = x + k0 * y
+        v = v + k1 * y
+        X[i], V[i] = x, v
+    return X, V
+
+
+def kalman_inputs(x: np.ndarray, v: np.ndarray, mean: np.ndarray, scale: np.ndarray,
+                  tau_v: float) -> tuple[np.ndarray, np.ndarray]:
+    """The fast forecast's inputs from the Kalman state: ((x − μ)/s, ẋ·τ_v/s), τ_v [s] =
+    ``learning.predictor.fast.VELOCITY_SCALE_S`` (position and velocity on one unit scale)."""
+    return (x - mean) / scale, v * (tau_v / scale)
+
+
 @dataclass
 class ModelTick:
     """What the front end produces on a model-rate (10 Hz) tick.
@@ -161,7 +221,7 @@ class FrontEndOutput:
     """One raw-rate step of the front end.
 
     feature_sample: (d_o,) what went into the decimator (raw where measured, KF where not);
-    fork_velocity: (d_o,) KF velocity [unit/s]; predicting_for_s: time since the last
+    fork_velocity: (d_o,) KF velocity [unit/s]; fork_position: (d_o,) KF position; predicting_for_s: time since the last
     measurement [s]; missing: (d_o,) bool, channels substituted this step; stale: the whole
     sample repeated the previous one; tick: the model-rate outputs, or None between ticks.
     """
@@ -172,6 +232,7 @@ class FrontEndOutput:
     missing: np.ndarray
     stale: bool
     tick: ModelTick | None
+    fork_position: np.ndarray | None = None
 
 
 class StreamingFrontEnd:
@@ -200,8 +261,9 @@ class StreamingFrontEnd:
         self.decimator = StreamingDecimator(self.rate_hz, self.model_hz, d)
         self.lags = window_lags(self.window_s, self.model_hz)
         self._sqrt_l = math.sqrt(self.lags)
-        self.kalman = ForkKalman(d, 1.0 / self.rate_hz, 5.0 * scale if accel_std is None else accel_std,
-                                 0.02 * scale if meas_std is None else meas_std)
+        self.kalman = fork_kalman(scale, self.rate_hz) if accel_std is None and meas_std is None else \
+            ForkKalman(d, 1.0 / self.rate_hz, KALMAN_ACCEL_PER_SCALE * scale if accel_std is None else accel_std,
+                       KALMAN_MEAS_PER_SCALE * scale if meas_std is None else meas_std)
         self.detect_stale = bool(detect_stale)
         self._mean = np.asarray(obs_standardizer.mean_, dtype=float)
         self._scale = scale
@@ -252,4 +314,5 @@ class StreamingFrontEnd:
                 novelty = float("inf")
             tick = ModelTick(std, window, np.array(proba, dtype=float), float(novelty))
             self.last_tick = tick
-        return FrontEndOutput(feat, self.kalman.velocity, self.kalman.predicting_for(t), missing, stale, tick)
+        return FrontEndOutput(feat, self.kalman.velocity, self.kalman.predicting_for(t), missing, stale, tick,
+                              self.kalman.position)

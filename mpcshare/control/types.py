@@ -77,7 +77,10 @@ class ControllerConfig:
     gate's α ramp between the robot and the wearer (see ``Arbiter``); strategy_options: settings
     of the strategy's rule that override the bundle's choice (``mpcshare.control.strategies.gate``);
     keepout: the wearer's body zones kept out of the knife's way
-    (:class:`~mpcshare.control.keepout.KeepOutSettings`; None: off).
+    (:class:`~mpcshare.control.keepout.KeepOutSettings`; None: off);
+    fast_forecast: use the bundle's control-rate forecast when it has one (else, or False: the
+    10 Hz forecast alone); fast_lead_s [s]: the aim ahead with the control-rate forecast
+    (replaces forecast_lead_s).
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
@@ -114,11 +117,13 @@ class ControllerConfig:
     handover_s: float = 0.5
     strategy_options: dict[str, float] = field(default_factory=dict)
     keepout: KeepOutSettings | None = field(default_factory=KeepOutSettings)
+    fast_forecast: bool = True
+    fast_lead_s: float = 0.03
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:
             raise ControllerSetupError(f"smoother_target {self.smoother_target!r} not in {list(SMOOTHER_TARGETS)}")
-        for name in ("forecast_lead_s", "smoother_lead_s", "handover_s"):
+        for name in ("forecast_lead_s", "smoother_lead_s", "handover_s", "fast_lead_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v <= 1.0):
                 raise ControllerSetupError(f"ControllerConfig.{name} must be in [0, 1] s, got {v!r}")

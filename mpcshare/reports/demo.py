@@ -21,6 +21,7 @@ from mpcshare.reports.comparison import comparison_findings
 from mpcshare.reports.headline import headline_lines
 from mpcshare.reports.html import write_html_report
 from mpcshare.reports.mode_sources import mode_source_sentence
+from mpcshare.reports.training import skill_lines
 
 __all__ = ["demo_headline", "demo_summary", "write_demo_report"]
 
@@ -77,6 +78,13 @@ def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison:
                    f"its error grows from {_num(fc['forecast'][0] * m)} to {_num(fc['forecast'][-1] * m)}{unit}, "
                    f"against {_num(fc['hold'][-1] * m)}{unit} for holding its present estimate and "
                    f"{_num(fc['constant_velocity'][-1] * m)}{unit} for extrapolating it.")
+    ff = training.get("fast_forecast") or {}
+    if ff.get("skill"):
+        sk = ff["skill"]
+        out.append(f"At the control rate (100 Hz, on the fork's Kalman state) the forecast's skill against holding "
+                   f"its present estimate is {_num(sk['vs_hold'][1], 2)} at {ff['horizons_s'][1]:g} s and "
+                   f"{_num(sk['vs_hold'][-1], 2)} at {ff['horizons_s'][-1]:g} s (against constant velocity "
+                   f"{_num(sk['vs_constant_velocity'][1], 2)} and {_num(sk['vs_constant_velocity'][-1], 2)}).")
     if comparison:
         s = comparison["strategies"]
         if "gate" in s:
@@ -142,6 +150,7 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
     consts = t["gates"]["constant_modes"]
     parts += [f"Mode {m}: the gate always says {'robot' if c['value'] else 'wearer'} ({c['reason']})."
               for m, c in consts.items()]
+    parts += ["", "### The forecast at the control rate", "", *skill_lines(training.get("fast_forecast"))]
     if (out / "sweep" / "sweep.md").exists():
         parts += ["", "### The trade-off between accuracy and effort (K sweep)", "",
                   _section((out / "sweep" / "sweep.md").read_text(), "sweep")]

@@ -56,6 +56,10 @@ class TrainConfig:
             (``round(forecast_s·model_hz)`` model steps beyond the current one; 0: the
             current action only): the controller cancels its latency with it and gives it
             to the MPC as its preview (docs/design.md, "Online control").
+        fast_forecast: also fit the control-rate forecast (:mod:`learning.predictor.fast`: a ridge
+            correction of the LSTM's forecast from the fork's Kalman state, run every control step);
+            needs the knife tip channels and ``forecast_s`` > 0.
+        fast_alpha: its ridge penalty; fast_lags: its fork position lags [raw steps].
         seed: seed of everything random.
     """
 
@@ -81,6 +85,9 @@ class TrainConfig:
     device: str = "cpu"
     zero_phase_targets: bool = True
     forecast_s: float = 0.5
+    fast_forecast: bool = True
+    fast_alpha: float = 1.0
+    fast_lags: tuple[int, ...] = (5, 10, 20)
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -110,6 +117,11 @@ class TrainConfig:
             raise ValueError(f"device must be 'cpu', 'cuda' or 'auto', got {self.device!r}")
         if not (math.isfinite(self.forecast_s) and 0.0 <= self.forecast_s <= 5.0):
             raise ValueError(f"forecast_s must be in [0, 5] s, got {self.forecast_s!r}")
+        object.__setattr__(self, "fast_lags", tuple(self.fast_lags))
+        if not all(int(v) == v and v >= 1 for v in self.fast_lags):
+            raise ValueError(f"fast_lags must be integers >= 1 (raw steps), got {self.fast_lags!r}")
+        if not (math.isfinite(self.fast_alpha) and self.fast_alpha >= 0):
+            raise ValueError(f"fast_alpha must be finite and >= 0, got {self.fast_alpha!r}")
         if not self.learning_rate > 0:
             raise ValueError(f"learning_rate must be > 0, got {self.learning_rate!r}")
 
@@ -119,5 +131,5 @@ class TrainConfig:
         return int(round(self.forecast_s * self.model_hz))
 
     def to_dict(self) -> dict[str, Any]:
-        """The settings as a JSON-able dict (field name → value)."""
-        return asdict(self)
+        """The settings as a JSON-able dict (field name → value; tuples as lists, as JSON reads them back)."""
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}

@@ -94,6 +94,8 @@ class TrainingData:
     fit_trials: list[int]
     val_trials: list[int]
     novelty_threshold: float
+    train_raw: Demonstrations | None = None
+    heldout_raw: Demonstrations | None = None
 
     @property
     def train_trials(self) -> list[int]:
@@ -191,7 +193,7 @@ def prepare_training_data(demos: Demonstrations, config: TrainConfig,
                         vol_names=list(demos.vol_names) if demos.has_voluntary else [],
                         preprocessor=pre, modes=hmm, train=train, heldout=held,
                         fit_trials=fit_raw.trial_ids, val_trials=val_raw.trial_ids,
-                        novelty_threshold=novelty)
+                        novelty_threshold=novelty, train_raw=train_raw, heldout_raw=held_raw)
 
 
 def reactive_labels(q: np.ndarray, K: float) -> np.ndarray:

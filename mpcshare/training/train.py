@@ -18,7 +18,10 @@ Steps (all at the model rate ``model_hz``, default 10 Hz):
 5. gates ``ModeGates.fit(windows, modes, Z)``; ``ReactivePredictor.fit`` on each trial's
    sequence ``concat(o_t, p_t)`` with the loss masked to R (the first L−1 samples of a
    trial have no window and so no label: masked out);
-6. held-out evaluation (:mod:`mpcshare.training.evaluation`);
+6. held-out evaluation (:mod:`mpcshare.training.evaluation`); the control-rate forecast
+   (:mod:`mpcshare.training.fast`) fitted on the fit trials from the raw-rate fork's Kalman
+   state and the LSTM's forecasts, its preview skill from the validation trials, its skill
+   table (per mode and horizon, against the hold and constant velocity) on the held-out trials;
 7. ``novelty_threshold`` = the 99.9th percentile of ``−log p(o_t | o_<t)`` per step on
    the training trials (``TaskModes.log_predictive``).
 
@@ -112,8 +115,8 @@ def train_bundles(demos: Demonstrations, config: TrainConfig | None = None,
     ps = [float(p) for p in (percentiles if percentiles is not None else [config.percentile])]
     check_training_data(demos, config)
     tags = [f" p{p:g}" if len(ps) > 1 else "" for p in ps]  # one percentile: the stages of train_bundle
-    names = ["preprocess", "modes", "quotients"] + [stage + tag for tag in tags
-                                                    for stage in ("gates", "predictor", "baselines", "evaluation")]
+    per_k = ("gates", "predictor", "fast", "baselines", "evaluation")
+    names = ["preprocess", "modes", "quotients"] + [stage + tag for tag in tags for stage in per_k]
     stages = Stages(names, progress)
     t0 = time.perf_counter()
     try:
@@ -125,6 +128,17 @@ def train_bundles(demos: Demonstrations, config: TrainConfig | None = None,
     finally:
         stages.close()
     return out
+
+
+def _fit_fast(data: TrainingData, predictor, config: TrainConfig):
+    """(fast forecaster or None, its metrics) (:func:`mpcshare.training.fast.fit_fast`)."""
+    if not config.fast_forecast:
+        return None, {"skipped": "fast_forecast is off in the training settings"}
+    if not config.forecast_steps:
+        return None, {"skipped": "the predictor has no forecast (forecast_s = 0)"}
+    from mpcshare.training.fast import fit_fast
+
+    return fit_fast(data, predictor)
 
 
 def _bundle_at(data: TrainingData, config: TrainConfig, stages: Stages, progress: bool, t0: float,
@@ -139,11 +153,14 @@ def _bundle_at(data: TrainingData, config: TrainConfig, stages: Stages, progress
     stages.done("gates" + tag)
     predictor = fit_predictor(data, Z.astype(bool), progress=progress)
     stages.done("predictor" + tag)
+    fast, fast_metrics = _fit_fast(data, predictor, config)
+    stages.done("fast" + tag)
     baselines = {"ridge": fit_ridge(data)}
     if config.lstm_baseline:
         baselines["lstm_all"] = fit_predictor(data, np.ones(len(Z), dtype=bool), progress=progress)
     stages.done("baselines" + tag)
     metrics = evaluate(data, gates, predictor, K, baselines=baselines)
+    metrics["fast_forecast"] = fast_metrics
     stages.done("evaluation" + tag)
     metrics["training"] = {
         "K": None if math.isinf(K) else float(K), "percentile": float(config.percentile),
@@ -157,6 +174,6 @@ def _bundle_at(data: TrainingData, config: TrainConfig, stages: Stages, progress
         obs_names=tuple(data.obs_names), act_names=tuple(data.act_names), vol_names=tuple(data.vol_names),
         rate_hz=data.rate_hz, model_hz=config.model_hz, window_s=config.window_s,
         preprocessor=data.preprocessor, modes=data.modes, gates=gates, predictor=predictor, K=float(K),
-        percentile=float(config.percentile), novelty_threshold=data.novelty_threshold,
+        percentile=float(config.percentile), novelty_threshold=data.novelty_threshold, fast=fast,
         train_trials=data.train_trials, heldout_trials=data.heldout_trials, metrics=metrics,
         config=config.to_dict())

@@ -135,7 +135,7 @@ def test_other_format_version_is_refused(saved, tmp_path):
     info["format_version"] = FORMAT_VERSION + 1
     (b / "bundle.json").write_text(json.dumps(info))
     _rewrite_manifest(b)
-    with pytest.raises(BundleError, match="format version 2") as e:
+    with pytest.raises(BundleError, match=f"format version {FORMAT_VERSION + 1}") as e:
         load_bundle(b)
     assert str(e.value).startswith(str(b / "bundle.json"))
     m = json.loads((b / "manifest.json").read_text())
@@ -144,6 +144,37 @@ def test_other_format_version_is_refused(saved, tmp_path):
     with pytest.raises(BundleError, match="format version 7") as e:
         load_bundle(b)
     assert str(e.value).startswith(str(b / "manifest.json"))
+
+
+def test_the_fast_forecaster_round_trips(bundle, saved):
+    back = load_bundle(saved)
+    assert bundle.fast is not None and back.fast is not None
+    rng = np.random.default_rng(1)
+    phi = rng.normal(size=(5, bundle.fast.n_features_in_))
+    slow = rng.normal(size=(5, bundle.fast.n_horizons_, 3))
+    np.testing.assert_array_equal(back.fast.predict(phi, slow), bundle.fast.predict(phi, slow))
+    np.testing.assert_array_equal(back.fast.preview_skill_, bundle.fast.preview_skill_)
+    assert back.fast.channels_ == ("knife_x", "knife_y", "knife_z")
+
+
+def test_a_version_1_bundle_still_loads_without_the_fast_forecaster(saved, tmp_path):
+    b = _copy(saved, tmp_path / "b")
+    (b / "fast.json").unlink()
+    info = json.loads((b / "bundle.json").read_text())
+    info["format_version"] = 1
+    (b / "bundle.json").write_text(json.dumps(info))
+    m = json.loads((b / "manifest.json").read_text())
+    m["format_version"] = 1
+    del m["files"]["fast.json"]
+    (b / "manifest.json").write_text(json.dumps(m))
+    _rewrite_manifest(b)
+    old = load_bundle(b)
+    assert old.format_version == 1 and old.fast is None
+    info["format_version"] = 2  # a version-2 bundle.json beside a version-1 manifest: refused
+    (b / "bundle.json").write_text(json.dumps(info))
+    _rewrite_manifest(b)
+    with pytest.raises(BundleError, match="the manifest says 1"):
+        load_bundle(b)
 
 
 def test_channel_mismatch_is_refused(saved, demos):

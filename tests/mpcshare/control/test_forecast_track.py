@@ -67,3 +67,25 @@ def test_known_trajectory_is_the_trajectory():
     np.testing.assert_allclose(v[0], [np.cos(0.5), -np.sin(0.5), 1.0], atol=1e-4)
     with pytest.raises(ValueError, match="shape"):
         KnownTrajectory(pos[:, :2], 0.01)
+
+
+def test_the_uniform_spline_equals_scipys_natural_spline():
+    from scipy.interpolate import CubicSpline
+
+    from mpcshare.control.forecast import _UniformSpline
+
+    rng = np.random.default_rng(2)
+    for n in (2, 3, 6):
+        pts = rng.normal(size=(n, 3))
+        t0, h = 3.7, 0.1
+        times = t0 + h * np.arange(n)
+        ref = CubicSpline(times, pts, axis=0, bc_type="natural")
+        sp = _UniformSpline(t0, h, pts)
+        t = np.linspace(t0 + 1e-9, times[-1] - 1e-9, 57)
+        p, v, a = sp(t)
+        np.testing.assert_allclose(p, ref(t), atol=1e-12)
+        np.testing.assert_allclose(v, ref(t, 1), atol=1e-10)
+        np.testing.assert_allclose(a, ref(t, 2), atol=1e-8)
+        np.testing.assert_allclose(sp.end_velocity, ref(times[-1], 1), atol=1e-10)
+        pa, va, _ = sp(np.array([times[-1] + 0.2]))
+        np.testing.assert_allclose(pa[0], pts[-1] + 0.2 * ref(times[-1], 1), atol=1e-10)

@@ -129,3 +129,18 @@ def test_frontend_without_any_measurement_raises_clearly():
     fe = StreamingFrontEnd(std, modes)
     with pytest.raises(ValueError, match="no fork measurement"):
         fe.step(0.0, np.full(9, np.nan))
+
+
+def test_the_batch_kalman_equals_stepping_the_filter():
+    from mpcshare.control.frontend import fork_kalman, kalman_batch
+
+    rng = np.random.default_rng(4)
+    Z = np.cumsum(rng.normal(size=(400, 6)), axis=0) * 0.01
+    scale = np.array([0.05, 0.05, 0.05, 0.3, 0.3, 2.0])
+    kf = fork_kalman(scale, 100.0)
+    X, V = kalman_batch(kf, Z)
+    ref = fork_kalman(scale, 100.0)
+    for i in range(len(Z)):
+        ref.step(i * 0.01, Z[i])
+        np.testing.assert_allclose(X[i], ref.x, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(V[i], ref.v, rtol=1e-9, atol=1e-12)
