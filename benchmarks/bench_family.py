@@ -16,7 +16,9 @@ end one JSON object: every world, and the distribution over the family's worlds 
 (median, min, max, share ≤ 0.9 and ≤ 0.8 of the line ratios; effort against ``voluntary``).
 
 Worlds run in parallel processes (``--workers``; each single-threaded). Sizes: family worlds
-12 trials × 60 s (``--quick``: 8 × 40 s), 25 % of the trials held out (the default split).
+16 trials × 60 s (``--quick``: 12 × 40 s), 25 % of the trials held out (the default split); the
+gate's rule is chosen in the closed loop on the last held-out trials (as ``mpcshare train``) and
+every run is evaluated on the other held-out trials.
 
 Cost: per world and seed about 17 episodes per held-out trial (the placebo's 5 draws, the
 oracle's up to 4 replays); the full default (13 worlds, 3 whole trials of 60 s, 4 seeds) is hours
@@ -55,7 +57,7 @@ def _data(world: str, quick: bool) -> tuple[Any, tuple[str, ...], dict[str, Any]
     if world.startswith("family:"):
         from sim.world_family import world_demonstrations
 
-        demos, spec = world_demonstrations(int(world.split(":")[1]), n_trials=8 if quick else 12,
+        demos, spec = world_demonstrations(int(world.split(":")[1]), n_trials=12 if quick else 16,
                                            trial_s=40.0 if quick else 60.0)
         info = {"kinds": list(spec.kinds), "stroke_hz": spec.stroke_hz, "stroke_amp_mm": 1e3 * spec.stroke_amp_m,
                 "knife_delay_s": spec.knife_delay_s, "act_noise_mm": 1e3 * spec.act_noise_m}
@@ -83,12 +85,18 @@ def run_world(world: str, quick: bool, seeds: int) -> dict[str, Any]:
     from mpcshare.run_table import DEFAULT_RUNS
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
+    from mpcshare.training.rule_choice import choose_for_bundle
 
     t0 = time.perf_counter()
     demos, mode_names, info = _data(world, quick)
     bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
+    # the gate's rule chosen in the closed loop as `mpcshare train` does, on the last held-out trials;
+    # the runs below are evaluated on the other held-out trials only
+    choice = choose_for_bundle(bundle, demos, duration_s=30.0, log=None)
+    info["rule_choice"] = {"wearer_modes": choice["wearer_modes"], "why": choice["why"], "trials": choice["trials"]}
     t_train = time.perf_counter() - t0
-    trials = list(bundle.heldout_trials[:2] if quick else bundle.heldout_trials)
+    rest = [t for t in bundle.heldout_trials if t not in choice["trials"]]
+    trials = list(rest[:2] if quick else rest)
     runs = [r for r in DEFAULT_RUNS if r.name in RUNS]
     per_pair: dict[str, list[float]] = {r: [] for r in RUNS}
     pooled: dict[str, dict[str, Any]] = {}

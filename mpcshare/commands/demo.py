@@ -83,9 +83,12 @@ def _summarise(demos: Demonstrations, out: Path) -> tuple[dict, str]:
     return summary, summary_md
 
 
-def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any) -> tuple[Any, dict | None]:
-    """Stage 4: the bundle in ``out/model`` (read back as ``mpcshare sim --model`` would) and, where the
-    analysis advises the time-free mixture, the comparison of the two mode sources (else None)."""
+def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any, wearer_name: str,
+           rule_duration_s: float) -> tuple[Any, dict | None]:
+    """Stage 4: the bundle in ``out/model`` (read back as ``mpcshare sim --model`` would), its hand-over
+    rule chosen in the closed loop as ``mpcshare train`` does (on the last held-out trials, ``rule_duration_s``
+    each, beside the wearer ``wearer_name``), and, where the analysis advises the time-free mixture, the
+    comparison of the two mode sources (else None)."""
     from mpcshare.bundle import load_bundle, save_bundle
     from mpcshare.reports.claims import mixture_advice
     from mpcshare.reports.mode_sources import mode_source_comparison, mode_source_sentence
@@ -95,6 +98,14 @@ def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any)
         bundle = train_bundle(demos, config, progress=True)
     except TrainingError as exc:
         raise CommandError(f"cannot train on the demonstrations: {exc}") from None
+    from mpcshare.training.rule_choice import choose_for_bundle
+
+    print("choosing the hand-over rule in the closed loop on held-out trials", flush=True)
+    try:
+        choice = choose_for_bundle(bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name, log=print)
+        print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']})")
+    except ValueError as exc:
+        print(f"hand-over rule: its defaults ({exc})")
     bundle.config["data_path"] = str((out / "demos.npz").resolve())
     save_bundle(bundle, out / "model")
     bundle = load_bundle(out / "model")
@@ -144,7 +155,7 @@ def _demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
-    bundle, mode_sources = _train(demos, config, out, analysis)
+    bundle, mode_sources = _train(demos, config, out, analysis, args.wearer, min(30.0, args.sim_duration))
     lap("training", t0)
 
     sweep = None

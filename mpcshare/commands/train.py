@@ -156,13 +156,12 @@ def _run(args: argparse.Namespace) -> int:
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
     from mpcshare.reports.training import write_training_md
+    from mpcshare.training.rule_choice import rule_markdown
 
-    md = write_training_md(bundle.metrics, Path(out) / "training.md")
+    md = write_training_md(bundle.metrics, Path(out) / "training.md",
+                           extra="" if choice is None else rule_markdown(choice))
     print_metrics(bundle.metrics)
     if choice is not None:
-        from mpcshare.training.rule_choice import rule_markdown
-
-        write_training_md(bundle.metrics, md, extra=rule_markdown(choice))
         print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']})")
     print(f"bundle: {out} (summary: {md})")
     return 0
@@ -173,18 +172,10 @@ def _choose_rule(bundle, demos, args: argparse.Namespace) -> dict | None:
     ``bundle.metrics`` (``rule_settings``, ``rule_choice``); None with ``--no-rule-choice``."""
     if args.no_rule_choice:
         return None
-    from mpcshare.training.rule_choice import choose_rule
-    from sim.wearer_presets import wearer_preset
+    from mpcshare.training.rule_choice import choose_for_bundle
 
-    held = list(bundle.heldout_trials)
-    n = args.rule_trials or min(2, max(1, len(held) // 2))
-    log = None if args.quiet else print
-    choice = choose_rule(bundle, demos, held[-n:], duration_s=args.rule_duration, log=log,
-                         wearer=wearer_preset(args.rule_wearer))
-    choice["wearer"] = args.rule_wearer
-    bundle.metrics["rule_settings"] = choice["settings"]
-    bundle.metrics["rule_choice"] = choice
-    return choice
+    return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
+                             wearer_name=args.rule_wearer, log=None if args.quiet else print)
 
 
 TRAIN_COMMAND = Command("train", "train gates and the reactive predictor into a model bundle, "

@@ -31,22 +31,20 @@ from mpcshare.control.setup import arbitration_inputs
 from mpcshare.control.strategies.gate import voluntary_shares
 from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
+from mpcshare.line_ratio import line_ratio as _line_ratio
 from sim.wearer import WearerConfig
 
-__all__ = ["CRITERION", "candidates", "choose_rule", "line_ratio", "rule_markdown"]
+__all__ = ["CRITERION", "candidates", "choose_for_bundle", "choose_rule", "line_ratio", "rule_markdown"]
 
 CRITERION = ("lowest line ratio among the candidates with effort <= max_effort x voluntary; if none, or "
              "reactive itself costs >= max_effort x voluntary, the lowest tracking RMS")
 
 
 def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive: dict[str, float]) -> float | None:
-    """RMS / RMS_line(effort) (module docstring); None when the parties' efforts coincide."""
-    ev, er = voluntary["voluntary_effort"], reactive["voluntary_effort"]
-    if not abs(ev - er) > 1e-12:
-        return None
-    line = reactive["tracking_rmse_m"] + (effort - er) / (ev - er) * (
-        voluntary["tracking_rmse_m"] - reactive["tracking_rmse_m"])
-    return float(rms / line) if line > 0 else None
+    """RMS / RMS_line(effort) of :func:`mpcshare.line_ratio.line_ratio` (the one definition: the line
+    held at its ends, never extrapolated), from the parties' pooled metrics; None where undefined."""
+    return _line_ratio(rms, effort, (voluntary["voluntary_effort"], voluntary["tracking_rmse_m"]),
+                       (reactive["voluntary_effort"], reactive["tracking_rmse_m"]))
 
 
 def candidates(v: np.ndarray) -> list[dict[str, Any]]:
@@ -123,6 +121,25 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, du
             "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
             "trials": [int(t) for t in trials], "duration_s": duration_s, "voluntary_share_by_mode": v.tolist(),
             "seconds": round(time.perf_counter() - t0, 1)}
+
+
+def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
+                      duration_s: float | None = 30.0, wearer_name: str | None = None,
+                      log: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
+    1 to 2) with the wearer preset ``wearer_name`` (default the default preset), recorded in
+    ``bundle.metrics`` (``rule_settings``, ``rule_choice``) so that the saved bundle's ``gate`` uses it;
+    returns the choice. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
+    from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
+
+    name = wearer_name or DEFAULT_WEARER_PRESET
+    held = list(bundle.heldout_trials)
+    n = n_trials or min(2, max(1, len(held) // 2))
+    choice = choose_rule(bundle, demos, held[-n:], duration_s=duration_s, log=log, wearer=wearer_preset(name))
+    choice["wearer"] = name
+    bundle.metrics["rule_settings"] = choice["settings"]
+    bundle.metrics["rule_choice"] = choice
+    return choice
 
 
 def rule_markdown(choice: dict[str, Any]) -> str:

@@ -28,7 +28,9 @@ def test_line_ratio_against_the_straight_line():
     assert line_ratio(0.010, 0.08, vol, rea) == pytest.approx(1.0)
     assert line_ratio(0.015, 0.05, vol, rea) == pytest.approx(1.0)  # the midpoint lies on the line
     assert line_ratio(0.012, 0.05, vol, rea) == pytest.approx(0.8)
-    assert line_ratio(0.012, 0.05, vol, dict(vol)) is None
+    # equal efforts: the line is the better party (mpcshare.line_ratio, the one definition)
+    assert line_ratio(0.012, 0.05, vol, dict(vol)) == pytest.approx(1.2)
+    assert line_ratio(0.030, 0.10, vol, rea) == pytest.approx(3.0)  # beyond both efforts: the better party
 
 
 def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
