@@ -49,7 +49,9 @@ def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive:
 
 def candidates(v: np.ndarray) -> list[dict[str, Any]]:
     """The nested wearer-mode sets: for the top i modes by v_j (i = 1..K−1, distinct shares),
-    share_on halfway between the i-th and the (i+1)-th share, share_off halfway below it."""
+    share_on halfway between the i-th and the (i+1)-th share, share_off halfway below it; last, the
+    empty set (the robot leads every mode; share_on halfway between the largest share and 1), so
+    that the choice can keep the robot leading where it tracks best."""
     order = np.argsort(-np.asarray(v, dtype=float), kind="stable")
     s = np.asarray(v, dtype=float)[order]
     out = []
@@ -59,6 +61,10 @@ def candidates(v: np.ndarray) -> list[dict[str, Any]]:
         on = 0.5 * (s[i - 1] + s[i])
         out.append({"wearer_modes": sorted(int(j) for j in order[:i]),
                     "settings": {"share_on": round(float(on), 6), "share_off": round(float(0.5 * (on + s[i])), 6)}})
+    if len(s) and s[0] < 1.0 - 1e-6:
+        on = 0.5 * (s[0] + 1.0)
+        out.append({"wearer_modes": [],
+                    "settings": {"share_on": round(float(on), 6), "share_off": round(float(0.5 * (on + s[0])), 6)}})
     return out
 
 

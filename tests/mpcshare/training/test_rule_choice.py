@@ -13,13 +13,14 @@ from mpcshare.training.rule_choice import candidates, choose_rule, line_ratio, r
 def test_candidates_are_the_nested_wearer_mode_sets():
     v = np.array([0.06, 0.05, 0.7, 0.0])
     c = candidates(v)
-    assert [x["wearer_modes"] for x in c] == [[2], [0, 2], [0, 1, 2]]
+    assert [x["wearer_modes"] for x in c] == [[2], [0, 2], [0, 1, 2], []]  # last: the robot leads every mode
     for x in c:  # each threshold separates the set from the rest, with hysteresis, and is a valid setting
         s = check_settings(x["settings"])
-        inside = v[x["wearer_modes"]]
+        inside = v[x["wearer_modes"]] if x["wearer_modes"] else np.array([1.0])
         outside = np.delete(v, x["wearer_modes"])
         assert inside.min() >= s["share_on"] > s["share_off"] > outside.max()
-    assert candidates(np.array([0.3, 0.3])) == []  # nothing separates equal shares
+    assert [x["wearer_modes"] for x in candidates(np.array([0.3, 0.3]))] == [[]]  # equal shares: all or none
+    assert [x["wearer_modes"] for x in candidates(np.array([1.0, 0.2]))] == [[0]]  # a mode always unpredictable
 
 
 def test_line_ratio_against_the_straight_line():
@@ -52,6 +53,7 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     monkeypatch.setattr(rule_choice, "_pooled", fake)
     ons = [c["settings"]["share_on"] for c in candidates(np.array([0.06, 0.7, 0.0]))]
     by_on.update({ons[0]: (0.014, 0.04), ons[1]: (0.0105, 0.07)})  # line ratios 0.82 (0.33x), 0.84 (0.88x)
+    by_on[ons[2]] = (0.021, 0.075)  # the robot leads every mode: the wearer corrects it hard
     choice = choose_rule(Bundle(), None, [3])
     assert choice["wearer_modes"] == [1] and "lowest line ratio" in choice["why"]
     by_on.update({ons[0]: (0.014, 0.07)})
@@ -62,5 +64,7 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     figures["reactive"] = (0.020, 0.065)  # the robot alone costs 0.81x: the line is ill-posed
     choice = choose_rule(Bundle(), None, [3])
     assert choice["wearer_modes"] == [0, 1] and "reactive alone costs 0.81x" in choice["why"]
+    by_on[ons[2]] = (0.009, 0.066)  # the robot leading every mode tracks best: the choice keeps it leading
+    assert choose_rule(Bundle(), None, [3])["wearer_modes"] == []
     with pytest.raises(ValueError, match="at least one held-out trial"):
         choose_rule(Bundle(), None, [])
