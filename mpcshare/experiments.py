@@ -12,7 +12,7 @@ run's metrics, pooled and per trial. Each is simulated on the
 same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
 default the preset ``hemiparetic_mild``) and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
-:func:`sim.metrics.episode_metrics` are pooled over trials (:func:`pool_metrics`) and
+:func:`sim.metrics.episode_metrics` are pooled over trials (:func:`mpcshare.pooling.pool_metrics`) and
 written to ``comparison.json`` (top-level ``strategies``: name → metrics; ``trials``;
 ``duration_s``; ``run_files``; ``wearer``: the preset's name, or None, and the
 settings), ``comparison.md`` and ``comparison.png``.
@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
@@ -32,6 +33,7 @@ from learning.data import Demonstrations
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedules, random_handover_schedules
 from mpcshare.line_ratio import add_line_ratios
+from mpcshare.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
 from sim.closed_loop import run_episode
 from sim.keepout_metrics import KEEPOUT_KEYS, episode_keepout_metrics
@@ -46,7 +48,8 @@ if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torc
     from mpcshare.bundle import ModelBundle
 
 __all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
-           "output_size", "pool_metrics", "render_clip", "simulate_episode"]
+           "output_size", "pool_keepout_metrics", "pool_metrics", "pool_task_metrics", "render_clip",
+           "simulate_episode"]
 
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
@@ -98,104 +101,6 @@ def intent_preview(trial: Any, act_names: Sequence[str], wearer: WearerConfig | 
     cutoff = (wearer or WearerConfig()).intent_cutoff_hz
     positions, _ = smooth_intent(trial.act[:, [names.index(c) for c in TIP_CHANNELS]], rate, cutoff)
     return KnownTrajectory(positions, 1.0 / rate)
-
-
-def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.ndarray],
-                 sim_seconds: Sequence[float]) -> dict[str, float]:
-    """Pool per-trial metrics into one row.
-
-    Tracking RMS: √(Σ_k n_k·rms_k² / Σ_k n_k) (n_k control steps of trial k); p95 and the
-    shares and effort: means weighted by n_k; counts (hand-overs, limit violations):
-    sums; step-time percentiles over all steps pooled; real-time factor: total
-    simulated time / total wall time.
-    """
-    if not metrics:
-        raise ValueError("no episodes to pool")
-    metrics = [{k: (float("nan") if v is None else v) for k, v in m.items()} for m in metrics]
-    n = np.array([len(s) for s in step_times], dtype=float)
-    w = n / n.sum()
-
-    def mean(key: str) -> float:
-        return float(np.sum(w * np.array([m[key] for m in metrics], dtype=float)))
-
-    steps = np.concatenate([np.asarray(s, dtype=float) for s in step_times])
-    wall = sum(s / m["realtime_factor"] for s, m in zip(sim_seconds, metrics) if m["realtime_factor"] > 0)
-    rtf = float(sum(sim_seconds) / wall) if wall > 0 else float("nan")
-    return {
-        "tracking_rmse_m": float(math.sqrt(np.sum(w * np.array([m["tracking_rmse_m"] ** 2 for m in metrics])))),
-        "tracking_p95_m": mean("tracking_p95_m"),
-        "voluntary_effort": mean("voluntary_effort"),
-        "reactive_share": mean("reactive_share"),
-        "handovers": int(sum(int(m["handovers"]) for m in metrics)),
-        "conflict_share": mean("conflict_share"),
-        "limit_violations": int(sum(int(m["limit_violations"]) for m in metrics)),
-        "step_p50_ms": float(np.percentile(steps, 50) * 1e3),
-        "step_p99_ms": float(np.percentile(steps, 99) * 1e3),
-        "realtime_factor": rtf,
-    }
-
-
-def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np.ndarray]) -> dict[str, Any]:
-    """Pool the task figures: lag and RMS at it weighted by steps; the sawing amplitude and correlation
-    weighted by cutting time; strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n)."""
-    n = np.array([len(s) for s in step_times], dtype=float)
-
-    def weighted(key: str, w: np.ndarray) -> float | None:
-        vals = np.array([np.nan if m.get(key) is None else m[key] for m in metrics], dtype=float)
-        ok = np.isfinite(vals) & (w > 0)
-        return float(np.sum(w[ok] * vals[ok]) / np.sum(w[ok])) if ok.any() else None
-
-    cut = np.array([float(m.get("cutting_s") or 0.0) for m in metrics])
-    intended = sum(int(m.get("strokes_intended") or 0) for m in metrics)
-    executed = sum(int(m.get("strokes_executed") or 0) for m in metrics)
-    by_mode: dict[str, float | None] = {}
-    for name in sorted({k for m in metrics for k in (m.get("rms_by_mode_m") or {})}):
-        vals = [(w, (m.get("rms_by_mode_m") or {}).get(name)) for w, m in zip(n, metrics)]
-        vals = [(w, v) for w, v in vals if v is not None]
-        by_mode[name] = float(math.sqrt(sum(w * v * v for w, v in vals) / sum(w for w, _ in vals))) if vals else None
-    return {"lag_s": weighted("lag_s", n), "rms_at_lag_m": weighted("rms_at_lag_m", n),
-            "saw_amplitude_ratio": weighted("saw_amplitude_ratio", cut),
-            "saw_correlation": weighted("saw_correlation", cut), "strokes_intended": intended,
-            "strokes_executed": executed, "stroke_share": executed / intended if intended else None,
-            "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode, **_pool_wearer_share(metrics)}
-
-
-def pool_keepout_metrics(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """Pool the keep-out figures (:mod:`sim.keepout_metrics`): the least clearance (per zone too), the
-    deepest intrusion and the highest speed near the person over episodes; times and steps summed."""
-    def values(key: str) -> list[float]:
-        return [float(m[key]) for m in metrics if m.get(key) is not None]
-
-    def pick(key: str, f: Callable[[list[float]], float]) -> float | None:
-        v = values(key)
-        return f(v) if v else None
-
-    zones = sorted({z for m in metrics for z in (m.get("keepout_min_clearance_by_zone_m") or {})})
-    by_zone = {}
-    for z in zones:
-        v = [m["keepout_min_clearance_by_zone_m"][z] for m in metrics
-             if (m.get("keepout_min_clearance_by_zone_m") or {}).get(z) is not None]
-        by_zone[z] = min(v) if v else None
-    return {"keepout_min_clearance_m": pick("keepout_min_clearance_m", min),
-            "keepout_max_depth_m": pick("keepout_max_depth_m", max),
-            "keepout_time_inside_s": pick("keepout_time_inside_s", sum),
-            "keepout_steps_driven_in": int(sum(values("keepout_steps_driven_in"))),
-            "keepout_inside_zone_moving_s": pick("keepout_inside_zone_moving_s", sum),
-            "keepout_near_speed_mps": pick("keepout_near_speed_mps", max),
-            "keepout_min_clearance_by_zone_m": by_zone}
-
-
-def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """The wearer's share per mode pooled over episodes, weighted by each episode's steps in that mode."""
-    shares: dict[str, float] = {}
-    counts: dict[str, int] = {}
-    for m in metrics:
-        for name, n in (m.get("mode_steps") or {}).items():
-            share = (m.get("wearer_share_by_mode") or {}).get(name)
-            if share is not None and n:
-                shares[name] = shares.get(name, 0.0) + share * n
-                counts[name] = counts.get(name, 0) + int(n)
-    return {"wearer_share_by_mode": {k: shares[k] / counts[k] for k in sorted(counts)}, "mode_steps": counts}
 
 
 def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: StrategyRun, options: dict[str, Any],
@@ -258,64 +163,19 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     """
     make_controller = make_controller or _from_bundle
     extra = dict(controller_options or {})
-    known = set(demos.trial_ids)
-    missing = [int(t) for t in trial_ids if int(t) not in known]
-    if missing or not len(trial_ids):
-        raise ValueError(f"trials {missing or list(trial_ids)} not in the data (it has {sorted(known)[:20]})")
-    names = [r.name for r in runs]
-    if len(set(names)) != len(names):
-        raise ValueError(f"run names must be unique, got {names}")
-    by_id = {tr.trial_id: tr for tr in demos.trials}
-    runs_dir = Path(out) / "runs" if out is not None else None
-    if runs_dir is not None:
-        runs_dir.mkdir(parents=True, exist_ok=True)
+    _check_request(demos, trial_ids, runs)
+    runner = _Runner(bundle, demos, partial(simulate_episode, beta=beta, duration_s=duration_s, seed=seed,
+                                            wearer=wearer, mode_names=mode_names, make_controller=make_controller,
+                                            scene=scene, scenario=scenario),
+                     extra, seed, Path(out) if out is not None else None, mcap, mcap_rate_hz)
     pooled: dict[str, dict[str, float]] = {}
     per_trial: dict[str, dict[str, dict[str, float]]] = {}
-    files: dict[str, list[str]] = {}
-    cache: dict[tuple[str, int], tuple[Any, dict[str, Any]]] = {}  # episodes the scheduled runs are computed from
-
-    def simulate(run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-        episode, m = simulate_episode(bundle, demos, by_id[tid], run, {**extra, **options}, beta=beta,
-                                      duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names,
-                                      make_controller=make_controller, scene=scene, scenario=scenario)
-        if run.name in _SOURCES:
-            cache[(run.name, tid)] = (episode, m)
-        return episode, m
-
-    def source(name: str, tid: int) -> tuple[Any, dict[str, Any]]:
-        if (name, tid) not in cache:
-            simulate(next(r for r in DEFAULT_RUNS if r.name == name), tid, {})
-        return cache[(name, tid)]
-
-    def save(run: StrategyRun, tid: int, j: int, n_draws: int, episode: Any) -> None:
-        if runs_dir is None:
-            return
-        path = runs_dir / f"{run.name}_trial{tid}{f'_draw{j}' if n_draws > 1 else ''}.npz"
-        episode.save(path)
-        if mcap:
-            fork = None if episode.fork_pose is not None else fork_poses(by_id[tid], demos.obs_names)
-            write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork,
-                           joint_stride=_joint_stride(episode, mcap_rate_hz))
-        files[run.name].append(str(path.relative_to(Path(out))))
-
     for run in runs:
         metrics, steps, seconds = [], [], []
-        per_trial[run.name], files[run.name] = {}, []
+        per_trial[run.name], runner.files[run.name] = {}, []
         for tid in (int(t) for t in trial_ids):
             t0 = time.perf_counter()
-            draws = _draw_options(run, tid, seed, source)
-            done = []
-            for j, options in enumerate(draws):
-                episode, m = simulate(run, tid, options)
-                save(run, tid, j, len(draws), episode)
-                done.append((episode, m))
-            if run.schedule == "oracle":  # the best replay, the pure runs' own episodes included
-                done.append(min(done + [source(n, tid) for n in SCHEDULE_SOURCES["oracle"]],
-                                key=lambda em: em[1]["tracking_rmse_m"]))
-                done = done[-1:]
-            trial_steps = [np.asarray(e.step_time, dtype=float) for e, _ in done]
-            trial_seconds = [float(e.t[-1] - e.t[0]) + float(np.median(np.diff(e.t))) for e, _ in done]
-            trial_metrics = [m for _, m in done]
+            trial_metrics, trial_steps, trial_seconds = runner.trial(run, tid)
             metrics, steps, seconds = metrics + trial_metrics, steps + trial_steps, seconds + trial_seconds
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
                 {**pool_metrics(trial_metrics, trial_steps, trial_seconds),
@@ -331,11 +191,78 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     for tid in (str(int(t)) for t in trial_ids):
         add_line_ratios({name: per_trial[name][tid] for name in per_trial})
     return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
-                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=files,
+                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=runner.files,
                       wearer=describe_wearer(wearer),
                       offline_wearer_share_by_mode=_offline_share(bundle, mode_names),
                       scenario=getattr(scenario, "name", None),
                       keepout=getattr(extra.get("config"), "keepout", True) is not None)
+
+
+def _check_request(demos: Demonstrations, trial_ids: Sequence[int], runs: Sequence[StrategyRun]) -> None:
+    """ValueError unless every trial is in the data (and there is one) and the run names are unique."""
+    known = set(demos.trial_ids)
+    missing = [int(t) for t in trial_ids if int(t) not in known]
+    if missing or not len(trial_ids):
+        raise ValueError(f"trials {missing or list(trial_ids)} not in the data (it has {sorted(known)[:20]})")
+    names = [r.name for r in runs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"run names must be unique, got {names}")
+
+
+class _Runner:
+    """The episodes of :func:`compare_strategies`: simulated (``simulate(bundle, demos, trial, run,
+    options)``, the settings bound), the schedule sources' episodes cached for the scheduled runs, and
+    the run files written under ``out/runs`` (``files``: run name → paths relative to ``out``)."""
+
+    def __init__(self, bundle: Any, demos: Demonstrations, simulate: Callable[..., tuple[Any, dict[str, Any]]],
+                 extra: dict[str, Any], seed: int, out: Path | None, mcap: bool, mcap_rate_hz: float | None) -> None:
+        self.bundle, self.demos, self._simulate, self.extra, self.seed = bundle, demos, simulate, extra, seed
+        self.out, self.mcap, self.mcap_rate_hz = out, mcap, mcap_rate_hz
+        self.by_id = {tr.trial_id: tr for tr in demos.trials}
+        self.runs_dir = out / "runs" if out is not None else None
+        if self.runs_dir is not None:
+            self.runs_dir.mkdir(parents=True, exist_ok=True)
+        self.files: dict[str, list[str]] = {}
+        self.cache: dict[tuple[str, int], tuple[Any, dict[str, Any]]] = {}  # episodes the scheduled runs use
+
+    def simulate(self, run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+        episode, m = self._simulate(self.bundle, self.demos, self.by_id[tid], run, {**self.extra, **options})
+        if run.name in _SOURCES:
+            self.cache[(run.name, tid)] = (episode, m)
+        return episode, m
+
+    def source(self, name: str, tid: int) -> tuple[Any, dict[str, Any]]:
+        if (name, tid) not in self.cache:
+            self.simulate(next(r for r in DEFAULT_RUNS if r.name == name), tid, {})
+        return self.cache[(name, tid)]
+
+    def save(self, run: StrategyRun, tid: int, j: int, n_draws: int, episode: Any) -> None:
+        if self.runs_dir is None or self.out is None:
+            return
+        path = self.runs_dir / f"{run.name}_trial{tid}{f'_draw{j}' if n_draws > 1 else ''}.npz"
+        episode.save(path)
+        if self.mcap:
+            fork = None if episode.fork_pose is not None else fork_poses(self.by_id[tid], self.demos.obs_names)
+            write_run_mcap(episode, path.with_suffix(".mcap"), fork=fork,
+                           joint_stride=_joint_stride(episode, self.mcap_rate_hz))
+        self.files[run.name].append(str(path.relative_to(self.out)))
+
+    def trial(self, run: StrategyRun, tid: int) -> tuple[list[dict[str, Any]], list[np.ndarray], list[float]]:
+        """``run`` on trial ``tid`` (every draw; ``oracle``: the best replay only): (metrics, step times [s],
+        simulated seconds) per episode kept."""
+        draws = _draw_options(run, tid, self.seed, self.source)
+        done = []
+        for j, options in enumerate(draws):
+            episode, m = self.simulate(run, tid, options)
+            self.save(run, tid, j, len(draws), episode)
+            done.append((episode, m))
+        if run.schedule == "oracle":  # the best replay, the pure runs' own episodes included
+            done.append(min(done + [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle"]],
+                            key=lambda em: em[1]["tracking_rmse_m"]))
+            done = done[-1:]
+        steps = [np.asarray(e.step_time, dtype=float) for e, _ in done]
+        seconds = [float(e.t[-1] - e.t[0]) + float(np.median(np.diff(e.t))) for e, _ in done]
+        return [m for _, m in done], steps, seconds
 
 
 def _joint_stride(episode: Any, rate_hz: float | None) -> int:

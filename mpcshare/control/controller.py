@@ -3,8 +3,8 @@
 Per :meth:`SharedController.step`:
 
 1. front end (:mod:`mpcshare.control.frontend`): Kalman filter over the fork, anti-aliased
-   10 Hz window, mode filter and novelty; on the 10 Hz ticks the gate of the most
-   probable mode (``gates.proba_one``) and the streaming reactive predictor
+   10 Hz window, mode filter and novelty; on the 10 Hz ticks (:mod:`mpcshare.control.models_tick`)
+   the gate of the most probable mode (``gates.proba_one``) and the streaming reactive predictor
    (``predictor.make_stream().step(concat(o_t, p_t))``), whose forecast of the tip over
    its horizon becomes a continuous trajectory p̂(·) (:class:`~mpcshare.control.forecast.ForecastTrack`:
    a spline, cross-faded between ticks; held when the predictor has no forecast); with the
@@ -19,6 +19,7 @@ Per :meth:`SharedController.step`:
 3. ``robot.smoothing.ReferenceSmoother`` (ruckig, jerk-limited) toward (p_ref, û, α·p̈̂(t + τ));
 4. optional MPC (``robot.mpc.tip_mpc.TipMPC``; with the keep-out, ``KeepOutTipMPC``: the wearer's
    body zones as constraints over its horizon, moving with the hand's forecast) over its horizon on the preview
+   (:mod:`mpcshare.control.preview`)
    r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (the robot's share from the forecast,
    the wearer's extrapolated; ``mpc_preview=False``: the smoothed reference p_s extrapolated at
    its velocity; with the control-rate forecast, the forecast is read only up to the horizons
@@ -71,11 +72,14 @@ from typing import TYPE_CHECKING, Callable
 import numpy as np
 
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy, fuse, reactive_velocity
+from mpcshare.control.fallback import fallback_joint_state, rest_command
 from mpcshare.control.fastpath import FastPath
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
-from mpcshare.control.frontend import StreamingFrontEnd
+from mpcshare.control.frontend import StreamingFrontEnd, sense
 from mpcshare.control.keepout import make_keepout_mpc, make_keepout_qp
+from mpcshare.control.models_tick import fast_step, models_tick
 from mpcshare.control.mpc_follow import MPCFollower
+from mpcshare.control.preview import PreviewPlan, mpc_preview
 from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
@@ -196,7 +200,7 @@ class SharedController:
             self.fast.reset()
         self._t_now = math.nan
         self._acc_ff = np.zeros(3)  # α·p̈̂ (plate frame), the smoother's target acceleration
-        self._preview = (0.0, 0.0, np.zeros(3), math.nan)  # α, β, û_v (plate), the aimed time t + τ
+        self._preview = PreviewPlan.empty()  # α, β, û_v (plate), the aimed time t + τ
         K = self.layout.n_modes
         self._mode_proba = np.full(K, 1.0 / K)
         self._novelty = float("nan")
@@ -250,19 +254,11 @@ class SharedController:
             return self._step(t0, t, obs, voluntary, q, v, base_pose)
         except Exception as exc:  # noqa: BLE001 — last line of defence: brake within limits, say why
             reason = f"{type(exc).__name__}: {exc}"
-            try:
-                qa, va = (np.asarray(x, dtype=float).reshape(self.qp.n) for x in (q, v))
-            except Exception:  # noqa: BLE001 — q, v unusable: hold
-                qa = va = np.full(self.qp.n, np.nan)
+            qa, va = fallback_joint_state(q, v, self.qp.n)
             try:
                 return self._hold(qa, va, [("internal_error", reason)], {}, t0)
             except Exception:  # noqa: BLE001 — even the QP failed: repeat the last command at rest
-                n = self.qp.n
-                last = self._last
-                z = np.zeros(n)
-                return ControlCommand(z, last.q_cmd if last else z, z, z, 0.0, 1.0, self._mode_proba.copy(),
-                               self._novelty, np.full(3, np.nan), "internal_error", (reason,),
-                               {"total": time.perf_counter() - t0})
+                return rest_command(self.qp.n, self._last, self._mode_proba, self._novelty, reason, t0)
 
     def _step(self, t0: float, t, obs, voluntary, q, v, base_pose) -> ControlCommand:
         faults: list[tuple[str, str]] = []
@@ -287,44 +283,27 @@ class SharedController:
                 faults.append(("invalid_base_pose", f"{exc}: last valid pose kept"))
 
         ta = time.perf_counter()  # 1. front end
-        fe = self._sense(t, obs, faults)
+        fe = sense(t, obs, faults, frontend=self.frontend, d_o=self.layout.d_o,
+                   stale_after_s=self.config.stale_after_s, keepout=self.keepout, pose=self._pose)
         if fe is None:
             return self._hold(q, v, faults, timings, t0)
+        self._fork_vel = fe.fork_velocity
         timings["frontend"] = time.perf_counter() - ta
         ta = time.perf_counter()  # 2. learned parts at the model rate
         if fe.tick is not None:
-            self._models_tick(t, fe.tick, faults)
+            self._mode_proba, self._novelty, self._window_ready, self._gate_proba = models_tick(
+                t, fe.tick, stream=self._stream, gates=self.bundle.gates, layout=self.layout, fast=self.fast,
+                forecast=self.forecast, oracle=self.oracle, faults=faults)
         timings["models"] = time.perf_counter() - ta
         if self.fast is not None:
             ta = time.perf_counter()  # 2b. the control-rate forecast
-            self._fast_step(t, fe, faults)
+            fast_step(t, fe, self._mode_proba, self.fast, self.forecast, faults)
             timings["fast"] = time.perf_counter() - ta
         ta = time.perf_counter()  # 3. arbitration and the tip reference (plate frame)
         alpha, beta, u, p_model = self._arbitrate(t, dt, q, voluntary, fe, faults)
         timings["arbitration"] = time.perf_counter() - ta
         res = self._track(q, v, u, p_model, faults, timings)  # 4. smoothing, MPC, QP
         return self._command(res, alpha, beta, faults, timings, t0)
-
-    def _sense(self, t: float, obs, faults: list[tuple[str, str]]):
-        """The front end's output for this sample (None: no observation yet, hold)."""
-        lay = self.layout
-        o = np.asarray(obs, dtype=float) if obs is not None else None
-        if o is not None and o.shape != (lay.d_o,):
-            faults.append(("invalid_observation_shape", f"obs has shape {o.shape}, expected ({lay.d_o},)"))
-            o = None
-        elif o is None or not _finite(o):
-            faults.append(("missing_observation", "fork sample missing or NaN: Kalman prediction substituted"))
-        try:
-            fe = self.frontend.step(t, o)
-        except ValueError as exc:
-            faults.append(("no_observation", f"{exc}: holding"))
-            return None
-        self._fork_vel = fe.fork_velocity
-        if self.keepout is not None:
-            self.keepout.update(t, o, fe.fork_velocity, fe.stale, self._pose, faults)
-        if fe.stale and not fe.predicting_for_s > self.config.stale_after_s:
-            faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
-        return fe
 
     def _arbitrate(self, t: float, dt: float, q: np.ndarray, voluntary, fe, faults: list[tuple[str, str]]
                    ) -> tuple[float, float, np.ndarray, np.ndarray]:
@@ -364,7 +343,7 @@ class SharedController:
             faults.append(("invalid_shoulder", "shoulder signal NaN, missing or not (3,): reference held"))
             u = np.zeros(3)
             self._acc_ff = np.zeros(3)
-        self._preview = (alpha if pred_ok else 0.0, beta, u_v, t_aim)
+        self._preview = PreviewPlan(alpha if pred_ok else 0.0, beta, u_v, t_aim)
         p_new, clamped = cfg.workspace.clamp(p_ref + u * dt)
         if clamped:
             faults.append(("reference_unreachable", "tip reference clamped to the workspace box"))
@@ -405,58 +384,8 @@ class SharedController:
             faults.append(("qp_failed", res.reason))
         return res
 
-    def _models_tick(self, t: float, tick, faults: list[tuple[str, str]]) -> None:
-        """Gate and predictor on a 10 Hz tick at time t [s] (the gate held until the next tick,
-        the predictor's forecast made a trajectory)."""
-        lay = self.layout
-        self._mode_proba, self._novelty = tick.mode_proba, tick.novelty
-        self._window_ready = tick.window is not None
-        try:
-            x = np.concatenate([tick.sample, tick.mode_proba])
-            u_std = np.asarray(self._stream.step(x), dtype=float)
-            f_std = getattr(self._stream, "forecast", None)
-            f_std = u_std[None, :] if f_std is None else np.asarray(f_std, dtype=float)
-            F = f_std * lay.act_scale + lay.act_mean
-            if self.fast is not None:
-                self.fast.on_tick(f_std)
-            elif not self.oracle:
-                self.forecast.update(t, F[:, lay.tip_index])
-        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
-            if self.fast is not None:
-                self.fast.on_tick(None)
-            elif not self.oracle:
-                self.forecast.reset()
-            faults.append(("internal_error", f"reactive predictor failed: {exc}"))
-        if tick.window is None:
-            self._gate_proba = None
-            return
-        try:
-            self._gate_proba = float(self.bundle.gates.proba_one(tick.window, int(np.argmax(tick.mode_proba))))
-        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
-            self._gate_proba = None
-            faults.append(("internal_error", f"gate failed: {exc}"))
-
-    def _fast_step(self, t: float, fe, faults: list[tuple[str, str]]) -> None:
-        """The control-rate forecast of this step becomes the tip trajectory (module docstring, 1)."""
-        try:
-            F = self.fast.step(fe.fork_position, fe.fork_velocity, self._mode_proba, fe.tick is not None)
-            if F is not None:
-                self.forecast.update(t, F)
-        except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
-            self.forecast.reset()
-            faults.append(("internal_error", f"control-rate forecast failed: {exc}"))
-
     def _mpc_preview(self, sm, H: int) -> np.ndarray:
-        """The MPC's reference (H+1, 3), model frame (module docstring, item 4)."""
-        k = np.arange(H + 1)[:, None] * self.dt
-        alpha, beta, u_v, t_aim = self._preview
-        if not (self.config.mpc_preview and self.forecast.ready and math.isfinite(t_aim)):
-            return sm.position[None, :] + k * sm.velocity[None, :]
-        times = t_aim + k[:, 0]
-        if self.fast is not None:  # the forecast where it has skill, a hold beyond
-            times = np.minimum(times, max(self.fast.preview_until(self._t_now, self._mode_proba), t_aim))
-        p, _, _ = self.forecast.sample(times)
-        if not _finite(p):
-            return sm.position[None, :] + k * sm.velocity[None, :]
-        offset = alpha * (p - p[0]) + beta * k * u_v[None, :]  # plate frame
-        return sm.position[None, :] + offset @ self._pose[:3, :3]
+        """The MPC's reference (H+1, 3), model frame (:func:`mpcshare.control.preview.mpc_preview`)."""
+        return mpc_preview(sm, H, self.dt, self._preview, self.forecast, self._pose[:3, :3],
+                           enabled=self.config.mpc_preview, fast=self.fast, t_now=self._t_now,
+                           mode_proba=self._mode_proba)
