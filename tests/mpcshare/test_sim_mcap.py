@@ -60,13 +60,18 @@ def test_mcap_rate_thins_the_joint_states(demos, tmp_path):
     assert counts["/arm/joint_states"] == 40 and counts["/knife/tip"] == 40  # 1 kHz → 100 Hz; control rate kept
 
 
-def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tmp_path, monkeypatch, capsys):
+def _stand_in_bundle(demos, tmp_path, monkeypatch) -> None:
+    """`mpcshare sim --model stand-in` loads a stand-in bundle over ``demos`` whose controllers idle."""
     data = tmp_path / "demos.npz"
     save(demos, data)
     bundle = SimpleNamespace(obs_names=list(demos.obs_names), rate_hz=demos.rate_hz, heldout_trials=[0],
                              config={"data_path": str(data)})
     monkeypatch.setattr(mpcshare.bundle, "load_bundle", lambda path: bundle)
     monkeypatch.setattr(mpcshare.experiments, "_from_bundle", _idle)
+
+
+def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tmp_path, monkeypatch, capsys):
+    _stand_in_bundle(demos, tmp_path, monkeypatch)
     from mpcshare.experiments import DEFAULT_RUNS, output_size
 
     out = tmp_path / "sim"
@@ -80,12 +85,7 @@ def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tm
 
 
 def test_sim_command_mcap_option(demos, tmp_path, monkeypatch):
-    data = tmp_path / "demos.npz"
-    save(demos, data)
-    bundle = SimpleNamespace(obs_names=list(demos.obs_names), rate_hz=demos.rate_hz, heldout_trials=[0],
-                             config={"data_path": str(data)})
-    monkeypatch.setattr(mpcshare.bundle, "load_bundle", lambda path: bundle)
-    monkeypatch.setattr(mpcshare.experiments, "_from_bundle", _idle)
+    _stand_in_bundle(demos, tmp_path, monkeypatch)
     out = tmp_path / "sim"
     assert main(["sim", "--model", "stand-in", "--out", str(out), "--duration", "0.3", "--runs", "voluntary",
                  "--mcap"]) == 0
