@@ -37,11 +37,16 @@ class _Spline:
     def __init__(self, times: np.ndarray, points: np.ndarray) -> None:
         self.t0, self.t1 = float(times[0]), float(times[-1])
         self.first, self.last = points[0].copy(), points[-1].copy()
-        if len(times) >= 2:
-            self.cs: CubicSpline | None = CubicSpline(times, points, axis=0, bc_type="natural")
+        self.curved = len(times) >= 2
+        if self.curved:
+            self.cs = CubicSpline(times, points, axis=0, bc_type="natural")
             self.end_velocity = np.asarray(self.cs(self.t1, 1))
         else:
-            self.cs, self.end_velocity = None, np.zeros(points.shape[1])
+            self.end_velocity = np.zeros(points.shape[1])
+
+    def _inside(self, ti: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """p, ṗ, p̈ at times strictly between the first and the last knot."""
+        return self.cs(ti), self.cs(ti, 1), self.cs(ti, 2)
 
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)
@@ -50,14 +55,13 @@ class _Spline:
         before, after = t <= self.t0, t >= self.t1
         inside = ~(before | after)
         p[before] = self.first
-        if self.cs is None:
+        if not self.curved:
             p[after] = self.last
             return p, v, a
         p[after] = self.last + (t[after] - self.t1)[:, None] * self.end_velocity
         v[after] = self.end_velocity
         if inside.any():
-            ti = t[inside]
-            p[inside], v[inside], a[inside] = self.cs(ti), self.cs(ti, 1), self.cs(ti, 2)
+            p[inside], v[inside], a[inside] = self._inside(t[inside])
         return p, v, a
 
 
@@ -83,9 +87,9 @@ class _UniformSpline(_Spline):
         n = points.shape[0]
         self.t0, self.t1, self.h = float(t0), float(t0) + h * (n - 1), float(h)
         self.first, self.last = points[0].copy(), points[-1].copy()
-        self.cs = None
-        if n < 2:
-            self.M, self.end_velocity = None, np.zeros(points.shape[1])
+        self.curved = n >= 2
+        if not self.curved:
+            self.end_velocity = np.zeros(points.shape[1])
             return
         M = np.zeros_like(points)
         if n > 2:
@@ -93,29 +97,15 @@ class _UniformSpline(_Spline):
         self.M, self.y = M, points
         self.end_velocity = (points[-1] - points[-2]) / h + M[-2] * (h / 6.0) + M[-1] * (h / 3.0)
 
-    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        t = np.asarray(t, dtype=float)
-        d = self.first.shape[0]
-        p, v, a = np.empty((t.shape[0], d)), np.zeros((t.shape[0], d)), np.zeros((t.shape[0], d))
-        before, after = t <= self.t0, t >= self.t1
-        inside = ~(before | after)
-        p[before] = self.first
-        if self.M is None:
-            p[after] = self.last
-            return p, v, a
-        p[after] = self.last + (t[after] - self.t1)[:, None] * self.end_velocity
-        v[after] = self.end_velocity
-        if inside.any():
-            h, M, y = self.h, self.M, self.y
-            ti = t[inside]
-            k = np.minimum(((ti - self.t0) / h).astype(int), M.shape[0] - 2)
-            u = (ti - (self.t0 + k * h))[:, None]
-            b = h - u
-            c0, c1 = y[k] / h - M[k] * (h / 6.0), y[k + 1] / h - M[k + 1] * (h / 6.0)
-            p[inside] = (M[k] * b ** 3 + M[k + 1] * u ** 3) / (6.0 * h) + c0 * b + c1 * u
-            v[inside] = (M[k + 1] * u ** 2 - M[k] * b ** 2) / (2.0 * h) - c0 + c1
-            a[inside] = (M[k] * b + M[k + 1] * u) / h
-        return p, v, a
+    def _inside(self, ti: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        h, M, y = self.h, self.M, self.y
+        k = np.minimum(((ti - self.t0) / h).astype(int), M.shape[0] - 2)
+        u = (ti - (self.t0 + k * h))[:, None]
+        b = h - u
+        c0, c1 = y[k] / h - M[k] * (h / 6.0), y[k + 1] / h - M[k + 1] * (h / 6.0)
+        p = (M[k] * b ** 3 + M[k + 1] * u ** 3) / (6.0 * h) + c0 * b + c1 * u
+        v = (M[k + 1] * u ** 2 - M[k] * b ** 2) / (2.0 * h) - c0 + c1
+        return p, v, (M[k] * b + M[k + 1] * u) / h
 
 
 class TipTrajectory:
