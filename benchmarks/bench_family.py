@@ -92,8 +92,9 @@ def run_world(world: str, quick: bool, seeds: int) -> dict[str, Any]:
     bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
     # the gate's rule chosen in the closed loop as `mpcshare train` does, on the last held-out trials;
     # the runs below are evaluated on the other held-out trials only
-    choice = choose_for_bundle(bundle, demos, duration_s=30.0, log=None)
-    info["rule_choice"] = {"wearer_modes": choice["wearer_modes"], "why": choice["why"], "trials": choice["trials"]}
+    choice = choose_for_bundle(bundle, demos, duration_s=30.0, mode_names=mode_names, log=None)
+    info["rule_choice"] = {k: choice[k] for k in ("wearer_modes", "why", "trials", "mode_costs", "price_order",
+                                                  "cutting_modes", "seconds")}
     t_train = time.perf_counter() - t0
     rest = [t for t in bundle.heldout_trials if t not in choice["trials"]]
     trials = list(rest[:2] if quick else rest)

@@ -28,7 +28,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-__all__ = ["STROKE_BAND_HZ", "TASK_KEYS", "SawingFidelity", "bandpass", "episode_task_metrics", "rms_by_mode",
+__all__ = ["SAWING_MIN_AMPLITUDE", "SAWING_MIN_CORRELATION", "STROKE_BAND_HZ", "TASK_KEYS",
+           "SawingFidelity", "bandpass", "episode_task_metrics", "rms_by_mode",
            "sawing_fidelity", "time_lag", "wearer_share_by_mode"]
 
 STROKE_BAND_HZ = (0.8, 3.0)  # [Hz] the band of the sawing strokes (2 Hz strokes in the demonstrations)
@@ -147,6 +148,10 @@ def rms_by_mode(tip: np.ndarray, intent: np.ndarray, modes: np.ndarray,
 
 
 #: keys of :func:`episode_task_metrics` (``comparison.json`` per strategy)
+#: the stroke counts as sawing when, while cutting, its band correlates with the intended stroke at least
+#: this much and reaches at least this share of its amplitude (docs/design.md, "the task")
+SAWING_MIN_CORRELATION = 0.7
+SAWING_MIN_AMPLITUDE = 0.6
 TASK_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "strokes_intended",
              "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps")
 

@@ -102,7 +102,8 @@ def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any,
 
     print("choosing the hand-over rule in the closed loop on held-out trials", flush=True)
     try:
-        choice = choose_for_bundle(bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name, log=print)
+        choice = choose_for_bundle(bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,
+                                   mode_names=MODE_NAMES, log=print)
         print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']})")
     except ValueError as exc:
         print(f"hand-over rule: its defaults ({exc})")

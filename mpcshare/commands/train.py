@@ -173,9 +173,10 @@ def _choose_rule(bundle, demos, args: argparse.Namespace) -> dict | None:
     if args.no_rule_choice:
         return None
     from mpcshare.training.rule_choice import choose_for_bundle
+    from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
-                             wearer_name=args.rule_wearer, log=None if args.quiet else print)
+                             wearer_name=args.rule_wearer, mode_names=MODE_NAMES, log=None if args.quiet else print)
 
 
 TRAIN_COMMAND = Command("train", "train gates and the reactive predictor into a model bundle, "

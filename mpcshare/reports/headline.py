@@ -23,11 +23,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from mpcshare.line_ratio import add_line_ratios
+from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 
 __all__ = ["SAWING_TARGET", "SHARED_STRATEGIES", "Headline", "headline_lines", "headlines", "line_ratio",
            "shared_strategy"]
 
-SAWING_TARGET = (0.6, 0.7)  # amplitude ratio and correlation of the stroke that count as sawing (docs/design.md)
+SAWING_TARGET = (SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION)  # amplitude ratio and correlation that count as sawing
 EFFORT_TARGET = 0.75  # the shared strategy's effort, at most this share of the wearer's alone (docs/design.md)
 #: which run is "sharing" in the headline: the first of these present
 SHARED_STRATEGIES = ("gate", "paper_gate", "blend")

@@ -1,22 +1,29 @@
-"""The default gate's settings chosen in the closed loop on held-out trials of the user's own data.
+"""The default gate's wearer modes chosen in the closed loop on held-out trials of the user's own data.
 
-The rule (:mod:`mpcshare.control.strategies.gate`) hands the wearer the modes whose held-out
-unpredictable share v_j reaches ``share_on``. Which modes those should be depends on how well the
-robot and the wearer track each mode, which the data alone does not say (the wearer's error is
-not recorded), so :func:`choose_rule` measures it: for each nested set of wearer modes (the modes
-sorted by v_j, the top 1, 2, …, K − 1; thresholds between consecutive shares, :func:`candidates`) it
-simulates the closed loop (:func:`mpcshare.experiments.simulate_episode`, the default wearer) on
-the given held-out trials, beside ``voluntary`` and ``reactive``, and reads each candidate's
-**line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to that
-of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing the parties).
+The rule (:mod:`mpcshare.control.strategies.gate`) hands the wearer whole modes, before they
+begin. Which modes those should be depends on how well the robot and the wearer *track* each
+mode and what leading costs the wearer, which the data alone do not say (the wearer's error is
+not recorded), so :func:`choose_rule` measures it:
 
-Criterion (:data:`CRITERION`): the lowest line ratio among the candidates whose effort is at most
-``max_effort`` × the voluntary effort (the issue-28 target 0.75). When none is, or the line is
-ill-posed (the robot alone costs the wearer at least ``max_effort`` × the effort of doing it
-alone: they correct it that much, and every ratio then divides by a near-vertical line), the
-lowest tracking RMS: where nothing saves effort, track best.
-The choice, every candidate's figures and why are returned for the bundle's ``metrics`` and
-``training.md``.
+1. it simulates the closed loop (:func:`mpcshare.experiments.simulate_episode`, the default
+   wearer) on the given held-out trials with ``voluntary`` and ``reactive``, and reads what each
+   mode costs under each party (:func:`mpcshare.training.mode_cost.mode_costs`: the squared
+   error the wearer saves per unit of effort, the *price* ρ_j);
+2. candidates (:func:`candidate_sets`): the wearer leads the top 1, 2, … modes by price (the
+   lower hull of effort against error over whole-mode assignments); each of them together
+   with the modes that carry the labelled cutting, where the data name one (the task: the knife
+   must saw, and only the wearer knows the stroke); and the robot leading every mode;
+3. each candidate is simulated in the closed loop (hand-over costs included) and scored by its
+   **line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to
+   that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
+
+Criterion (:data:`CRITERION`): among the candidates whose effort is at most ``max_effort`` × the
+voluntary effort (the issue-28 target 0.75), those that saw while cutting (:func:`saws`: the
+task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line ratio. When none is
+within the effort cap, or the line is ill-posed (the robot alone costs the wearer at least
+``max_effort`` × the effort of doing it alone), the lowest tracking RMS: where nothing saves
+effort, track best. The choice, every candidate's figures, the per-mode costs and why are
+returned for the bundle's ``metrics`` and ``training.md``.
 """
 
 from __future__ import annotations
@@ -27,17 +34,21 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
-from mpcshare.control.setup import arbitration_inputs
-from mpcshare.control.strategies.gate import voluntary_shares
 from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.line_ratio import line_ratio as _line_ratio
+from mpcshare.training.mode_cost import cutting_modes, mode_costs, price_order
+from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 from sim.wearer import WearerConfig
 
-__all__ = ["CRITERION", "candidates", "choose_for_bundle", "choose_rule", "line_ratio", "rule_markdown"]
+__all__ = ["CRITERION", "HANDOVER_SETTINGS", "candidate_sets", "choose_for_bundle", "choose_rule", "line_ratio",
+           "rule_markdown", "saws"]
 
-CRITERION = ("lowest line ratio among the candidates with effort <= max_effort x voluntary; if none, or "
-             "reactive itself costs >= max_effort x voluntary, the lowest tracking RMS")
+CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
+             "wearer alone saws, the lowest line ratio; if none is within the cap, or reactive itself costs >= "
+             "max_effort x voluntary, the lowest tracking RMS")
+#: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
+HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3}
 
 
 def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive: dict[str, float]) -> float | None:
@@ -47,93 +58,135 @@ def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive:
                        (reactive["voluntary_effort"], reactive["tracking_rmse_m"]))
 
 
-def candidates(v: np.ndarray) -> list[dict[str, Any]]:
-    """The nested wearer-mode sets: for the top i modes by v_j (i = 1..K−1, distinct shares),
-    share_on halfway between the i-th and the (i+1)-th share, share_off halfway below it; last, the
-    empty set (the robot leads every mode; share_on halfway between the largest share and 1), so
-    that the choice can keep the robot leading where it tracks best."""
-    order = np.argsort(-np.asarray(v, dtype=float), kind="stable")
-    s = np.asarray(v, dtype=float)[order]
-    out = []
-    for i in range(1, len(s)):
-        if s[i - 1] - s[i] <= 1e-9:
-            continue
-        on = 0.5 * (s[i - 1] + s[i])
-        out.append({"wearer_modes": sorted(int(j) for j in order[:i]),
-                    "settings": {"share_on": round(float(on), 6), "share_off": round(float(0.5 * (on + s[i])), 6)}})
-    if len(s) and s[0] < 1.0 - 1e-6:
-        on = 0.5 * (s[0] + 1.0)
-        out.append({"wearer_modes": [],
-                    "settings": {"share_on": round(float(on), 6), "share_off": round(float(0.5 * (on + s[0])), 6)}})
-    return out
+def candidate_sets(order: Sequence[int], cutting: Sequence[int], n_modes: int) -> list[list[int]]:
+    """The wearer-mode sets to try (module docstring): the prefixes of ``order`` (modes by price), each
+    also joined with the ``cutting`` modes, the cutting modes alone, and last the empty set (the robot
+    leads every mode); never all ``n_modes`` (that is ``voluntary``); sorted sets, no repeats."""
+    sets: list[list[int]] = []
+    prefixes = [list(order[:i]) for i in range(1, len(order) + 1)]
+    for base in prefixes + ([[]] if cutting else []):
+        for s in (base, sorted(set(base) | set(cutting))):
+            s = sorted(int(j) for j in s)
+            if s and len(s) < n_modes and s not in sets:
+                sets.append(s)
+    return sets + [[]]
 
 
 def _pooled(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
-            duration_s: float | None, wearer: WearerConfig | None, seed: int) -> dict[str, float]:
+            duration_s: float | None, wearer: WearerConfig | None, seed: int,
+            mode_names: Sequence[str] | None = None) -> tuple[dict[str, float], list[Any]]:
+    """Pooled figures of ``strategy`` on ``trials`` (RMS, effort, limit violations, mean stroke correlation
+    while cutting or None) and the episodes."""
     by_id = {tr.trial_id: tr for tr in demos.trials}
-    ms, steps, secs = [], [], []
+    ms, steps, secs, episodes = [], [], [], []
     extra = {"config": ControllerConfig(strategy_options=dict(options))} if options else {}
     for tid in trials:
         ep, m = simulate_episode(bundle, demos, by_id[int(tid)], StrategyRun(strategy, strategy), extra, beta=0.5,
-                                 duration_s=duration_s, seed=seed, wearer=wearer, mode_names=None)
+                                 duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names)
         ms.append(m)
+        episodes.append(ep)
         steps.append(np.asarray(ep.step_time, dtype=float))
         secs.append(float(ep.t[-1] - ep.t[0]))
     p = pool_metrics(ms, steps, secs)
-    return {k: p[k] for k in ("tracking_rmse_m", "voluntary_effort", "limit_violations")}
+    out = {k: p[k] for k in ("tracking_rmse_m", "voluntary_effort", "limit_violations")}
+    for key in ("saw_correlation", "saw_amplitude_ratio"):
+        vals = [m[key] for m in ms if m.get(key) is not None]
+        out[key] = float(np.mean(vals)) if vals else None
+    return out, episodes
+
+
+def saws(row: dict[str, Any]) -> bool:
+    """Whether the knife sawed while cutting: the stroke's correlation and amplitude ratio reach the task's
+    thresholds (:data:`sim.task_metrics.SAWING_MIN_CORRELATION`, ``SAWING_MIN_AMPLITUDE``)."""
+    return ((row.get("saw_correlation") or 0.0) >= SAWING_MIN_CORRELATION
+            and (row.get("saw_amplitude_ratio") or 0.0) >= SAWING_MIN_AMPLITUDE)
+
+
+def _n_modes(bundle: Any) -> int:
+    """The mode model's number of modes; ValueError when the bundle has none."""
+    modes = getattr(bundle, "modes", None)
+    A = getattr(modes, "transmat_", None)
+    if A is None:
+        raise ValueError("the bundle has no mode model (modes.transmat_) whose modes the wearer could lead")
+    return int(np.shape(A)[0])
+
+
+def _cutting(bundle_episodes: list[Any], demos: Demonstrations, trials: Sequence[int],
+             mode_names: Sequence[str] | None, n_modes: int) -> list[int]:
+    """The controller's modes that carry the labelled cutting (none without labels or a ``cutting`` name)."""
+    if not mode_names or "cutting" not in mode_names:
+        return []
+    by_id = {tr.trial_id: tr for tr in demos.trials}
+    labels = [by_id[int(t)].mode for t in trials]
+    if any(lab is None for lab in labels):
+        return []
+    return cutting_modes(bundle_episodes, labels, list(mode_names).index("cutting"), n_modes)
+
+
+def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
+               max_effort: float) -> tuple[dict[str, Any], str]:
+    """The chosen row and why (module docstring, :data:`CRITERION`)."""
+    ok = [r for r in rows if r["effort_vs_voluntary"] <= max_effort and r["line_ratio"] is not None]
+    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
+    if not (ok and posed):
+        best = min(rows, key=lambda r: r["tracking_rmse_m"])
+        cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort"
+                 if not posed else f"no candidate has effort <= {max_effort:g}x voluntary")
+        return best, f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm)"
+    sawing = [r for r in ok if saws(r)]
+    pool, task = (sawing, ", of those that saw while cutting") if saws(vol) and sawing else (ok, "")
+    best = min(pool, key=lambda r: r["line_ratio"])
+    return best, (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(ok)} of {len(rows)} candidates with "
+                  f"effort <= {max_effort:g}x voluntary{task}")
 
 
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, duration_s: float | None = 30.0,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
-                log: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """Choose the gate's settings in the closed loop (module docstring).
+                mode_names: Sequence[str] | None = None, log: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Choose the gate's wearer modes in the closed loop (module docstring).
 
-    Returns ``{"settings", "wearer_modes", "why", "criterion", "candidates", "voluntary", "reactive",
-    "trials", "duration_s", "seconds"}``. Raises ValueError when the bundle has no per-mode figures
-    or no trial is given.
+    ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
+    task's stroke; None: no sawing figures). Returns ``{"settings", "wearer_modes", "why",
+    "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
+    "trials", "duration_s", "seconds"}``. Raises ValueError when the bundle has no mode model or no
+    trial is given.
     """
     if not len(trials):
         raise ValueError("choose_rule needs at least one held-out trial")
-    v = voluntary_shares(arbitration_inputs(bundle)["mode_stats"])
-    if v is None:
-        raise ValueError("the bundle has no per-mode held-out figures (metrics['gate']['per_mode']) to choose from")
+    n_modes = _n_modes(bundle)
     t0 = time.perf_counter()
-    run = lambda s, o=None: _pooled(bundle, demos, trials, s, o, duration_s, wearer, seed)  # noqa: E731
-    vol, rea = run("voluntary"), run("reactive")
+    run = lambda s, o=None: _pooled(bundle, demos, trials, s, o, duration_s, wearer, seed, mode_names)  # noqa: E731
+    (vol, vol_eps), (rea, rea_eps) = run("voluntary"), run("reactive")
+    costs = mode_costs(vol_eps, rea_eps, n_modes)
+    order = price_order(costs)
+    cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
     rows = []
-    for c in candidates(v):
-        m = run("gate", c["settings"])
-        rows.append({**c, **m, "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
+    for modes in candidate_sets(order, cutting, n_modes):
+        settings = {"wearer_modes": modes, **HANDOVER_SETTINGS}
+        m, _ = run("gate", settings)
+        rows.append({"wearer_modes": modes, "settings": settings, **m,
+                     "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
         if log is not None:
             r = rows[-1]
             lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
             log(f"  gate with wearer modes {r['wearer_modes']}: RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
                 f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
-    if not rows:
-        raise ValueError(f"every mode has the same held-out unpredictable share {v.tolist()}: nothing to choose")
-    ok = [r for r in rows if r["effort_vs_voluntary"] <= max_effort and r["line_ratio"] is not None]
-    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
-    if ok and posed:
-        best = min(ok, key=lambda r: r["line_ratio"])
-        why = (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(ok)} of {len(rows)} candidates with "
-               f"effort <= {max_effort:g}x voluntary")
-    else:
-        best = min(rows, key=lambda r: r["tracking_rmse_m"])
-        cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort"
-                 if not posed else f"no candidate has effort <= {max_effort:g}x voluntary")
-        why = f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm)"
+    best, why = _criterion(rows, vol, rea, max_effort)
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
             "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
-            "trials": [int(t) for t in trials], "duration_s": duration_s, "voluntary_share_by_mode": v.tolist(),
+            "mode_costs": costs, "price_order": order, "cutting_modes": cutting,
+            "trials": [int(t) for t in trials], "duration_s": duration_s,
             "seconds": round(time.perf_counter() - t0, 1)}
 
 
 def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
                       duration_s: float | None = 30.0, wearer_name: str | None = None,
+                      mode_names: Sequence[str] | None = None,
                       log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
-    1 to 2) with the wearer preset ``wearer_name`` (default the default preset), recorded in
+    1 to 2) with the wearer preset ``wearer_name`` (default the default preset) and the demonstrations'
+    ``mode_names`` (for the cutting modes), recorded in
     ``bundle.metrics`` (``rule_settings``, ``rule_choice``) so that the saved bundle's ``gate`` uses it;
     returns the choice. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
     from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
@@ -141,7 +194,8 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     name = wearer_name or DEFAULT_WEARER_PRESET
     held = list(bundle.heldout_trials)
     n = n_trials or min(2, max(1, len(held) // 2))
-    choice = choose_rule(bundle, demos, held[-n:], duration_s=duration_s, log=log, wearer=wearer_preset(name))
+    choice = choose_rule(bundle, demos, held[-n:], duration_s=duration_s, log=log, wearer=wearer_preset(name),
+                         mode_names=mode_names)
     choice["wearer"] = name
     bundle.metrics["rule_settings"] = choice["settings"]
     bundle.metrics["rule_choice"] = choice
@@ -156,14 +210,37 @@ def rule_markdown(choice: dict[str, Any]) -> str:
              f"{choice['seconds']:g} s: "
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
-             f"Held-out unpredictable share per mode: {[round(x, 3) for x in choice['voluntary_share_by_mode']]}.", "",
-             "| run | wearer modes | RMS [mm] | effort vs voluntary | line ratio |", "|---|---|---|---|---|"]
+             *_costs_markdown(choice),
+             "| run | wearer modes | RMS [mm] | effort vs voluntary | line ratio | stroke corr. |",
+             "|---|---|---|---|---|---|"]
     for name in ("voluntary", "reactive"):
         m = choice[name]
         lines.append(f"| {name} | | {m['tracking_rmse_m'] * 1e3:.1f} | "
-                     f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 |")
+                     f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
     for r in choice["candidates"]:
         lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
         lines.append(f"| gate | {r['wearer_modes']} | {r['tracking_rmse_m'] * 1e3:.1f} | "
-                     f"{r['effort_vs_voluntary']:.2f} | {lr} |")
+                     f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
     return "\n".join(lines) + "\n"
+
+
+def _f(row: dict[str, Any]) -> str:
+    return "n/a" if row.get("saw_correlation") is None else f"{row['saw_correlation']:.2f}"
+
+
+def _costs_markdown(choice: dict[str, Any]) -> list[str]:
+    """The per-mode costs table (:mod:`mpcshare.training.mode_cost`) and the order and cutting modes."""
+    c = choice["mode_costs"]
+    rows = ["What each mode costs (the controller's own mode estimate; price: squared error the wearer saves per "
+            "rad of effort):", "",
+            "| mode | share | wearer RMS [mm] | robot RMS [mm] | wearer effort [rad] | robot effort [rad] | "
+            "price [mm²/rad] |", "|---|---|---|---|---|---|---|"]
+    def f(key: str, j: int, digits: int) -> str:
+        return "n/a" if c[key][j] is None else f"{c[key][j]:.{digits}f}"
+
+    for j in range(len(c["share"])):
+        rows.append(f"| {j} | {f('share', j, 2)} | {f('rms_wearer_mm', j, 1)} | {f('rms_robot_mm', j, 1)} | "
+                    f"{f('effort_wearer_rad', j, 3)} | {f('effort_robot_rad', j, 3)} | "
+                    f"{f('price_mm2_per_rad', j, 0)} |")
+    return rows + ["", f"Modes by price: {choice['price_order']}; modes that carry the cutting: "
+                   f"{choice['cutting_modes'] or 'none named'}.", ""]

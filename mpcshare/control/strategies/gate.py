@@ -35,8 +35,13 @@ wearer commanding a tip speed ‖û_v‖ above ``push_mps`` against the robot (�
 ``push_s`` (a leaky integral x' = 1[push] − x/push_s reaching 1 − 1/e of its limit) takes the
 lead, and keeps it for ``hold_s`` after the evidence fades (off when ``push_mps`` is inf).
 
-Settings (:data:`DEFAULTS`) come from the controller's ``strategy_options`` over the bundle's
-``rule_settings``. A bundle without per-mode figures falls back to the paper's gate
+**Measured wearer modes.** Where ``mpcshare train`` chose the wearer's modes in the closed loop
+(:mod:`mpcshare.training.rule_choice`, by what each mode costs under each party), the setting
+``wearer_modes`` lists them and v is their indicator (v_j = 1 for a wearer mode, else 0): s_t is
+then the forecast probability of being in a wearer mode within ``lead_s``.
+
+Settings (:data:`DEFAULTS`, and ``wearer_modes``) come from the controller's ``strategy_options``
+over the bundle's ``rule_settings``. A bundle without per-mode figures falls back to the paper's gate
 (:mod:`mpcshare.control.strategies.paper_gate`), and its reasons say so.
 """
 
@@ -50,7 +55,8 @@ import numpy as np
 from mpcshare.control.strategies.base import ArbiterView, StepInputs, StrategyContext, StrategySpec, Target
 from mpcshare.control.strategies.paper_gate import PaperGate
 
-__all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast", "voluntary_shares"]
+__all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast", "voluntary_shares",
+           "wearer_indicator"]
 
 #: The rule's settings and their defaults (see the module docstring).
 DEFAULTS: dict[str, float] = {"share_on": 0.3, "share_off": 0.2, "lead_s": 0.5, "hold_s": 0.5,
@@ -58,10 +64,11 @@ DEFAULTS: dict[str, float] = {"share_on": 0.3, "share_off": 0.2, "lead_s": 0.5, 
 
 
 def check_settings(options: dict[str, Any]) -> dict[str, float]:
-    """The rule's settings: :data:`DEFAULTS` updated with ``options``; ValueError naming a wrong one."""
-    unknown = sorted(set(options) - set(DEFAULTS))
+    """The rule's numeric settings: :data:`DEFAULTS` updated with ``options`` (``wearer_modes`` is read
+    by :func:`wearer_indicator`); ValueError naming a wrong one."""
+    unknown = sorted(set(options) - set(DEFAULTS) - {"wearer_modes"})
     if unknown:
-        raise ValueError(f"unknown gate setting(s) {unknown}; valid: {', '.join(DEFAULTS)}")
+        raise ValueError(f"unknown gate setting(s) {unknown}; valid: {', '.join(DEFAULTS)}, wearer_modes")
     s = {k: float(options.get(k, v)) for k, v in DEFAULTS.items()}
     if not 0.0 <= s["share_off"] <= s["share_on"] <= 1.0:
         raise ValueError(f"need 0 <= share_off <= share_on <= 1, got {s['share_off']!r}, {s['share_on']!r}")
@@ -85,6 +92,22 @@ def voluntary_shares(mode_stats: dict[str, Any] | None, n_modes: int | None = No
         v = np.asarray(raw, dtype=float)
     if v.ndim != 1 or not np.all(np.isfinite(v)) or np.any(v < 0) or np.any(v > 1):
         raise ValueError(f"mode_stats voluntary_share must be K shares in [0, 1], got {raw!r}")
+    return v
+
+
+def wearer_indicator(modes: Any, n_modes: int | None) -> np.ndarray | None:
+    """(K,) v_j = 1 for j in ``modes`` (the ``wearer_modes`` setting), else 0; None when ``modes`` is None.
+    ValueError for a mode outside 0..K−1 or without the mode model's K."""
+    if modes is None:
+        return None
+    if n_modes is None:
+        raise ValueError("gate setting wearer_modes needs the bundle's mode model (its transition matrix)")
+    idx = [int(j) for j in modes]
+    bad = [j for j in idx if not 0 <= j < n_modes]
+    if bad:
+        raise ValueError(f"gate setting wearer_modes has mode(s) {bad}; valid: 0..{n_modes - 1}")
+    v = np.zeros(n_modes)
+    v[idx] = 1.0
     return v
 
 
@@ -182,7 +205,8 @@ def make(ctx: StrategyContext) -> ModeCostGate | PaperGate:
     """The rule from the context's mode statistics, transition matrix and settings."""
     settings = check_settings(ctx.options)
     n = None if ctx.transmat is None else int(np.shape(ctx.transmat)[0])
-    v = voluntary_shares(ctx.mode_stats, n)
+    v = wearer_indicator(ctx.options.get("wearer_modes"), n)
+    v = voluntary_shares(ctx.mode_stats, n) if v is None else v
     if v is None:
         return _PaperFallback(ctx.on_threshold, ctx.off_threshold, ctx.min_dwell_s)
     return ModeCostGate(v, ctx.transmat, ctx.model_dt, settings, ctx.min_dwell_s)

@@ -1,26 +1,23 @@
-"""The closed-loop choice of the gate's settings: candidates, the line ratio, the criterion."""
+"""The closed-loop choice of the gate's wearer modes: candidates, the line ratio, the criterion."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from mpcshare.control.strategies.gate import check_settings
+from mpcshare.control.strategies.gate import check_settings, wearer_indicator
 from mpcshare.training import rule_choice
-from mpcshare.training.rule_choice import candidates, choose_rule, line_ratio, rule_markdown
+from mpcshare.training.rule_choice import candidate_sets, choose_rule, line_ratio, rule_markdown
 
 
-def test_candidates_are_the_nested_wearer_mode_sets():
-    v = np.array([0.06, 0.05, 0.7, 0.0])
-    c = candidates(v)
-    assert [x["wearer_modes"] for x in c] == [[2], [0, 2], [0, 1, 2], []]  # last: the robot leads every mode
-    for x in c:  # each threshold separates the set from the rest, with hysteresis, and is a valid setting
-        s = check_settings(x["settings"])
-        inside = v[x["wearer_modes"]] if x["wearer_modes"] else np.array([1.0])
-        outside = np.delete(v, x["wearer_modes"])
-        assert inside.min() >= s["share_on"] > s["share_off"] > outside.max()
-    assert [x["wearer_modes"] for x in candidates(np.array([0.3, 0.3]))] == [[]]  # equal shares: all or none
-    assert [x["wearer_modes"] for x in candidates(np.array([1.0, 0.2]))] == [[0]]  # a mode always unpredictable
+def test_candidates_are_price_prefixes_with_and_without_the_cutting_modes():
+    assert candidate_sets([2, 0, 1], [], 4) == [[2], [0, 2], [0, 1, 2], []]  # last: the robot leads every mode
+    assert candidate_sets([2, 0, 1], [3], 4) == [[2], [2, 3], [0, 2], [0, 2, 3], [0, 1, 2], [3], []]
+    assert candidate_sets([1, 0], [], 2) == [[1], []]  # never every mode: that is `voluntary`
+    assert candidate_sets([], [0], 3) == [[0], []]  # nothing worth its price: the cutting alone, or the robot
+    for modes in candidate_sets([2, 0, 1], [3], 4):  # each is a valid gate setting
+        check_settings({"wearer_modes": modes, **rule_choice.HANDOVER_SETTINGS})
+        assert wearer_indicator(modes, 4).sum() == len(modes)
 
 
 def test_line_ratio_against_the_straight_line():
@@ -34,37 +31,95 @@ def test_line_ratio_against_the_straight_line():
     assert line_ratio(0.030, 0.10, vol, rea) == pytest.approx(3.0)  # beyond both efforts: the better party
 
 
+class _Episode:
+    """The fields mode_costs reads: per control step the mode estimate, tip, intent, shoulder angles."""
+
+    def __init__(self, mode, err_m, effort_rad):
+        n = len(mode)
+        self.mode = np.asarray(mode)
+        self.tip_intent = np.zeros((n, 3))
+        self.tip = np.zeros((n, 3))
+        self.tip[:, 0] = err_m
+        self.voluntary = np.zeros((n, 3))
+        self.voluntary[:, 1] = effort_rad
+
+
+class _Bundle:
+    model_hz = 10.0
+
+    class modes:
+        transmat_ = np.full((3, 3), 1 / 3)
+
+
+def _fake_runs(figures, by_modes, calls):
+    """_pooled replaced: the parties' figures and episodes (mode 1 costs the robot most per effort), and
+    per gate candidate (its wearer modes) given (RMS, effort, stroke correlation)."""
+    mode = np.repeat([0, 1, 2], 100)
+
+    def fake(bundle, demos, trials, strategy, options, duration_s, wearer, seed, mode_names=None):
+        calls.append((strategy, None if options is None else tuple(options["wearer_modes"])))
+        if strategy == "gate":
+            rms, eff, saw = by_modes[tuple(options["wearer_modes"])]
+            return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
+                    "saw_amplitude_ratio": 0.9}, []
+        rms, eff, saw = figures[strategy]
+        err = {"voluntary": [0.005, 0.005, 0.005], "reactive": [0.006, 0.030, 0.012]}[strategy]
+        effort = {"voluntary": [0.05, 0.05, 0.10], "reactive": [0.01, 0.01, 0.01]}[strategy]
+        ep = _Episode(mode, np.repeat(err, 100), np.repeat(effort, 100))
+        return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
+                "saw_amplitude_ratio": 0.9}, [ep]
+    return fake
+
+
 def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
-    """With simulated figures (the loop replaced): the lowest line ratio among efforts <= 0.75x wins;
-    when none is below the cap, or the robot alone costs the wearer as much, the lowest RMS."""
-    figures = {"voluntary": (0.010, 0.08), "reactive": (0.020, 0.02)}
-    by_on = {}
-
-    def fake(bundle, demos, trials, strategy, options, duration_s, wearer, seed):
-        rms, eff = figures[strategy] if strategy != "gate" else by_on[options["share_on"]]
-        return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0}
-
-    class Bundle:
-        model_hz = 10.0
-        modes = None
-        metrics = {"gate": {"per_mode": {"0": {"n": 100, "n_positive": 94}, "1": {"n": 100, "n_positive": 30},
-                                         "2": {"n": 100, "n_positive": 100}}}}
-
-    monkeypatch.setattr(rule_choice, "_pooled", fake)
-    ons = [c["settings"]["share_on"] for c in candidates(np.array([0.06, 0.7, 0.0]))]
-    by_on.update({ons[0]: (0.014, 0.04), ons[1]: (0.0105, 0.07)})  # line ratios 0.82 (0.33x), 0.84 (0.88x)
-    by_on[ons[2]] = (0.021, 0.075)  # the robot leads every mode: the wearer corrects it hard
-    choice = choose_rule(Bundle(), None, [3])
-    assert choice["wearer_modes"] == [1] and "lowest line ratio" in choice["why"]
-    by_on.update({ons[0]: (0.014, 0.07)})
-    choice = choose_rule(Bundle(), None, [3])
-    assert choice["wearer_modes"] == [0, 1] and "no candidate" in choice["why"]  # 10.5 mm
-    assert "| gate | [0, 1] |" in rule_markdown(choice)
-    by_on.update({ons[0]: (0.0105, 0.04), ons[1]: (0.0104, 0.05)})
-    figures["reactive"] = (0.020, 0.065)  # the robot alone costs 0.81x: the line is ill-posed
-    choice = choose_rule(Bundle(), None, [3])
-    assert choice["wearer_modes"] == [0, 1] and "reactive alone costs 0.81x" in choice["why"]
-    by_on[ons[2]] = (0.009, 0.066)  # the robot leading every mode tracks best: the choice keeps it leading
-    assert choose_rule(Bundle(), None, [3])["wearer_modes"] == []
+    """With simulated figures (the loop replaced): the candidates follow the measured prices; the lowest
+    line ratio among efforts <= 0.75x wins; when none is below the cap, or the robot alone costs the
+    wearer as much, the lowest RMS."""
+    figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
+    by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
+    calls: list = []
+    monkeypatch.setattr(rule_choice, "_pooled", _fake_runs(figures, by_modes, calls))
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["price_order"] == [1, 2, 0]  # mode 1: 0.0009 - 0.000025 m² saved for 0.04 rad
+    assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1, 2), ()]
+    assert choice["wearer_modes"] == [1] and "lowest line ratio" in choice["why"]  # 0.82 at 0.5x
+    assert choice["settings"]["wearer_modes"] == [1]
+    assert choice["mode_costs"]["rms_robot_mm"] == pytest.approx([6.0, 30.0, 12.0])
+    by_modes[(1,)] = (0.014, 0.07, None)
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["wearer_modes"] == [1, 2] and "no candidate" in choice["why"]  # 10.5 mm
+    md = rule_markdown(choice)
+    assert "| gate | [1, 2] |" in md and "| 1 | 0.33 | 5.0 | 30.0 |" in md
+    by_modes.update({(1,): (0.0105, 0.04, None), (1, 2): (0.0104, 0.05, None)})
+    figures["reactive"] = (0.020, 0.065, None)  # the robot alone costs 0.81x: the line is ill-posed
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["wearer_modes"] == [1, 2] and "reactive alone costs 0.81x" in choice["why"]
+    by_modes[()] = (0.009, 0.066, None)  # the robot leading every mode tracks best: the choice keeps it leading
+    assert choose_rule(_Bundle(), None, [3])["wearer_modes"] == []
     with pytest.raises(ValueError, match="at least one held-out trial"):
-        choose_rule(Bundle(), None, [])
+        choose_rule(_Bundle(), None, [])
+
+
+def test_where_the_wearer_saws_the_choice_saws(monkeypatch):
+    """The task first: a candidate that does not saw loses to one that does, even at a better line."""
+    figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
+    by_modes = {(1,): (0.012, 0.04, 0.65), (1, 2): (0.0125, 0.05, 0.9), (): (0.02, 0.02, 0.1)}  # 0.65: not sawing
+    monkeypatch.setattr(rule_choice, "_pooled", _fake_runs(figures, by_modes, []))
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["wearer_modes"] == [1, 2] and "that saw" in choice["why"]
+    by_modes[(1, 2)] = (0.0125, 0.07, 0.9)  # the sawing candidate costs too much: the best line among the rest
+    assert choose_rule(_Bundle(), None, [3])["wearer_modes"] == [1]
+
+
+def test_a_bundle_without_a_mode_model_is_refused():
+    class NoModes:
+        modes = None
+
+    with pytest.raises(ValueError, match="no mode model"):
+        choose_rule(NoModes(), None, [3])
+
+
+def test_sawing_needs_both_the_correlation_and_the_amplitude():
+    assert rule_choice.saws({"saw_correlation": 0.7, "saw_amplitude_ratio": 0.6})
+    assert not rule_choice.saws({"saw_correlation": 0.95, "saw_amplitude_ratio": 0.5})  # too small a stroke
+    assert not rule_choice.saws({"saw_correlation": None, "saw_amplitude_ratio": None})  # no cutting seen

@@ -93,3 +93,19 @@ def test_settings_are_checked():
         _arbiter(share_on=0.2, share_off=0.5)
     with pytest.raises(ValueError, match="voluntary_share must be K shares"):
         Arbiter("gate", mode_stats={"voluntary_share": [0.5, 1.5]})
+
+
+def test_measured_wearer_modes_replace_the_shares():
+    """``wearer_modes`` (the closed-loop choice): v is their indicator, whatever the held-out shares say;
+    s is then the forecast probability of a wearer mode within lead_s."""
+    arb = _arbiter(wearer_modes=[2], share_on=0.5, share_off=0.3, lead_s=0.0, hold_s=0.0)
+    assert arb.decide(0.0, 0.9, mode_proba=_onehot(1)).alpha == 1.0  # the shares' stroke mode: the robot leads
+    assert arb.decide(0.1, 0.9, mode_proba=np.array([0.0, 0.45, 0.55])).alpha == 0.0  # P(mode 2) 0.55 >= 0.5
+    assert arb.decide(0.2, 0.9, mode_proba=np.array([0.0, 0.6, 0.4])).alpha == 0.0  # above share_off: kept
+    assert arb.decide(0.3, 0.9, mode_proba=np.array([0.0, 0.8, 0.2])).alpha == 1.0
+    ahead = _arbiter(wearer_modes=[2], share_on=0.4, share_off=0.3, lead_s=1.0)
+    p = max(np.linalg.matrix_power(A, k)[1, 2] for k in range(11))  # from mode 1, into mode 2 within 1 s: 0.41
+    assert p >= 0.4 and ahead.decide(0.0, 0.9, mode_proba=_onehot(1)).alpha == 0.0
+    for bad in ([3], [-1]):
+        with pytest.raises(ValueError, match="valid: 0..2"):
+            _arbiter(wearer_modes=bad)
