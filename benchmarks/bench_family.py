@@ -76,7 +76,24 @@ def _one_sided(a: list[float], b: list[float]) -> dict[str, Any]:
     return {"p": p, "n_pairs": int(d.size), "mean_difference_mm": float(1e3 * d.mean()) if d.size else None}
 
 
-def run_world(world: str, quick: bool, seeds: int) -> dict[str, Any]:
+def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict[str, Any],
+                        pooled: dict[str, dict[str, Any]], mode_names: Any, quick: bool) -> list[dict[str, Any]]:
+    """Every candidate of the rule's choice run on the *evaluation* trials (sim seed 0): which wearer-mode
+    set would have been best had the choice known the future (an upper bound on the choice, not a rule)."""
+    from mpcshare.training.rule_choice import line_ratio, pooled_run, saws
+
+    vol, rea = pooled["voluntary"], pooled["reactive"]
+    rows = []
+    for c in choice["candidates"]:
+        m, _ = pooled_run(bundle, demos, trials, "gate", c["settings"], 30.0 if quick else None, None, 0, mode_names)
+        rows.append({"wearer_modes": c["wearer_modes"], "rms_mm": 1e3 * m["tracking_rmse_m"],
+                     "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"],
+                     "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
+                     "saws": saws(m), "chosen": c["wearer_modes"] == choice["wearer_modes"]})
+    return rows
+
+
+def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False) -> dict[str, Any]:
     """Train on the world, simulate every run on its held-out trials, summarise (module docstring)."""
     import torch
 
@@ -120,6 +137,8 @@ def run_world(world: str, quick: bool, seeds: int) -> dict[str, Any]:
                 "gate_below_best_mix": _one_sided(per_pair["gate"], per_pair[best_mix])},
             "oracle_over_better_party": pooled["oracle_handover"]["tracking_rmse_m"] / better,
             "gate_effort_over_voluntary": pooled["gate"]["voluntary_effort"] / pooled["voluntary"]["voluntary_effort"],
+            "candidates_on_eval": _candidates_on_eval(bundle, demos, trials, choice, pooled, mode_names, quick)
+            if all_candidates else None,
             "train_s": t_train, "seconds": time.perf_counter() - t0,
             "figures_of": "seed 0 pooled over the trials; p-values over (trial, seed) pairs"}
 
@@ -153,6 +172,9 @@ def main(argv: list[str] | None = None) -> int:
                         "p < 0.01 is reachable; --quick 1)")
     p.add_argument("--quick", action="store_true", help="smaller worlds, at most 20 epochs, 2 trials x 30 s")
     p.add_argument("--out", help="also write the final JSON object to this file")
+    p.add_argument("--all-candidates", action="store_true",
+                   help="also run every candidate of the rule's choice on the evaluation trials (the best set in "
+                        "hindsight: an upper bound on the choice)")
     a = p.parse_args(argv)
     a.seeds = a.seeds if a.seeds is not None else (1 if a.quick else 4)
     seeds = list(range(3 if a.quick else 10)) if a.worlds is None else a.worlds
@@ -161,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=ctx) as pool:
-        futures = {pool.submit(run_world, w, a.quick, a.seeds): w for w in worlds}
+        futures = {pool.submit(run_world, w, a.quick, a.seeds, a.all_candidates): w for w in worlds}
         for fut in as_completed(futures):
             r = fut.result()
             results.append(r)

@@ -19,11 +19,11 @@ not recorded), so :func:`choose_rule` measures it:
 
 Criterion (:data:`CRITERION`): among the candidates whose effort is at most ``max_effort`` × the
 voluntary effort (the issue-28 target 0.75), those that saw while cutting (:func:`saws`: the
-task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line ratio. When none is
-within the effort cap, or the line is ill-posed (the robot alone costs the wearer at least
-``max_effort`` × the effort of doing it alone), the lowest tracking RMS: where nothing saves
-effort, track best. The choice, every candidate's figures, the per-mode costs and why are
-returned for the bundle's ``metrics`` and ``training.md``.
+task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line
+ratio; where the line is ill-posed (the robot alone costs the wearer at least ``max_effort`` × the
+effort of doing it alone), the lowest tracking RMS of those. When none is within the effort cap,
+the lowest tracking RMS: where nothing saves effort, track best. The choice, every candidate's
+figures, the per-mode costs and why are returned for the bundle's ``metrics`` and ``training.md``.
 """
 
 from __future__ import annotations
@@ -42,11 +42,11 @@ from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "HANDOVER_SETTINGS", "candidate_sets", "choose_for_bundle", "choose_rule", "line_ratio",
-           "rule_markdown", "saws"]
+           "pooled_run", "rule_markdown", "saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
-             "wearer alone saws, the lowest line ratio; if none is within the cap, or reactive itself costs >= "
-             "max_effort x voluntary, the lowest tracking RMS")
+             "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
+             "max_effort x voluntary); if none is within the cap, the lowest tracking RMS")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3}
 
@@ -72,7 +72,7 @@ def candidate_sets(order: Sequence[int], cutting: Sequence[int], n_modes: int) -
     return sets + [[]]
 
 
-def _pooled(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
+def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
             duration_s: float | None, wearer: WearerConfig | None, seed: int,
             mode_names: Sequence[str] | None = None) -> tuple[dict[str, float], list[Any]]:
     """Pooled figures of ``strategy`` on ``trials`` (RMS, effort, limit violations, mean stroke correlation
@@ -126,18 +126,24 @@ def _cutting(bundle_episodes: list[Any], demos: Demonstrations, trials: Sequence
 def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
                max_effort: float) -> tuple[dict[str, Any], str]:
     """The chosen row and why (module docstring, :data:`CRITERION`)."""
-    ok = [r for r in rows if r["effort_vs_voluntary"] <= max_effort and r["line_ratio"] is not None]
-    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
-    if not (ok and posed):
+    within = [r for r in rows if r["effort_vs_voluntary"] <= max_effort]
+    if not within:
         best = min(rows, key=lambda r: r["tracking_rmse_m"])
-        cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort"
-                 if not posed else f"no candidate has effort <= {max_effort:g}x voluntary")
-        return best, f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm)"
-    sawing = [r for r in ok if saws(r)]
-    pool, task = (sawing, ", of those that saw while cutting") if saws(vol) and sawing else (ok, "")
-    best = min(pool, key=lambda r: r["line_ratio"])
-    return best, (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(ok)} of {len(rows)} candidates with "
-                  f"effort <= {max_effort:g}x voluntary{task}")
+        return best, (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest tracking RMS "
+                      f"({best['tracking_rmse_m'] * 1e3:.1f} mm)")
+    sawing = [r for r in within if saws(r)]
+    pool, task = (sawing, ", of those that saw while cutting") if saws(vol) and sawing else (within, "")
+    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
+    ranked = [r for r in pool if r["line_ratio"] is not None]
+    if posed and ranked:
+        best = min(ranked, key=lambda r: r["line_ratio"])
+        return best, (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(within)} of {len(rows)} "
+                      f"candidates with effort <= {max_effort:g}x voluntary{task}")
+    best = min(pool, key=lambda r: r["tracking_rmse_m"])
+    cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort, "
+             "so the line is ill-posed" if not posed else "no line ratio is defined")
+    return best, (f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm) among the "
+                  f"{len(within)} of {len(rows)} candidates with effort <= {max_effort:g}x voluntary{task}")
 
 
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, duration_s: float | None = 30.0,
@@ -155,7 +161,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, du
         raise ValueError("choose_rule needs at least one held-out trial")
     n_modes = _n_modes(bundle)
     t0 = time.perf_counter()
-    run = lambda s, o=None: _pooled(bundle, demos, trials, s, o, duration_s, wearer, seed, mode_names)  # noqa: E731
+    run = lambda s, o=None: pooled_run(bundle, demos, trials, s, o, duration_s, wearer, seed, mode_names)  # noqa: E731
     (vol, vol_eps), (rea, rea_eps) = run("voluntary"), run("reactive")
     costs = mode_costs(vol_eps, rea_eps, n_modes)
     order = price_order(costs)

@@ -52,7 +52,7 @@ class _Bundle:
 
 
 def _fake_runs(figures, by_modes, calls):
-    """_pooled replaced: the parties' figures and episodes (mode 1 costs the robot most per effort), and
+    """pooled_run replaced: the parties' figures and episodes (mode 1 costs the robot most per effort), and
     per gate candidate (its wearer modes) given (RMS, effort, stroke correlation)."""
     mode = np.repeat([0, 1, 2], 100)
 
@@ -78,7 +78,7 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
     calls: list = []
-    monkeypatch.setattr(rule_choice, "_pooled", _fake_runs(figures, by_modes, calls))
+    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["price_order"] == [1, 2, 0]  # mode 1: 0.0009 - 0.000025 m² saved for 0.04 rad
     assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1, 2), ()]
@@ -92,10 +92,12 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     assert "| gate | [1, 2] |" in md and "| 1 | 0.33 | 5.0 | 30.0 |" in md
     by_modes.update({(1,): (0.0105, 0.04, None), (1, 2): (0.0104, 0.05, None)})
     figures["reactive"] = (0.020, 0.065, None)  # the robot alone costs 0.81x: the line is ill-posed
-    choice = choose_rule(_Bundle(), None, [3])
+    choice = choose_rule(_Bundle(), None, [3])  # the lowest RMS within the cap; (): 0.075 is above it
     assert choice["wearer_modes"] == [1, 2] and "reactive alone costs 0.81x" in choice["why"]
-    by_modes[()] = (0.009, 0.066, None)  # the robot leading every mode tracks best: the choice keeps it leading
+    by_modes[()] = (0.009, 0.058, None)  # the robot leading every mode tracks best: the choice keeps it leading
     assert choose_rule(_Bundle(), None, [3])["wearer_modes"] == []
+    by_modes[()] = (0.009, 0.066, None)  # ... but not above the effort cap
+    assert choose_rule(_Bundle(), None, [3])["wearer_modes"] == [1, 2]
     with pytest.raises(ValueError, match="at least one held-out trial"):
         choose_rule(_Bundle(), None, [])
 
@@ -104,7 +106,7 @@ def test_where_the_wearer_saws_the_choice_saws(monkeypatch):
     """The task first: a candidate that does not saw loses to one that does, even at a better line."""
     figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
     by_modes = {(1,): (0.012, 0.04, 0.65), (1, 2): (0.0125, 0.05, 0.9), (): (0.02, 0.02, 0.1)}  # 0.65: not sawing
-    monkeypatch.setattr(rule_choice, "_pooled", _fake_runs(figures, by_modes, []))
+    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["wearer_modes"] == [1, 2] and "that saw" in choice["why"]
     by_modes[(1, 2)] = (0.0125, 0.07, 0.9)  # the sawing candidate costs too much: the best line among the rest
