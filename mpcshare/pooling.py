@@ -75,7 +75,8 @@ def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np
 
 def pool_keepout_metrics(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """Pool the keep-out figures (:mod:`sim.keepout_metrics`): the least clearance (per zone too), the
-    deepest intrusion and the highest speed near the person over episodes; times and steps summed."""
+    deepest intrusion, the highest speed near the person and the knife's lowest point over episodes;
+    times and steps summed."""
     def values(key: str) -> list[float]:
         return [float(m[key]) for m in metrics if m.get(key) is not None]
 
@@ -95,7 +96,8 @@ def pool_keepout_metrics(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:
             "keepout_steps_driven_in": int(sum(values("keepout_steps_driven_in"))),
             "keepout_inside_zone_moving_s": pick("keepout_inside_zone_moving_s", sum),
             "keepout_near_speed_mps": pick("keepout_near_speed_mps", max),
-            "keepout_min_clearance_by_zone_m": by_zone}
+            "keepout_min_clearance_by_zone_m": by_zone,
+            "knife_min_height_m": pick("knife_min_height_m", min)}
 
 
 def _pool_wearer_share(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:

@@ -46,7 +46,7 @@ from .constraints import Constraint, _viable_bound_scalar, intersect_by_priority
 from .errors import ControllerConfigError, FrameNotFoundError
 from .state import ControlState
 
-__all__ = ["BLADE_LENGTH", "KeepOutConfig", "KeepOutLimit", "RetreatAction", "Zone", "ZoneClearance",
+__all__ = ["BLADE_LENGTH", "Blade", "KeepOutConfig", "KeepOutLimit", "RetreatAction", "Zone", "ZoneClearance",
            "closest_segment_points", "retreat", "segment_zone_clearance"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -176,21 +176,11 @@ class _Point(NamedTuple):
     drift: np.ndarray
 
 
-class KeepOutLimit:
-    """Keep-out rows ``G·a ≤ h`` (module docstring) for any Pinocchio model and tool frame.
+class Blade:
+    """The knife's tip and heel on any Pinocchio model: ``frame`` (name or id) holds the tip, the heel is
+    ``heel_offset`` (3,) [m] in that frame (a frame added to a copy of the model)."""
 
-    ``heel_offset`` (3,) [m]: the blade's heel in the tool frame (the SuperLimb's knife runs
-    along the tool frame's x: ``(−blade_length, 0, 0)``). Give the zones of each step with
-    :meth:`set_zones` (model world frame) before the QP's step; :attr:`clearances` holds the
-    step's :class:`ZoneClearance` per zone, :attr:`approach` the knife's own speed toward it [m/s]
-    and :attr:`rows` the last rows computed.
-    """
-
-    name = "keepout"
-
-    def __init__(self, model, frame: str | int, heel_offset: Sequence[float],
-                 config: KeepOutConfig | None = None) -> None:
-        self.config = config or KeepOutConfig()
+    def __init__(self, model, frame: str | int, heel_offset: Sequence[float]) -> None:
         if isinstance(frame, str):
             if not model.existFrame(frame):
                 raise FrameNotFoundError(f"frame {frame!r} not in model {model.name!r}")
@@ -205,21 +195,7 @@ class KeepOutLimit:
         self.heel_id = self.model.addFrame(pin.Frame("keepout_heel", tool.parentJoint, int(frame), placement,
                                                      pin.FrameType.OP_FRAME))
         self.data = self.model.createData()
-        self.zones: list[Zone] = []
-        self.clearances: list[ZoneClearance] = []
-        self.approach: list[float] = []
-        self.rows: Constraint | None = None
         self._zero = np.zeros(self.model.nv)
-
-    def num_rows(self, n: int) -> int:
-        return 2 * int(self.config.max_zones)
-
-    def set_zones(self, zones: Sequence[Zone]) -> None:
-        """The zones of this step (model world frame); at most ``config.max_zones``."""
-        if len(zones) > self.config.max_zones:
-            raise ControllerConfigError(f"{len(zones)} zones given, KeepOutConfig.max_zones is "
-                                        f"{self.config.max_zones}")
-        self.zones = list(zones)
 
     def _point(self, fid: int) -> _Point:
         m, d = self.model, self.data
@@ -236,6 +212,42 @@ class KeepOutLimit:
         pin.updateFramePlacements(m, d)
         pin.computeJointJacobians(m, d)
         return self._point(self.tip_id), self._point(self.heel_id)
+
+
+class KeepOutLimit:
+    """Keep-out rows ``G·a ≤ h`` (module docstring) for any Pinocchio model and tool frame.
+
+    ``heel_offset`` (3,) [m]: the blade's heel in the tool frame (the SuperLimb's knife runs
+    along the tool frame's x: ``(−blade_length, 0, 0)``). Give the zones of each step with
+    :meth:`set_zones` (model world frame) before the QP's step; :attr:`clearances` holds the
+    step's :class:`ZoneClearance` per zone, :attr:`approach` the knife's own speed toward it [m/s]
+    and :attr:`rows` the last rows computed.
+    """
+
+    name = "keepout"
+
+    def __init__(self, model, frame: str | int, heel_offset: Sequence[float],
+                 config: KeepOutConfig | None = None) -> None:
+        self.config = config or KeepOutConfig()
+        self.blade = Blade(model, frame, heel_offset)
+        self.zones: list[Zone] = []
+        self.clearances: list[ZoneClearance] = []
+        self.approach: list[float] = []
+        self.rows: Constraint | None = None
+
+    def num_rows(self, n: int) -> int:
+        return 2 * int(self.config.max_zones)
+
+    def set_zones(self, zones: Sequence[Zone]) -> None:
+        """The zones of this step (model world frame); at most ``config.max_zones``."""
+        if len(zones) > self.config.max_zones:
+            raise ControllerConfigError(f"{len(zones)} zones given, KeepOutConfig.max_zones is "
+                                        f"{self.config.max_zones}")
+        self.zones = list(zones)
+
+    def knife(self, q: np.ndarray, v: np.ndarray | None = None) -> tuple[_Point, _Point]:
+        """(tip, heel) at (q, v) (:meth:`Blade.knife`)."""
+        return self.blade.knife(q, v)
 
     def compute_qp_inequalities(self, state: ControlState) -> Constraint:
         cfg, dt = self.config, state.dt

@@ -15,7 +15,10 @@ knife) and ṗ_b the knife's own velocity at the closest blade point (backward d
   faster than the knife toward the zone} (the person's own sweep outran the arm);
 * ``keepout_near_speed_mps`` = max of the knife's own speed toward a zone over the steps
   with c < ``near_m`` (0.05 m) (speed near the person; 0 when never near);
-* ``keepout_min_clearance_by_zone_m``: zone → min_k c_k,z.
+* ``keepout_min_clearance_by_zone_m``: zone → min_k c_k,z;
+* ``knife_min_height_m`` = min_k min(tip_k,z, heel_k,z): the blade's lowest point above the
+  plate's top (plate frame z; negative: into the plate, whose top the controller keeps as its
+  floor, ``ControllerConfig.floor_z``).
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ __all__ = ["KEEPOUT_KEYS", "episode_keepout_metrics"]
 
 KEEPOUT_KEYS = ("keepout_min_clearance_m", "keepout_max_depth_m", "keepout_time_inside_s",
                 "keepout_steps_driven_in", "keepout_inside_zone_moving_s", "keepout_near_speed_mps",
-                "keepout_min_clearance_by_zone_m")
+                "keepout_min_clearance_by_zone_m", "knife_min_height_m")
 DRIVEN_SPEED = 0.05  # [m/s] issue 30: inside and moving toward the zone faster than this = driven in
 
 
@@ -94,4 +97,12 @@ def episode_keepout_metrics(episode: Episode, near_m: float = 0.05) -> dict[str,
         "keepout_near_speed_mps": float(max(0.0, near_own.max())) if near_own.size else 0.0,
         "keepout_min_clearance_by_zone_m": {name: (float(np.nanmin(c[:, j])) if np.isfinite(c[:, j]).any() else None)
                                             for j, name in enumerate(BODY_PARTS)},
+        "knife_min_height_m": _lowest(episode),
     }
+
+
+def _lowest(episode: Episode) -> float | None:
+    """The blade's lowest z [m] (plate frame) over the episode: tip or heel (module docstring)."""
+    z = np.concatenate([episode.tip[:, 2], episode.knife_heel[:, 2]])
+    z = z[np.isfinite(z)]
+    return float(z.min()) if z.size else None

@@ -76,15 +76,16 @@ from mpcshare.control.fallback import fallback_joint_state, rest_command
 from mpcshare.control.fastpath import FastPath
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd, sense
-from mpcshare.control.keepout import make_keepout_mpc, make_keepout_qp
+from mpcshare.control.keepout import KeepOutSettings, make_keepout_mpc, make_keepout_qp
 from mpcshare.control.models_tick import fast_step, models_tick
 from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.preview import PreviewPlan, mpc_preview
 from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
-from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose
+from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose, project_box_shell
 from mpcshare.errors import ControllerTypeError
 from robot.description import RobotDescription, as_description
+from robot.floor import FloorLimit
 from robot.kinematics import TipKinematics
 from robot.qp import QPStatus
 from robot.shoulder import ShoulderMap
@@ -126,7 +127,10 @@ class SharedController:
         self.shoulder = shoulder if shoulder is not None else ShoulderMap()
         self.robot = as_description(robot)  # TypeError naming the choices for anything else
         self.dt = 1.0 / float(bundle.rate_hz)
-        self.qp, self.keepout = make_keepout_qp(self.robot, cfg.qp, self.dt, cfg.keepout)
+        heel = cfg.keepout.heel_offset if cfg.keepout is not None else KeepOutSettings().heel_offset
+        self.floor = None if cfg.floor_z is None else \
+            FloorLimit(self.robot.model, self.robot.tip_frame, heel, cfg.floor)
+        self.qp, self.keepout = make_keepout_qp(self.robot, cfg.qp, self.dt, cfg.keepout, self.floor)
         if self.keepout is not None:
             self.keepout.bind(bundle.obs_names)
         zoned = cfg.keepout is not None and cfg.keepout.mpc_zones
@@ -136,6 +140,10 @@ class SharedController:
             MPCFollower(self.mpc, self.dt, cfg.mpc_deadline_s, cfg.mpc_every)
         self.tip = TipKinematics(self.qp.model, self.robot.tip_frame)
         self.reach = self.robot.reach_shell(cfg.reach_margin)
+        lower = np.array(cfg.workspace.lower, dtype=float)
+        if cfg.floor_z is not None:
+            lower[2] = max(lower[2], cfg.floor_z)
+        self._box = (lower, np.array(cfg.workspace.upper, dtype=float))  # plate frame, floor raised to floor_z
         self.frontend = StreamingFrontEnd(bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz,
                                           model_hz=bundle.model_hz, window_s=bundle.window_s,
                                           detect_stale=cfg.detect_stale)
@@ -210,10 +218,16 @@ class SharedController:
         self._p_ref: np.ndarray | None = None  # plate frame
         self._last_t = -math.inf
         self._pose = np.array(self.default_base_pose, dtype=float)
+        self._set_floor()
         self._fork_vel = np.zeros(self.layout.d_o)
         self._last: ControlCommand | None = None
 
     # ------------------------------------------------------------------ helpers
+    def _set_floor(self) -> None:
+        """The floor z_plate ≥ floor_z in the model frame: n = Rᵀ·e_z, n·p ≥ floor_z − t_z."""
+        if self.floor is not None:
+            self.floor.set_plane(self._pose[2, :3], self.config.floor_z - self._pose[2, 3])
+
     def _to_model(self, p: np.ndarray) -> np.ndarray:
         return self._pose[:3, :3].T @ (p - self._pose[:3, 3])
 
@@ -279,6 +293,7 @@ class SharedController:
         if base_pose is not None:
             try:
                 self._pose = check_base_pose(base_pose)
+                self._set_floor()
             except ValueError as exc:
                 faults.append(("invalid_base_pose", f"{exc}: last valid pose kept"))
 
@@ -344,15 +359,31 @@ class SharedController:
             u = np.zeros(3)
             self._acc_ff = np.zeros(3)
         self._preview = PreviewPlan(alpha if pred_ok else 0.0, beta, u_v, t_aim)
-        p_new, clamped = cfg.workspace.clamp(p_ref + u * dt)
-        if clamped:
-            faults.append(("reference_unreachable", "tip reference clamped to the workspace box"))
-        p_model, clamped = self.reach.clamp(self._to_model(p_new))
-        if clamped:
-            faults.append(("reference_unreachable", "tip reference projected onto the arm's reach"))
-            p_new = self._to_plate(p_model)
+        p_new, u = self._bound_reference(p_ref, u, dt, faults)
+        p_model = self._to_model(p_new)
         self._p_ref = p_new
         return alpha, beta, u, p_model
+
+    def _bound_reference(self, p_ref: np.ndarray, u: np.ndarray, dt: float, faults: list[tuple[str, str]]
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """(p_ref + u·dt projected onto the workspace box ∩ the arm's reach, plate frame; u less its part
+        pointing out of them where projected, so that the smoother is not aimed through the bound)."""
+        p_int = p_ref + u * dt
+        pivot = self._to_plate(self.reach.pivot)
+        p_new, met = project_box_shell(p_int, *self._box, pivot, self.reach.r_min, self.reach.r_max)
+        if not met:
+            faults.append(("reference_unreachable", "the workspace box and the arm's reach do not meet: "
+                                                    "the reference kept in the box"))
+        elif (p_new != p_int).any():
+            faults.append(("reference_unreachable", "tip reference projected onto the workspace box and the "
+                                                    "arm's reach"))
+        out = p_int - p_new
+        norm = math.sqrt(float(out @ out))
+        if norm > 1e-12:
+            n = out / norm
+            u = u - max(0.0, float(u @ n)) * n
+            self._acc_ff = self._acc_ff - max(0.0, float(self._acc_ff @ n)) * n
+        return p_new, u
 
     def _track(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, p_model: np.ndarray,
                faults: list[tuple[str, str]], timings: dict[str, float]):

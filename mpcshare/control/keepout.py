@@ -29,6 +29,7 @@ import numpy as np
 
 from mpcshare.control.setup import make_qp
 from robot.constraints import TorqueLimit
+from robot.floor import FloorLimit
 from robot.keepout import BLADE_LENGTH, KeepOutConfig, KeepOutLimit, retreat
 from robot.qp import QPController, QPResult, QPStatus
 from robot.wearer_body import BODY_PARTS, WearerBody, body_zones
@@ -61,17 +62,20 @@ class KeepOutSettings:
             raise ValueError(f"{len(self.parts)} parts need KeepOutConfig.max_zones >= {len(self.parts)}")
 
 
-def make_keepout_qp(robot, qp_config, dt: float, settings: KeepOutSettings | None
+def make_keepout_qp(robot, qp_config, dt: float, settings: KeepOutSettings | None, floor: FloorLimit | None = None
                     ) -> tuple[QPController, "KeepOut | None"]:
     """The QP on ``robot``'s tip frame (a :class:`~robot.description.RobotDescription`; built by
-    ``setup.make_qp``) and, when ``settings`` is given, the keep-out rows beside its torque limit."""
+    ``setup.make_qp``) and, when ``settings`` is given, the keep-out rows beside its torque limit; ``floor``
+    (a :class:`robot.floor.FloorLimit`, None: none): the knife's floor rows beside them."""
     qp = make_qp(robot, qp_config, dt)
-    if settings is None:
+    if settings is None and floor is None:
         return qp, None
-    limit = KeepOutLimit(robot.model, robot.tip_frame, settings.heel_offset, settings.limit)
+    rows: list = [TorqueLimit(robot.limits)] + ([floor] if floor is not None else [])
+    limit = None if settings is None else KeepOutLimit(robot.model, robot.tip_frame, settings.heel_offset,
+                                                         settings.limit)
     qp = QPController(robot.model, robot.tip_frame, robot.limits, qp.config,
-                      constraints=[TorqueLimit(robot.limits), limit])
-    return qp, KeepOut(settings, limit)
+                      constraints=rows + ([limit] if limit is not None else []))
+    return qp, None if limit is None else KeepOut(settings, limit)
 
 
 def make_keepout_mpc(robot, dt: float, settings: KeepOutSettings):

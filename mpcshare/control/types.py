@@ -10,6 +10,7 @@ import numpy as np
 from mpcshare.control.keepout import KeepOutSettings
 from mpcshare.control.workspace import DEFAULT_WORKSPACE, WorkspaceBox
 from mpcshare.errors import ControllerSetupError
+from robot.floor import FloorConfig
 from robot.qp import QPConfig
 
 __all__ = ["DEFAULT_BETA", "SMOOTHER_TARGETS", "STATUSES", "ControlCommand", "ControllerConfig"]
@@ -80,7 +81,9 @@ class ControllerConfig:
     (:class:`~mpcshare.control.keepout.KeepOutSettings`; None: off);
     fast_forecast: use the bundle's control-rate forecast when it has one (else, or False: the
     10 Hz forecast alone); fast_lead_s [s]: the aim ahead with the control-rate forecast
-    (replaces forecast_lead_s).
+    (replaces forecast_lead_s); floor_z [m] (plate frame; None: off): the knife's hard floor, the
+    plate's top less a tolerance: QP rows keep the blade above it (:class:`robot.floor.FloorLimit`,
+    ``floor``: its settings) and the workspace box's floor is raised to it.
     """
 
     # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
@@ -119,6 +122,8 @@ class ControllerConfig:
     keepout: KeepOutSettings | None = field(default_factory=KeepOutSettings)
     fast_forecast: bool = True
     fast_lead_s: float = 0.03
+    floor_z: float | None = -0.01
+    floor: FloorConfig = field(default_factory=FloorConfig)
 
     def __post_init__(self) -> None:
         if self.smoother_target not in SMOOTHER_TARGETS:
@@ -127,6 +132,10 @@ class ControllerConfig:
             v = getattr(self, name)
             if not (math.isfinite(v) and 0.0 <= v <= 1.0):
                 raise ControllerSetupError(f"ControllerConfig.{name} must be in [0, 1] s, got {v!r}")
+        if self.floor_z is not None and not (math.isfinite(self.floor_z)
+                                             and self.floor_z < self.workspace.upper[2]):
+            raise ControllerSetupError(f"ControllerConfig.floor_z must be None or finite and below the workspace's "
+                                       f"top {self.workspace.upper[2]} m, got {self.floor_z!r}")
         if self.forecast_fade_s is not None and not (math.isfinite(self.forecast_fade_s) and self.forecast_fade_s >= 0):
             raise ControllerSetupError(f"ControllerConfig.forecast_fade_s must be None or >= 0, "
                                        f"got {self.forecast_fade_s!r}")

@@ -9,8 +9,11 @@
   positions of the demonstrations lie near the middle of the arm's joint ranges.
 * The **workspace box** (plate frame) bounds the integrated tip reference:
   x ∈ [−0.10, 0.30], y ∈ [−0.25, 0.20], z ∈ [−0.03, 0.25] m by default — the plate
-  (radius ≈ 0.12 m) with a margin, from 3 cm below its surface (a knife pressing into
-  food) to 25 cm above it.
+  (radius ≈ 0.12 m) with a margin, from 3 cm below its surface to 25 cm above it; the
+  controller raises its floor to ``ControllerConfig.floor_z`` (the plate's top, the knife's
+  hard floor) when that is set.
+* :func:`project_box_shell` puts a point into the box and the arm's reach shell *at once*
+  (clamping to one and then projecting onto the other can leave the first).
 
 What the arm itself can reach (the reach shell, in the model frame) is the robot's
 knowledge: :class:`robot.kinematics.ReachShell`.
@@ -18,13 +21,15 @@ knowledge: :class:`robot.kinematics.ReachShell`.
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from mpcshare.errors import ControllerSetupError
 
-__all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "WorkspaceBox", "check_base_pose"]
+__all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "WorkspaceBox", "check_base_pose", "project_box_shell"]
 
 DEFAULT_BASE_POSE = np.eye(4)
 DEFAULT_BASE_POSE[:3, 3] = (-0.22, 0.12, 0.0)
@@ -52,6 +57,53 @@ class WorkspaceBox:
 
 
 DEFAULT_WORKSPACE = WorkspaceBox()
+
+
+#: Every face of a box: per axis 0 = free, 1 = at the lower bound, 2 = at the upper bound (27 faces).
+_FACES = tuple(itertools.product((0, 1, 2), repeat=3))
+
+
+def _sphere_on_face(p: np.ndarray, center: np.ndarray, r: float, face: tuple[int, int, int],
+                    lower: np.ndarray, upper: np.ndarray) -> list[np.ndarray]:
+    """The points of the sphere ‖x − c‖ = r on a face's affine subspace nearest to and farthest from p (on
+    a line the sphere is these two points; ±axes when p is at the sub-sphere's centre); none where the
+    subspace misses the sphere."""
+    fixed = np.array(face) > 0
+    x0 = np.where(np.array(face) == 1, lower, np.where(np.array(face) == 2, upper, p))
+    rho2 = r * r - float(((x0 - center)[fixed] ** 2).sum())
+    if rho2 < 0.0 or fixed.all():
+        return [x0] if fixed.all() and abs(rho2) < 1e-12 else []
+    d = np.where(fixed, 0.0, p - center)
+    nd = float(np.linalg.norm(d))
+    axes = [sign * np.eye(3)[i] for i in np.flatnonzero(~fixed) for sign in (1.0, -1.0)]
+    dirs = [d / nd, -d / nd] if nd > 1e-12 else axes
+    return [np.where(fixed, x0, center + math.sqrt(rho2) * u) for u in dirs]
+
+
+def project_box_shell(p: np.ndarray, lower: np.ndarray, upper: np.ndarray, center: np.ndarray,
+                      r_min: float, r_max: float, tol: float = 1e-9) -> tuple[np.ndarray, bool]:
+    """The nearest point to ``p`` in box ∩ shell, B = [lower, upper], S = {r_min ≤ ‖x − c‖ ≤ r_max} [m].
+
+    Returns (point, True), or (the box's clamp of p, False) when B and S do not meet. Exact: the
+    nearest point has some set of active box faces and at most one active sphere; with none active
+    it is clip(p), else it is a point of that sphere within that face's affine subspace nearest to
+    p on it (or, on a line, the other of its two points). Every face (27) and both spheres are
+    tried and the nearest candidate of B ∩ S kept (S is not convex: alternating projections need
+    not find it).
+    """
+    b = np.minimum(np.maximum(p, lower), upper)
+    if r_min <= float(np.linalg.norm(b - center)) <= r_max:
+        return b, True
+    best, best_d = b, math.inf
+    for face in _FACES:
+        for r in (r_min, r_max):
+            for x in _sphere_on_face(p, center, r, face, lower, upper):
+                rx = float(np.linalg.norm(x - center))
+                dx = float(np.linalg.norm(x - p))
+                if dx < best_d and (x >= lower - tol).all() and (x <= upper + tol).all() \
+                        and r_min - tol <= rx <= r_max + tol:
+                    best, best_d = np.minimum(np.maximum(x, lower), upper), dx
+    return best, math.isfinite(best_d)
 
 
 def check_base_pose(T: object) -> np.ndarray:

@@ -39,6 +39,8 @@ def test_a_knife_driven_into_the_hand_is_counted():
     assert m["keepout_steps_driven_in"] * 0.01 == pytest.approx(m["keepout_time_inside_s"])
     assert m["keepout_inside_zone_moving_s"] == 0.0
     assert m["keepout_near_speed_mps"] == pytest.approx(0.2, rel=1e-6)
+    lowest = min(tip[:, 2].min(), (tip + 0.09 * U)[:, 2].min())
+    assert m["knife_min_height_m"] == pytest.approx(lowest)  # the blade's lowest point above the plate
 
 
 def test_a_hand_moving_onto_a_still_knife_is_not_driven_in():

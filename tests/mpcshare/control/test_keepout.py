@@ -105,8 +105,10 @@ def test_a_lost_marker_grows_the_zone_and_is_reported():
 
 
 def test_keepout_off_is_today_s_controller():
-    trial, ctl = _controller(ControllerConfig(keepout=None))
+    trial, ctl = _controller(ControllerConfig(keepout=None, floor_z=None))
     assert ctl.keepout is None and len(ctl.qp.constraints) == 1
+    _, floored = _controller(ControllerConfig(keepout=None))  # the knife's floor stays without the keep-out
+    assert floored.keepout is None and [c.name for c in floored.qp.constraints] == ["torque", "floor"]
     c = ctl.step(0.0, trial.obs[0], np.zeros(3), Q0, np.zeros(3))
     assert c.status in ("ok", "missing_observation")
 
