@@ -32,7 +32,7 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.data import format_summary
 from mpcshare.commands.sim import add_wearer_argument, cutting_steps
-from mpcshare.training.config import TrainConfig
+from mpcshare.training.config import RULE_DURATION_S, TrainConfig
 from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 
 __all__ = ["DEMO_COMMAND"]
@@ -156,7 +156,8 @@ def _demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
-    bundle, mode_sources = _train(demos, config, out, analysis, args.wearer, min(30.0, args.sim_duration))
+    rule_s = min(RULE_DURATION_S, 2 * args.sim_duration)  # the choice as `mpcshare train`, shorter in short demos
+    bundle, mode_sources = _train(demos, config, out, analysis, args.wearer, rule_s)
     lap("training", t0)
 
     sweep = None

@@ -27,7 +27,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.data import DATA_HELP
-from mpcshare.training.config import DEFAULT_PERCENTILES, MODES_FROM, TrainConfig
+from mpcshare.training.config import DEFAULT_PERCENTILES, MODES_FROM, RULE_DURATION_S, TrainConfig
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
 __all__ = ["TRAIN_COMMAND"]
@@ -77,8 +77,8 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     r = p.add_argument_group("hand-over rule (the default gate's settings, chosen in the closed loop)")
     r.add_argument("--rule-trials", type=positive_int, default=None,
                    help="held-out trials the choice simulates, the last ones (default: half of them, 1 to 2)")
-    r.add_argument("--rule-duration", type=positive_float, default=30.0,
-                   help="seconds simulated per trial for the choice (default 30)")
+    r.add_argument("--rule-duration", type=positive_float, default=RULE_DURATION_S,
+                   help=f"seconds simulated per trial for the choice (default {RULE_DURATION_S:g})")
     r.add_argument("--rule-wearer", choices=list(WEARER_PRESETS), default=DEFAULT_WEARER_PRESET,
                    help=f"the simulated wearer of the choice (default {DEFAULT_WEARER_PRESET})")
     r.add_argument("--no-rule-choice", action="store_true",

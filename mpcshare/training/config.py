@@ -13,7 +13,7 @@ from typing import Any
 
 from learning.predictor import defaults as lstm
 
-__all__ = ["DEFAULT_PERCENTILES", "MODES_FROM", "TrainConfig"]
+__all__ = ["DEFAULT_PERCENTILES", "MODES_FROM", "RULE_DURATION_S", "TrainConfig"]
 
 #: sources of the task modes (``TrainConfig.modes_from``, ``mpcshare train --modes-from``)
 MODES_FROM: tuple[str, ...] = ("hmm", "mixture")
@@ -21,6 +21,10 @@ MODES_FROM: tuple[str, ...] = ("hmm", "mixture")
 #: percentiles of the K trade-off sweep (``mpcshare train --sweep``, :func:`~mpcshare.training.sweep.run_sweep`)
 DEFAULT_PERCENTILES: tuple[float, ...] = (100.0, 90.0, 80.0, 70.0, 60.0, 50.0)
 
+
+#: seconds simulated per held-out trial for the closed-loop choice of the hand-over rule
+#: (``mpcshare.training.rule_choice``; 30 s of one trial chose by noise: issue 28)
+RULE_DURATION_S = 60.0
 
 @dataclass(frozen=True)
 class TrainConfig:

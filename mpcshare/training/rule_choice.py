@@ -37,6 +37,7 @@ from learning.data import Demonstrations
 from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.line_ratio import line_ratio as _line_ratio
+from mpcshare.training.config import RULE_DURATION_S
 from mpcshare.training.mode_cost import cutting_modes, mode_costs, price_order
 from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 from sim.wearer import WearerConfig
@@ -146,7 +147,8 @@ def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, A
                   f"{len(within)} of {len(rows)} candidates with effort <= {max_effort:g}x voluntary{task}")
 
 
-def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, duration_s: float | None = 30.0,
+def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
+                duration_s: float | None = RULE_DURATION_S,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
                 mode_names: Sequence[str] | None = None, log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
@@ -187,7 +189,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *, du
 
 
 def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
-                      duration_s: float | None = 30.0, wearer_name: str | None = None,
+                      duration_s: float | None = RULE_DURATION_S, wearer_name: str | None = None,
                       mode_names: Sequence[str] | None = None,
                       log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
