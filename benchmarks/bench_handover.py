@@ -26,9 +26,9 @@ import numpy as np
 
 from learning.data import Demonstrations, load
 from mpcshare.bundle import load_bundle
-from mpcshare.control.schedule import StepSchedule
 from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, pool_task_metrics, simulate_episode
+from mpcshare.experiments.schedule import StepSchedule
 from mpcshare.training.rule_choice import line_ratio as _line
 from sim.demonstrator import CUTTING, MODE_NAMES
 from sim.wearer_presets import WEARER_PRESETS, wearer_preset

@@ -17,9 +17,9 @@ import time
 from pathlib import Path
 
 from learning.data import save
+from mpcshare.experiments.tuning.episodes import TIMING_KEYS
+from mpcshare.experiments.tuning.runner import run_tune
 from mpcshare.training.config import TrainConfig
-from mpcshare.tuning.episodes import TIMING_KEYS
-from mpcshare.tuning.runner import run_tune
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 

@@ -14,9 +14,9 @@ import argparse
 from pathlib import Path
 
 from learning.data import save
+from mpcshare.experiments.tuning.report import build_result, chance_sentences, write_tune
+from mpcshare.experiments.tuning.runner import run_tune
 from mpcshare.training.config import TrainConfig
-from mpcshare.tuning.report import build_result, chance_sentences, write_tune
-from mpcshare.tuning.runner import run_tune
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 

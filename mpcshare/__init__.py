@@ -6,10 +6,10 @@
   ``import mpcshare`` does not import torch or scikit-learn) and their files;
 - :mod:`mpcshare.training` — training a bundle, its settings, held-out evaluation, the K sweep;
 - :mod:`mpcshare.reports` — the analysis, comparison and demo reports and their plots;
-- :mod:`mpcshare.experiments` — closed-loop comparisons of strategies on held-out trials (their
-  metrics pooled over trials by :mod:`mpcshare.pooling`), with
-  :mod:`mpcshare.handover_runs` (the replayed hand-over schedules) and :mod:`mpcshare.tuning`
-  (the ``tune`` sweep of K × β × strategy, local or on Ray); :mod:`mpcshare.run_table` — the runs
+- :mod:`mpcshare.experiments` — every closed-loop experiment in one package: the comparison of
+  strategies on held-out trials (``runs``), their metrics pooled over trials (``pooling``), the
+  placebo and oracle hand-over schedules (``schedule``, ``handover``) and the ``tune`` sweep of
+  K × β × strategy, local or on Ray (``tuning``); :mod:`mpcshare.run_table` — the runs
   (the strategy registry's and the extra ones) every command and report reads; :mod:`mpcshare.line_ratio`
   — the tracking RMS over the straight voluntary–reactive line; :mod:`mpcshare.conflicts` — the conflict
   scenarios of ``sim --scenario`` (a command into the hand, a hand sweep, …);

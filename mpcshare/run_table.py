@@ -10,7 +10,7 @@ swept strategies (``tunable``), the Pareto set, the plots' colours and the bench
 * :data:`EXTRA_RUNS`: ``gate_mpc`` (the default strategy with the MPC), ``oracle_preview`` (the
   robot given the true intent as its preview), ``random_handover`` (the placebo, the mean over
   :data:`RANDOM_DRAWS` draws) and ``oracle_handover`` (the upper bound), see
-  :mod:`mpcshare.handover_runs`.
+  :mod:`mpcshare.experiments.handover`.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ class StrategyRun:
     and ``oracle``: the controller is given the wearer's true intent as its preview instead of
     the predictor's forecast (an upper bound, not realisable). ``schedule``: ``"random"`` or
     ``"oracle"``: the run replays a hand-over schedule computed from the default strategy's, or
-    the pure runs', episodes on the same trial (:mod:`mpcshare.handover_runs`), ``draws`` times."""
+    the pure runs', episodes on the same trial (:mod:`mpcshare.experiments.handover`), ``draws`` times."""
 
     name: str
     strategy: str

@@ -4,7 +4,7 @@
 fitted once), simulates every setting and the baselines (``voluntary``, ``reactive``,
 ``random_handover`` matched to each setting, the mean of 5 draws per pair, ``oracle_preview``) on
 held-out trials × seeds (defaults: 10 pairs, tests Holm-corrected across settings)
-(:mod:`mpcshare.tuning`), and writes ``tune.json``, ``tune.md`` and ``pareto.png``. Episodes
+(:mod:`mpcshare.experiments.tuning`), and writes ``tune.json``, ``tune.md`` and ``pareto.png``. Episodes
 run in a local process pool (``--workers``) or on Ray (``--backend ray``, the optional extra
 ``pip install -e .[ray]``); an interrupted sweep started again with the same arguments resumes.
 """
@@ -101,9 +101,9 @@ def _usage_error(message: str) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from learning.data import split_by_trial
+    from mpcshare.experiments.tuning.report import build_result, chance_sentences, recommendation_line, write_tune
+    from mpcshare.experiments.tuning.runner import RayMissing, run_tune
     from mpcshare.training.config import TrainConfig
-    from mpcshare.tuning.report import build_result, chance_sentences, recommendation_line, write_tune
-    from mpcshare.tuning.runner import RayMissing, run_tune
 
     if args.backend == "ray":
         try:

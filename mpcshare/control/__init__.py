@@ -15,7 +15,6 @@
 - :mod:`mpcshare.control.fallback` — the last-resort commands when a step fails unexpectedly;
 - :mod:`mpcshare.control.arbitration` — α, β and the fusion û = α·û_r + β·û_v;
 - :mod:`mpcshare.control.strategies` — the arbitration strategies, one module each, in ``REGISTRY``;
-- :mod:`mpcshare.control.schedule` — given hand-over schedules (the placebo and the oracle);
 - :mod:`mpcshare.control.setup` — checking a bundle against the controller and building the MPC;
 - :mod:`mpcshare.control.workspace` — frames (the base pose) and the workspace box.
 """

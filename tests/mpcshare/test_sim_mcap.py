@@ -12,7 +12,7 @@ import pytest
 from mcap.reader import make_reader
 
 import mpcshare.bundle
-import mpcshare.experiments
+import mpcshare.experiments.runs
 from learning.data import save
 from mpcshare.cli import main
 from mpcshare.experiments import StrategyRun, compare_strategies
@@ -67,7 +67,7 @@ def _stand_in_bundle(demos, tmp_path, monkeypatch) -> None:
     bundle = SimpleNamespace(obs_names=list(demos.obs_names), rate_hz=demos.rate_hz, heldout_trials=[0],
                              config={"data_path": str(data)})
     monkeypatch.setattr(mpcshare.bundle, "load_bundle", lambda path: bundle)
-    monkeypatch.setattr(mpcshare.experiments, "_from_bundle", _idle)
+    monkeypatch.setattr(mpcshare.experiments.runs, "_from_bundle", _idle)
 
 
 def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tmp_path, monkeypatch, capsys):

@@ -12,7 +12,7 @@ run's metrics, pooled and per trial. Each is simulated on the
 same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
 default the preset ``hemiparetic_mild``) and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
-:func:`sim.metrics.episode_metrics` are pooled over trials (:func:`mpcshare.pooling.pool_metrics`) and
+:func:`sim.metrics.episode_metrics` are pooled over trials (:func:`mpcshare.experiments.pooling.pool_metrics`) and
 written to ``comparison.json`` (top-level ``strategies``: name → metrics; ``trials``;
 ``duration_s``; ``run_files``; ``wearer``: the preset's name, or None, and the
 settings), ``comparison.md`` and ``comparison.png``.
@@ -31,9 +31,9 @@ import numpy as np
 
 from learning.data import Demonstrations
 from mpcshare.control.types import DEFAULT_BETA
-from mpcshare.handover_runs import SCHEDULE_SOURCES, oracle_handover_schedules, random_handover_schedules
+from mpcshare.experiments.handover import SCHEDULE_SOURCES, oracle_handover_schedules, random_handover_schedules
+from mpcshare.experiments.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
 from mpcshare.line_ratio import add_line_ratios
-from mpcshare.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
 from sim.closed_loop import run_episode
 from sim.keepout_metrics import KEEPOUT_KEYS, episode_keepout_metrics
@@ -49,7 +49,7 @@ if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torc
 
 __all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
            "output_size", "pool_keepout_metrics", "pool_metrics", "pool_task_metrics", "render_clip",
-           "simulate_episode"]
+           "intent_preview", "simulate_episode"]
 
 METRIC_KEYS: tuple[str, ...] = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactive_share",
                                 "handovers", "conflict_share", "limit_violations", "step_p50_ms",
@@ -298,7 +298,7 @@ _SOURCES = {name for names in SCHEDULE_SOURCES.values() for name in names}
 def _draw_options(run: StrategyRun, tid: int, seed: int,
                   source: Callable[[str, int], tuple[Any, Any]]) -> list[dict[str, Any]]:
     """The controller options of each episode of ``run`` on trial ``tid``: one empty dict, or one
-    ``{"schedule": ...}`` per draw of a scheduled run (:mod:`mpcshare.handover_runs`)."""
+    ``{"schedule": ...}`` per draw of a scheduled run (:mod:`mpcshare.experiments.handover`)."""
     if run.schedule is None:
         return [{}]
     if run.schedule == "random":

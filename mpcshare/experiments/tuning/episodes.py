@@ -9,9 +9,9 @@ and wearer noise: ``run_episode(seed=seed)``):
 * phase 1 — every setting (S, p, β); the baselines ``voluntary`` (once: no K, no β),
   ``reactive`` (per K: the predictor differs) and ``oracle_preview`` (once: the true intent);
 * phase 2 — ``random_handover`` matched to each setting (``matched_to`` = S), from the
-  setting's schedule on the same trial and seed (:func:`mpcshare.handover_runs.schedule_record`),
+  setting's schedule on the same trial and seed (:func:`mpcshare.experiments.handover.schedule_record`),
   ``draws`` draws (default :data:`mpcshare.run_table.RANDOM_DRAWS`), draw j seeded by (seed, trial,
-  p, β, S, j); the pair's placebo figure is the mean over its draws (:mod:`mpcshare.tuning.stats`).
+  p, β, S, j); the pair's placebo figure is the mean over its draws (:mod:`mpcshare.experiments.tuning.stats`).
 
 A row is a JSON-able dict: ``percentile``, ``beta``, ``strategy``, ``matched_to``, ``trial``,
 ``seed``, ``draw`` (0 but for the placebo's draws), the metrics of :mod:`sim.metrics` and
@@ -119,7 +119,7 @@ def run_task(task: EpisodeTask) -> dict[str, Any]:
     import torch
 
     from mpcshare.experiments import StrategyRun, simulate_episode
-    from mpcshare.handover_runs import random_schedules_from, schedule_record
+    from mpcshare.experiments.handover import random_schedules_from, schedule_record
     from sim.wearer_presets import wearer_preset
 
     threads = torch.get_num_threads()

@@ -1,12 +1,12 @@
 """The schedules of the replayed runs ``random_handover`` and ``oracle_handover`` from episodes.
 
 * ``random_handover`` (the placebo): from the gate's episode on the trial, the schedule
-  ``on[k] = α_k > 0.5``; each draw is :func:`mpcshare.control.schedule.random_schedule` with the
+  ``on[k] = α_k > 0.5``; each draw is :func:`mpcshare.experiments.schedule.random_schedule` with the
   same steps on, hand-overs and first state, and interior segments ≥ the dwell
   d = ⌈``min_dwell_s`` / Δ⌉ steps (or the gate's own shortest interior segment, if shorter:
   the gate's overrides switch without dwell), seeded by (seed, trial, draw).
 * ``oracle_handover`` (the upper bound, never worse than the better party): the candidates of
-  :func:`oracle_handover_schedules` — :func:`mpcshare.control.schedule.oracle_schedule` on the
+  :func:`oracle_handover_schedules` — :func:`mpcshare.experiments.schedule.oracle_schedule` on the
   per-step tracking errors e_k = ‖p_k − p*_k‖ of the ``voluntary`` and ``reactive`` episodes on
   the trial, with dwell d, at the switch costs λ_c = c · (1/Δ) · mean(e_v² + e_r²)/2 for c in
   :data:`ORACLE_SWITCH_COSTS_S` (a hand-over costs c seconds of the parties' mean squared error:
@@ -16,7 +16,7 @@
   per trial, and pooled (√ of weighted mean squares), it is never worse than the better party.
 
 Both are replayed by the controller's ``schedule`` strategy, read ``handover_s``/2 ahead so
-that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.control.schedule.StepSchedule`).
+that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.experiments.schedule.StepSchedule`).
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from mpcshare.control.schedule import ScheduleStats, StepSchedule, oracle_schedule, random_schedule, schedule_stats
 from mpcshare.control.strategies import DEFAULT_STRATEGY
 from mpcshare.control.types import ControllerConfig
+from mpcshare.experiments.schedule import ScheduleStats, StepSchedule, oracle_schedule, random_schedule, schedule_stats
 
 __all__ = ["ORACLE_SWITCH_COSTS_S", "SCHEDULE_SOURCES", "dwell_steps", "oracle_handover_schedule",
            "oracle_handover_schedules", "random_handover_schedules",
@@ -57,7 +57,7 @@ def tracking_error(episode: Any) -> np.ndarray:
 
 def schedule_record(episode: Any) -> dict[str, Any]:
     """What a matched-random schedule needs of an episode (JSON-able): the
-    :class:`~mpcshare.control.schedule.ScheduleStats` of ``α > 0.5`` and the step times
+    :class:`~mpcshare.experiments.schedule.ScheduleStats` of ``α > 0.5`` and the step times
     ``t0_s + k·dt_s``."""
     alpha = np.nan_to_num(np.asarray(episode.alpha, dtype=float), nan=0.0)
     return {**asdict(schedule_stats(alpha > 0.5)), "t0_s": float(episode.t[0]), "dt_s": _period(episode)}
