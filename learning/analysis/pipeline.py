@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from typing import Any
 
 import numpy as np
@@ -51,6 +51,7 @@ from learning.analysis.report import (
     SegmentationTest,
     VoluntaryShare,
 )
+from learning.analysis.result import AnalysisResult
 from learning.analysis.search import fit_modes, search_candidates, search_labelings, within_group_quotients
 from learning.data import Demonstrations
 from learning.lipschitz import pointwise_quotients_multi
@@ -65,44 +66,6 @@ from learning.preprocessing.preprocess import (
 )
 
 __all__ = ["AnalysisConfig", "AnalysisResult", "AnalysisError", "analyze", "MIN_EFFECT", "SIGNIFICANCE"]
-
-
-@dataclass
-class AnalysisResult:
-    """What :func:`analyze` found: the report and the arrays behind it.
-
-    Attributes:
-        summary: the findings (``report`` is ``summary.to_dict()``, the report.json content).
-        windows: the preprocessed data at ``config.window_s``.
-        q: (N,) quotients without modes; q_modes: (N,) within HMM modes;
-        q_reference: (N,) within the time-free reference grouping;
-        q_random: (n_random, N) within random segmentations.
-        modes: (N,) HMM mode of each window row (Viterbi).
-        features: (N_samples, D) standardised per-sample observations (the HMM's input);
-        sample_modes: (N_samples,) their HMM modes (``modes = sample_modes[windows.source_index]``).
-        true_modes: (N,) ground-truth labels or None.
-        mode_model: the fitted :class:`TaskModes`.
-        shares: {K: (trial ids, shares without modes, shares with modes)}.
-    """
-
-    summary: AnalysisReport
-    config: AnalysisConfig
-    windows: WindowedData
-    q: np.ndarray
-    q_modes: np.ndarray
-    q_reference: np.ndarray
-    q_random: np.ndarray
-    modes: np.ndarray
-    features: np.ndarray
-    sample_modes: np.ndarray
-    true_modes: np.ndarray | None
-    mode_model: TaskModes
-    shares: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
-
-    @property
-    def report(self) -> dict[str, Any]:
-        """The JSON-ready report (``summary.to_dict()``, a fresh dict on every access)."""
-        return self.summary.to_dict()
 
 
 def _finite_stats(q: np.ndarray, K_by_percentile: dict[str, float | None] | None = None) -> QuotientStats:
@@ -266,6 +229,39 @@ def _search_rows(search_rand: np.ndarray, rand: np.ndarray, config: AnalysisConf
     return rows, np.asarray(index)
 
 
+def _check_settings(demos: Demonstrations, config: AnalysisConfig) -> None:
+    """AnalysisError where the data cannot be analysed with ``config`` (rate, trials for select_modes)."""
+    if demos.rate_hz < config.target_hz:
+        raise AnalysisError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
+                            f"{config.target_hz:g} Hz; lower --rate")
+    if config.select_modes and len(demos.trials) < 2:
+        raise AnalysisError(f"choosing the number of modes (select_modes) holds out whole trials and needs "
+                            f"at least 2 trials, the data have {len(demos.trials)}")
+
+
+def _modes_summary(model: TaskModes, modes: np.ndarray, true: np.ndarray | None, Z: np.ndarray,
+                   lengths: np.ndarray, config: AnalysisConfig) -> ModesSummary:
+    """The fitted HMM's figures: occupancy, fit, restarts, and its agreement with the labels (if any)."""
+    agreement = ari = None
+    if true is not None:
+        agreement = float(mode_agreement(modes, true)[0])
+        ari = float(mode_ari(modes, true))
+    return ModesSummary(
+        n_modes=int(config.n_modes), agreement=agreement, ari=ari,
+        occupancy=[float(np.mean(modes == k)) for k in range(config.n_modes)],
+        converged=bool(model.converged_), loglik=float(model.loglik_), bic=float(model.bic(Z, lengths)),
+        restart_logliks=[float(v) for v in model.restart_logliks_],
+        restart_ari=[float(v) for v in model.restart_ari_])
+
+
+def _select_modes(Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig, progress: bool, steps: Any) -> Any:
+    """The number of modes chosen by held-out likelihood over whole trials (``select_n_modes``)."""
+    sel = select_n_modes(Z, lengths, candidates=config.search_modes or range(2, 7), cv=3,
+                         seed=config.seed, n_restarts=min(config.hmm_restarts, 2), progress=progress)
+    steps.done("mode selection")
+    return sel
+
+
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             progress: bool = False) -> AnalysisResult:
     """Run the whole predictability analysis (see module docstring).
@@ -281,12 +277,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             long as the window or a search window, ``select_modes`` with one trial).
     """
     config = config or AnalysisConfig()
-    if demos.rate_hz < config.target_hz:
-        raise AnalysisError(f"data rate {demos.rate_hz:g} Hz is below the analysis rate "
-                            f"{config.target_hz:g} Hz; lower --rate")
-    if config.select_modes and len(demos.trials) < 2:
-        raise AnalysisError(f"choosing the number of modes (select_modes) holds out whole trials and needs "
-                            f"at least 2 trials, the data have {len(demos.trials)}")
+    _check_settings(demos, config)
     n_search = len(config.search_windows) * len(config.search_modes)
     t_start = time.perf_counter()
 
@@ -302,10 +293,6 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     model, labels = fitted[config.n_modes]
     modes = labels[w.source_index]
     true = w.mode if w.mode is not None and np.any(w.mode >= 0) else None
-    agreement = ari = None
-    if true is not None:
-        agreement = float(mode_agreement(modes, true)[0])
-        ari = float(mode_ari(modes, true))
     # the search's other numbers of modes too, where its random groupings join step 3's pass
     shared = bool(n_search) and float(config.window_s) in {float(v) for v in config.search_windows}
     if shared:
@@ -350,9 +337,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     share_report, shares = _voluntary_shares(w.trial, q, q_modes, q_ref, q_random, config)
     steps.done("voluntary share")
 
-    # 6. search for missing information
-    # the main analysis's quotients within its modes are those of the search's candidate
-    # (window_s, n_modes): same windows, same HMM labels
+    # 6. search for missing information, and the number of modes chosen on held-out trials
     main = (float(config.window_s), int(config.n_modes))
     candidates = (search_candidates(std, Z, lengths, config, fitted, SIGNIFICANCE, progress,
                                     known_q_modes={main: q_modes}, known_q_reference={main: q_ref},
@@ -360,12 +345,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
                   if n_search else [])
     if n_search:
         steps.done("search")
-    selection = None
-    if config.select_modes:
-        sel = select_n_modes(Z, lengths, candidates=config.search_modes or range(2, 7), cv=3,
-                             seed=config.seed, n_restarts=min(config.hmm_restarts, 2), progress=progress)
-        selection = sel
-        steps.done("mode selection")
+    selection = _select_modes(Z, lengths, config, progress, steps) if config.select_modes else None
     steps.close()
 
     summary = AnalysisReport(
@@ -374,12 +354,7 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
         rate_hz=float(config.target_hz), window_s=float(config.window_s), lags=int(w.lags), scope=config.scope,
         quotients=_finite_stats(q, K_by_percentile),
         quotients_with_modes=_finite_stats(q_modes),
-        modes=ModesSummary(
-            n_modes=int(config.n_modes), agreement=agreement, ari=ari,
-            occupancy=[float(np.mean(modes == k)) for k in range(config.n_modes)],
-            converged=bool(model.converged_), loglik=float(model.loglik_), bic=float(model.bic(Z, lengths)),
-            restart_logliks=[float(v) for v in model.restart_logliks_],
-            restart_ari=[float(v) for v in model.restart_ari_]),
+        modes=_modes_summary(model, modes, true, Z, lengths, config),
         segmentation_test=_segmentation_test(ev, config),
         voluntary_share=share_report,
         candidates=candidates,
