@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -47,6 +47,61 @@ def search_labelings(window_labels: dict[int, np.ndarray], config: AnalysisConfi
                       for n in config.search_modes])
 
 
+def _progress_bar(config: AnalysisConfig, todo: list[int], known: dict, known_ref: dict, passes: dict) -> Any:
+    """One step per HMM fit, per shared pass and per call within a grouping (those known skipped)."""
+    from tqdm.auto import tqdm
+
+    n_known = sum(((float(w), int(n)) in known) + ((float(w), int(n)) in known_ref)
+                  for w in config.search_windows for n in config.search_modes)
+    n_known += sum(float(w) in passes for w in config.search_windows)
+    return tqdm(total=len(todo) + len(config.search_windows) * (1 + 2 * len(config.search_modes)) - n_known,
+                desc="search", unit="step", leave=False)
+
+
+def _plan_calls(std: Demonstrations, config: AnalysisConfig, fitted: dict[int, tuple[TaskModes, np.ndarray]],
+                refs: dict[int, np.ndarray], passes: dict[float, np.ndarray], known: dict, known_ref: dict
+                ) -> tuple[dict[float, Any], dict[tuple, QuotientCall]]:
+    """(windows, quotient calls) of the search: per window a shared pass (no grouping, then every
+    candidate's random groupings) unless ``passes`` has it, and a call per grouping (reference,
+    modes) not already known; every call goes to one pool, longest first (:func:`run_calls`)."""
+    R = config.search_random
+    windows, calls = {}, {}
+    for window in config.search_windows:
+        w = causal_windows(std, window, rms=True)
+        windows[window] = w
+        Q = passes.get(float(window))
+        if Q is None:
+            rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
+            calls[(window, "pass", 0)] = QuotientCall(
+                w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]), multi=True)
+        elif Q.shape != (1 + R * len(config.search_modes), len(w)):
+            raise ValueError(f"known_pass[{window}] must be ({1 + R * len(config.search_modes)}, {len(w)}) "
+                             f"(no grouping, then {R} random groupings per number of modes), got {Q.shape}")
+        for n in config.search_modes:
+            if (float(window), int(n)) not in known_ref:
+                calls[(window, "reference", n)] = QuotientCall(w.X, w.Y, refs[n][w.source_index])
+            if (float(window), int(n)) not in known:
+                calls[(window, "modes", n)] = QuotientCall(w.X, w.Y, fitted[n][1][w.source_index])
+    return windows, calls
+
+
+def _candidate(window: float, n_modes: int, q0: np.ndarray, share0: float, ev: Any, trial: np.ndarray,
+               K0: float, bic: float) -> Candidate:
+    """One candidate's row from its evidence (gains in log10, shares at K0)."""
+    return Candidate(
+        window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
+        median_q_modes=float(np.median(ev.q_modes)),
+        median_q_reference=float(np.median(ev.q_reference)),
+        median_q_random=float(np.median(ev.q_random)),
+        gain_beyond_reference_log10=ev.vs_reference.effect / math.log(10),
+        p_value=ev.vs_reference.p_value,
+        gain_beyond_random_log10=ev.vs_random.effect / math.log(10),
+        share_K=float(K0), share_without_modes=share0, share_with_modes=mean_share(ev.q_modes, trial, K0),
+        share_reference=mean_share(ev.q_reference, trial, K0),
+        share_random=float(np.mean([mean_share(r, trial, K0) for r in ev.q_random])),
+        hmm_bic=bic)
+
+
 def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig,
                       fitted: dict[int, tuple[TaskModes, np.ndarray]], alpha: float,
                       progress: bool = False,
@@ -75,14 +130,7 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     known = known_q_modes or {}
     known_ref = known_q_reference or {}
     passes = known_pass or {}
-    bar = None
-    if progress:  # one step per HMM fit, per shared pass and per call within a grouping
-        from tqdm.auto import tqdm
-        n_known = sum(((float(w), int(n)) in known) + ((float(w), int(n)) in known_ref)
-                      for w in config.search_windows for n in config.search_modes)
-        n_known += sum(float(w) in passes for w in config.search_windows)
-        bar = tqdm(total=len(todo) + len(config.search_windows) * (1 + 2 * len(config.search_modes)) - n_known,
-                   desc="search", unit="step", leave=False)
+    bar = _progress_bar(config, todo, known, known_ref, passes) if progress else None
     for n_modes in todo:
         fitted[n_modes] = fit_modes(Z, lengths, n_modes, config)
         if bar is not None:
@@ -95,26 +143,7 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
         if n not in refs:
             refs[n] = reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed)
     bics = {n: float(fitted[n][0].bic(Z, lengths)) for n in config.search_modes}
-    # Every quotient call of the search (a shared pass per window, a call per grouping)
-    # goes to one pool of single-threaded calls, longest first (run_calls).
-    windows, calls = {}, {}
-    for window in config.search_windows:
-        w = causal_windows(std, window, rms=True)
-        windows[window] = w
-        Q = passes.get(float(window))
-        if Q is None:
-            # No grouping and every candidate's random groupings: one pass over the pairs.
-            rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
-            calls[(window, "pass", 0)] = QuotientCall(
-                w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand]), multi=True)
-        elif Q.shape != (1 + R * len(config.search_modes), len(w)):
-            raise ValueError(f"known_pass[{window}] must be ({1 + R * len(config.search_modes)}, {len(w)}) "
-                             f"(no grouping, then {R} random groupings per number of modes), got {Q.shape}")
-        for n in config.search_modes:
-            if (float(window), int(n)) not in known_ref:
-                calls[(window, "reference", n)] = QuotientCall(w.X, w.Y, refs[n][w.source_index])
-            if (float(window), int(n)) not in known:
-                calls[(window, "modes", n)] = QuotientCall(w.X, w.Y, fitted[n][1][w.source_index])
+    windows, calls = _plan_calls(std, config, fitted, refs, passes, known, known_ref)
     done = run_calls(calls, done=None if bar is None else lambda: bar.update(1))
     for window in config.search_windows:
         w = windows[window]
@@ -134,18 +163,7 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
                                q_modes=q_modes,
                                q_reference=known_ref.get((float(window), int(n_modes)),
                                                          done.get((window, "reference", n_modes))))
-            rows.append(Candidate(
-                window_s=float(window), n_modes=int(n_modes), median_q_without_modes=float(np.median(q0)),
-                median_q_modes=float(np.median(ev.q_modes)),
-                median_q_reference=float(np.median(ev.q_reference)),
-                median_q_random=float(np.median(ev.q_random)),
-                gain_beyond_reference_log10=ev.vs_reference.effect / math.log(10),
-                p_value=ev.vs_reference.p_value,
-                gain_beyond_random_log10=ev.vs_random.effect / math.log(10),
-                share_K=float(K0), share_without_modes=share0, share_with_modes=mean_share(ev.q_modes, w.trial, K0),
-                share_reference=mean_share(ev.q_reference, w.trial, K0),
-                share_random=float(np.mean([mean_share(r, w.trial, K0) for r in ev.q_random])),
-                hmm_bic=bics[n_modes]))
+            rows.append(_candidate(window, n_modes, q0, share0, ev, w.trial, K0, bics[n_modes]))
     if bar is not None:
         bar.close()
     rows.sort(key=lambda r: -r.gain_beyond_reference_log10)
