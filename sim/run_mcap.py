@@ -170,28 +170,41 @@ def write_run_mcap(episode: Episode, path: str | Path, *, fork: np.ndarray | Non
             viewer then shows them).
         joint_stride: keep every ``joint_stride``-th physics-rate joint state (1: all).
     """
-    from mcap.writer import CompressionType, Writer
-
     path = Path(path)
     if path.suffix != ".mcap":
         raise ValueError(f"an MCAP file must end in .mcap, got {path.name!r}")
     if joint_stride < 1:
         raise ValueError(f"joint_stride must be >= 1, got {joint_stride}")
-    nc = len(episode.t)
-    if fork is None and episode.fork_pose is not None:
-        fork = episode.fork_pose  # the pose the scene showed (the run file's fork_pose)
-    if fork is not None:
-        fork = np.asarray(fork, dtype=float)
-        if fork.ndim != 2 or fork.shape[0] < nc or fork.shape[1] != len(FORK_CHANNELS):
-            raise ValueError(f"fork must be ({nc}, {len(FORK_CHANNELS)}) or longer (one pose per control step, "
-                             f"{', '.join(FORK_CHANNELS)}), got {fork.shape}")
-        fork = fork[:nc]
-    ns_c = _nanoseconds(episode.t, start_ns)
+    fork = _checked_fork(episode, fork)
     events: list[tuple[int, int, str, dict[str, Any]]] = []  # (time, order, topic, message)
 
     def add(ns: int, topic: str, msg: dict[str, Any]) -> None:
         events.append((ns, len(events), topic, msg))
 
+    _control_events(episode, fork, _nanoseconds(episode.t, start_ns), add)
+    _joint_events(episode, joint_stride, start_ns, add)
+    events.sort(key=lambda e: (e[0], e[1]))
+    _write_events(path, events, episode.info)
+    return path
+
+
+def _checked_fork(episode: Episode, fork: np.ndarray | None) -> np.ndarray | None:
+    """The first Nc fork poses (``fork``, else the run file's ``fork_pose``); ValueError for a wrong shape."""
+    nc = len(episode.t)
+    if fork is None and episode.fork_pose is not None:
+        fork = episode.fork_pose  # the pose the scene showed (the run file's fork_pose)
+    if fork is None:
+        return None
+    fork = np.asarray(fork, dtype=float)
+    if fork.ndim != 2 or fork.shape[0] < nc or fork.shape[1] != len(FORK_CHANNELS):
+        raise ValueError(f"fork must be ({nc}, {len(FORK_CHANNELS)}) or longer (one pose per control step, "
+                         f"{', '.join(FORK_CHANNELS)}), got {fork.shape}")
+    return fork[:nc]
+
+
+def _control_events(episode: Episode, fork: np.ndarray | None, ns_c: list[int], add: Any) -> None:
+    """The control-rate messages (poses, frames, shoulder, arbitration, status, timing, log) via ``add``."""
+    nc = len(episode.t)
     base = np.asarray(episode.base_pose, dtype=float)
     base_q = Rotation.from_matrix(base[:, :3, :3]).as_quat() if nc else np.zeros((0, 4))
     fork_q = None
@@ -225,6 +238,10 @@ def write_run_mcap(episode: Episode, path: str | Path, *, fork: np.ndarray | Non
             add(ns, "/control/log", {"timestamp": _stamp(ns), "level": 2 if _status_ok(status) else 3,
                                      "message": f"status: {status}", "name": "controller", "file": "", "line": 0})
             previous = status
+
+
+def _joint_events(episode: Episode, joint_stride: int, start_ns: int, add: Any) -> None:
+    """Every ``joint_stride``-th physics-rate joint state as ``/arm/joint_states`` via ``add``."""
     keep = slice(0, None, joint_stride)
     t_phys = np.asarray(episode.t_physics, dtype=float)[keep]
     n_joints = np.asarray(episode.q).shape[1] if np.ndim(episode.q) == 2 else len(JOINT_NAMES)
@@ -235,7 +252,11 @@ def write_run_mcap(episode: Episode, path: str | Path, *, fork: np.ndarray | Non
         ns = start_ns + int(round(t * 1e9))
         add(ns, "/arm/joint_states", {"timestamp": _stamp(ns), "name": joint_names, "position": q,
                                       "velocity": v, "effort": tau})
-    events.sort(key=lambda e: (e[0], e[1]))
+
+
+def _write_events(path: Path, events: list[tuple[int, int, str, dict[str, Any]]], info: dict[str, Any]) -> None:
+    """The sorted ``events`` as JSON messages on their topics (schemas registered once), atomically."""
+    from mcap.writer import CompressionType, Writer
 
     with atomic_open(path, "wb") as fh:
         writer = Writer(fh, compression=CompressionType.ZSTD)
@@ -250,6 +271,5 @@ def write_run_mcap(episode: Episode, path: str | Path, *, fork: np.ndarray | Non
         encode = json.JSONEncoder(allow_nan=False, separators=(",", ":")).encode
         for ns, _, topic, msg in events:
             writer.add_message(channel_ids[topic], log_time=ns, data=encode(msg).encode(), publish_time=ns)
-        writer.add_metadata("mpcshare.run", {str(k): "" if v is None else str(v) for k, v in episode.info.items()})
+        writer.add_metadata("mpcshare.run", {str(k): "" if v is None else str(v) for k, v in info.items()})
         writer.finish()
-    return path
