@@ -122,11 +122,45 @@ def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any,
     return bundle, mode_sources
 
 
-def _demo(args: argparse.Namespace) -> int:
+def _sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainConfig, out: Path) -> dict | None:
+    """Stage 5: the trade-off between accuracy and effort as K moves (None with ``--no-sweep``)."""
+    if args.no_sweep:
+        _stage(5, "K sweep skipped (--no-sweep)")
+        return None
+    from mpcshare.training.sweep import run_sweep
+
+    _stage(5, "the trade-off between accuracy and effort (K sweep)")
+    result = run_sweep(demos, config, out=prepare_output_folder(out / "sweep"), progress=True)
+    print(result.conclusion)
+    return {"rows": result.rows, "conclusion": result.conclusion}
+
+
+def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, out: Path) -> dict:
+    """Stage 6: every run of the run table on the held-out trials, the video, ``sim/comparison.*``."""
     from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, output_size, render_clip
     from mpcshare.reports.comparison import write_comparison
-    from mpcshare.reports.demo import write_demo_report
     from sim.wearer_presets import wearer_preset
+
+    ids = bundle.heldout_trials[:args.sim_trials]
+    _stage(6, f"closed loop in MuJoCo: {len(DEFAULT_RUNS)} strategies x {len(ids)} held-out trial(s) "
+              f"x {args.sim_duration:g} s")
+    sim_out = prepare_output_folder(out / "sim")
+    npz_bytes, _ = output_size(DEFAULT_RUNS, demos, ids, args.sim_duration)
+    print(f"writing about {npz_bytes / 1e6:.0f} MB of run files into {sim_out / 'runs'} "
+          "(fewer with --sim-trials or --sim-duration)", flush=True)
+    wearer = wearer_preset(args.wearer)
+    comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
+                              mode_names=MODE_NAMES, wearer=wearer)
+    if not args.no_video:
+        video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
+                                     seed=args.seed, wearer=wearer)
+        comp.video = None if video is None else str(Path(video).relative_to(sim_out))
+        print(f"video: {video}" if video else f"no video: {message}")
+    return write_comparison(comp, sim_out, cutting=cutting_steps(demos, ids[0]))
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from mpcshare.reports.demo import write_demo_report
 
     out = prepare_output_folder(args.out)
     t_start = time.perf_counter()
@@ -160,36 +194,13 @@ def _demo(args: argparse.Namespace) -> int:
     bundle, mode_sources = _train(demos, config, out, analysis, args.wearer, rule_s)
     lap("training", t0)
 
-    sweep = None
-    if not args.no_sweep:
-        from mpcshare.training.sweep import run_sweep
-
-        t0 = time.perf_counter()
-        _stage(5, "the trade-off between accuracy and effort (K sweep)")
-        result = run_sweep(demos, config, out=prepare_output_folder(out / "sweep"), progress=True)
-        print(result.conclusion)
-        sweep = {"rows": result.rows, "conclusion": result.conclusion}
+    t0 = time.perf_counter()
+    sweep = _sweep(args, demos, config, out)
+    if sweep is not None:
         lap("sweep", t0)
-    else:
-        _stage(5, "K sweep skipped (--no-sweep)")
 
     t0 = time.perf_counter()
-    ids = bundle.heldout_trials[:args.sim_trials]
-    _stage(6, f"closed loop in MuJoCo: {len(DEFAULT_RUNS)} strategies x {len(ids)} held-out trial(s) "
-              f"x {args.sim_duration:g} s")
-    sim_out = prepare_output_folder(out / "sim")
-    npz_bytes, _ = output_size(DEFAULT_RUNS, demos, ids, args.sim_duration)
-    print(f"writing about {npz_bytes / 1e6:.0f} MB of run files into {sim_out / 'runs'} "
-          "(fewer with --sim-trials or --sim-duration)", flush=True)
-    wearer = wearer_preset(args.wearer)
-    comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
-                              mode_names=MODE_NAMES, wearer=wearer)
-    if not args.no_video:
-        video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
-                                     seed=args.seed, wearer=wearer)
-        comp.video = None if video is None else str(Path(video).relative_to(sim_out))
-        print(f"video: {video}" if video else f"no video: {message}")
-    comparison = write_comparison(comp, sim_out, cutting=cutting_steps(demos, ids[0]))
+    comparison = _closed_loop(args, bundle, demos, out)
     lap("closed loop", t0)
 
     timings["total"] = time.perf_counter() - t_start
