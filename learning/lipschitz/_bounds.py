@@ -205,16 +205,7 @@ def build_features(X: np.ndarray, Y: np.ndarray, idx: np.ndarray, *, leaf_size: 
         P = _pca_basis(Xg[:: max(1, n // 20000)] - m, None, max_k=max(1, n // 8))
         k = P.shape[0]
     K = k + 1
-    z = np.empty((n, K))
-    vmax = 0.0
-    for s in range(0, n, chunk):
-        e = min(s + chunk, n)
-        V = Xg[s:e] - m  # one rounding per coordinate: relative error ≤ u64
-        Z = V @ P.T
-        R = V - Z @ P
-        z[s:e, :k] = Z
-        z[s:e, k] = np.sqrt(np.einsum("ij,ij->i", R, R))
-        vmax = max(vmax, float(np.sqrt(np.einsum("ij,ij->i", V, V)).max()))
+    z, vmax = _project(Xg, m, P, chunk)
     # Absolute float64 error of the computed z (subtraction, product, residual):
     # ≤ few·(d + k)·u64·‖v‖; generous constant.
     delta_z = 8.0 * (d + k + 4) * _F64_U * vmax
@@ -244,32 +235,53 @@ def build_features(X: np.ndarray, Y: np.ndarray, idx: np.ndarray, *, leaf_size: 
     col_z[:, dy + 1 + K] = na
     col_z[:, dy + 2 + K] = 1.0
 
-    xs = nx = col_x = nbx = nx_lo = nx_hi = nw_lo = nw_hi = None
     c_x = margin_constant(d + dy + 4, unit_roundoff)
-    if full_screen:
-        col_x = np.empty((n, dy + d + 3), dtype=np.float32)
-        nxx = np.empty(n)
-        for s in range(0, n, chunk):
-            e = min(s + chunk, n)
-            V = (Xg[perm[s:e]] - m) * sx
-            V32 = V.astype(np.float32)
-            col_x[s:e, dy + 1:dy + 1 + d] = V32
-            V64 = V32.astype(np.float64)
-            nxx[s:e] = np.einsum("ij,ij->i", V64, V64)
-        nxx = np.maximum(nxx, _NORM_FLOOR)
-        nx = ((1.0 - c_x) * nxx).astype(np.float32)
-        nbx = ((1.0 + c_x) * nw).astype(np.float32)
-        nx_lo, nx_hi = nx, ((1.0 + c_x) * nxx).astype(np.float32)
-        nw_lo, nw_hi = ((1.0 - c_x) * nw).astype(np.float32), nbx
-        col_x[:, :dy] = ws
-        col_x[:, dy] = nbx
-        col_x[:, dy + 1 + d] = nx
-        col_x[:, dy + 2 + d] = 1.0
-        xs = col_x[:, dy + 1:dy + 1 + d]
-    return Features(perm=idx[perm], leaf_start=leaf_start, z=z, w=w, zs=zs, ws=ws, xs=xs,
-                    na=na, nb=nb, nbx=nbx, nx=nx, nx_lo=nx_lo, nx_hi=nx_hi,
-                    nw_lo=nw_lo, nw_hi=nw_hi, col_z=col_z, col_x=col_x, scale_x=sx,
-                    scale_y=sy, delta_z=delta_z, delta_y=delta_y, c_z=c_z, c_x=c_x)
+    full = _full_columns(Xg, perm, m, sx, ws, nw, c_x, chunk) if full_screen else dict.fromkeys(
+        ("xs", "nx", "col_x", "nbx", "nx_lo", "nx_hi", "nw_lo", "nw_hi"))
+    return Features(perm=idx[perm], leaf_start=leaf_start, z=z, w=w, zs=zs, ws=ws, na=na, nb=nb, col_z=col_z,
+                    scale_x=sx, scale_y=sy, delta_z=delta_z, delta_y=delta_y, c_z=c_z, c_x=c_x, **full)
+
+
+def _project(Xg: np.ndarray, m: np.ndarray, P: np.ndarray, chunk: int) -> tuple[np.ndarray, float]:
+    """(n, k + 1) z = [P·(x − m), ‖residual‖] in float64, and max ‖x − m‖ (for the error bound)."""
+    n, k = len(Xg), P.shape[0]
+    z = np.empty((n, k + 1))
+    vmax = 0.0
+    for s in range(0, n, chunk):
+        e = min(s + chunk, n)
+        V = Xg[s:e] - m  # one rounding per coordinate: relative error ≤ u64
+        Z = V @ P.T
+        R = V - Z @ P
+        z[s:e, :k] = Z
+        z[s:e, k] = np.sqrt(np.einsum("ij,ij->i", R, R))
+        vmax = max(vmax, float(np.sqrt(np.einsum("ij,ij->i", V, V)).max()))
+    return z, vmax
+
+
+def _full_columns(Xg: np.ndarray, perm: np.ndarray, m: np.ndarray, sx: float, ws: np.ndarray, nw: np.ndarray,
+                  c_x: float, chunk: int) -> dict[str, np.ndarray]:
+    """The full-dimensional screen's float32 columns of the points ``Xg[perm]`` (module docstring; read a
+    chunk at a time, never copied whole):
+    [ws, (1 + c_x)‖w‖², x·sx, (1 − c_x)‖x‖², 1] and the norms' lower and upper bounds."""
+    n, d, dy = len(perm), Xg.shape[1], ws.shape[1]
+    col_x = np.empty((n, dy + d + 3), dtype=np.float32)
+    nxx = np.empty(n)
+    for s in range(0, n, chunk):
+        e = min(s + chunk, n)
+        V32 = ((Xg[perm[s:e]] - m) * sx).astype(np.float32)
+        col_x[s:e, dy + 1:dy + 1 + d] = V32
+        V64 = V32.astype(np.float64)
+        nxx[s:e] = np.einsum("ij,ij->i", V64, V64)
+    nxx = np.maximum(nxx, _NORM_FLOOR)
+    nx = ((1.0 - c_x) * nxx).astype(np.float32)
+    nbx = ((1.0 + c_x) * nw).astype(np.float32)
+    col_x[:, :dy] = ws
+    col_x[:, dy] = nbx
+    col_x[:, dy + 1 + d] = nx
+    col_x[:, dy + 2 + d] = 1.0
+    return {"xs": col_x[:, dy + 1:dy + 1 + d], "nx": nx, "col_x": col_x, "nbx": nbx, "nx_lo": nx,
+            "nx_hi": ((1.0 + c_x) * nxx).astype(np.float32), "nw_lo": ((1.0 - c_x) * nw).astype(np.float32),
+            "nw_hi": nbx}
 
 
 def thresholds(L: np.ndarray, scale_x: float, scale_y: float) -> np.ndarray:
