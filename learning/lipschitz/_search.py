@@ -106,6 +106,23 @@ def nearest_leaves(ctx: LeafContext, a: int, m: int) -> np.ndarray:
     return near[np.lexsort((near, dc[near]))]
 
 
+def _leaf_candidates(ctx: LeafContext, a: int, L: np.ndarray, leaves: np.ndarray | None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(leaves to search, their upper bounds on the quotient): every leaf whose box bound reaches
+    min L, by decreasing bound then nearest centroid first (tightens L early); or ``leaves`` as
+    given, unbounded (the warm-up)."""
+    if leaves is not None:
+        cand = np.asarray(leaves)
+        return cand, np.full(len(cand), np.inf)
+    f = ctx.f
+    zlo, zhi, wlo, whi, zc = ctx.boxes
+    ub = leaf_upper_ratios(a, zlo, zhi, wlo, whi, f.delta_z, f.delta_y)
+    cand = np.nonzero(ub >= L.min())[0]
+    dc = ((zc[cand] - zc[a]) ** 2).sum(axis=1)
+    cand = cand[np.lexsort((dc, -ub[cand]))]
+    return cand, ub[cand]
+
+
 def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> PairCounters:
     """Complete the quotients of the rows of leaf ``a`` (see module doc).
 
@@ -121,19 +138,9 @@ def search_leaf(ctx: LeafContext, a: int, leaves: np.ndarray | None = None) -> P
     L = q[s0:e0].copy()
     if ctx.lb is not None:
         np.maximum(L, ctx.lb[s0:e0], out=L)
-    zlo, zhi, wlo, whi, zc = ctx.boxes
-    if leaves is None:
-        ub = leaf_upper_ratios(a, zlo, zhi, wlo, whi, f.delta_z, f.delta_y)
-        cand = np.nonzero(ub >= L.min())[0]
-        if len(cand) == 0:
-            return st
-        # Decreasing bound, then nearest centroid first (tightens L early).
-        dc = ((zc[cand] - zc[a]) ** 2).sum(axis=1)
-        cand = cand[np.lexsort((dc, -ub[cand]))]
-        cub = ub[cand]
-    else:
-        cand = np.asarray(leaves)
-        cub = np.full(len(cand), np.inf)
+    cand, cub = _leaf_candidates(ctx, a, L, leaves)
+    if len(cand) == 0 and leaves is None:
+        return st
     sizes = np.diff(f.leaf_start)[cand]
     has_full = f.xs is not None
     use_z = True
