@@ -262,6 +262,36 @@ def _select_modes(Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig, pr
     return sel
 
 
+def _shared_pass(w: WindowedData, rand: np.ndarray, fitted: dict[int, tuple[TaskModes, np.ndarray]],
+                 config: AnalysisConfig, shared: bool, progress: bool) -> tuple[np.ndarray, dict[float, np.ndarray]]:
+    """(Q, known_pass): the quotients without modes (row 0), within the test's random groupings
+    ``rand`` and, where ``shared``, within the search's random groupings at this window, in one
+    pass over the pairs (:func:`pointwise_quotients_multi`, each row equal to its own call); the
+    search's rows keyed by the window, so that the search does not pass over these windows again."""
+    extra = np.zeros((0, len(w)), np.int64)
+    if shared:
+        search_rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
+        extra, search_rows = _search_rows(search_rand, rand, config)
+    Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand, extra]),
+                                  progress=progress)
+    return Q, ({float(config.window_s): Q[search_rows]} if shared else {})
+
+
+def _mode_tests(w: WindowedData, Z: np.ndarray, model: TaskModes, labels: np.ndarray, modes: np.ndarray,
+                q_random: np.ndarray, config: AnalysisConfig) -> tuple[Any, np.ndarray]:
+    """(evidence, reference labels): the quotients within the modes and within the time-free reference
+    (two calls side by side) and the two tests against random groups and the reference."""
+    features = model.transform(Z)
+    ref_labels = reference_segmentation(features, labels, config.reference, config.seed)
+    within = within_group_quotients(w.X, w.Y, {"modes": modes, "reference": ref_labels[w.source_index]})
+    ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, features, labels,
+                       reference=config.reference, n_random=config.n_random,
+                       random_method=config.random_method, alpha=SIGNIFICANCE, min_effect=config.min_effect,
+                       help_effect=config.help_effect, seed=config.seed, q_random=q_random,
+                       q_modes=within["modes"], reference_labels=ref_labels, q_reference=within["reference"])
+    return ev, ref_labels
+
+
 def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
             progress: bool = False) -> AnalysisResult:
     """Run the whole predictability analysis (see module docstring).
@@ -307,28 +337,14 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     #    groupings (their HMMs are fitted first), so the search does not pass over these
     #    windows again.
     rand = random_labelings(modes, config.n_random, config.random_method, config.seed)
-    extra = np.zeros((0, len(w)), np.int64)
-    if shared:
-        search_rand = search_labelings({n: fitted[n][1][w.source_index] for n in config.search_modes}, config)
-        extra, search_rows = _search_rows(search_rand, rand, config)
-    Q = pointwise_quotients_multi(w.X, w.Y, np.vstack([np.zeros((1, len(w)), np.int64), rand, extra]),
-                                  progress=progress)
+    Q, known_pass = _shared_pass(w, rand, fitted, config, shared, progress)
     q = Q[0]
-    known_pass = {float(config.window_s): Q[search_rows]} if shared else {}
     K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
     steps.done("quotients")
 
     # 4. quotients within modes and within the time-free reference (two calls side by
     #    side); the two tests
-    features = model.transform(Z)
-    ref_labels = reference_segmentation(features, labels, config.reference, config.seed)
-    within = within_group_quotients(w.X, w.Y, {"modes": modes, "reference": ref_labels[w.source_index]})
-    ev = mode_evidence(w.X, w.Y, w.trial, w.source_index, features, labels,
-                       reference=config.reference, n_random=config.n_random,
-                       random_method=config.random_method, alpha=SIGNIFICANCE, min_effect=config.min_effect,
-                       help_effect=config.help_effect, seed=config.seed, q_random=Q[1:1 + len(rand)],
-                       q_modes=within["modes"],
-                       reference_labels=ref_labels, q_reference=within["reference"])
+    ev, ref_labels = _mode_tests(w, Z, model, labels, modes, Q[1:1 + len(rand)], config)
     q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
     steps.done("segmentation test")
 
