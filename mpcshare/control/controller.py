@@ -32,34 +32,9 @@ Per :meth:`SharedController.step`:
    the wearer's body zones (:mod:`mpcshare.control.keepout`). When the MPC fails or runs out of time, the QP
    tracks the smoothed reference alone.
 
-``step`` never raises: every fault gives a safe command and a status (:data:`STATUSES`,
-most severe first; ``reasons`` lists every fault of the step):
-
-==========================  ==========================================================
-status                      what the step does
-==========================  ==========================================================
-internal_error              an unexpected exception (or a learned part raised): brake
-                            toward the smoothed reference within limits; a failing
-                            gate/predictor only sets α = 0
-invalid_joint_state         q or v NaN / wrong shape: the QP holds its last command
-time_went_backwards         t ≤ previous t (or NaN): nothing is updated, brake and hold
-no_observation              no fork sample ever measured: brake and hold
-qp_failed                   both QPs failed: the QP's brake (torque limits hold)
-keepout_robot               the knife moved into a body zone's margin (never expected: the
-                            keep-out rows forbid it; :mod:`mpcshare.control.keepout`)
-keepout_retreat             the keep-out rows and the limits cannot all be met: the safest
-                            feasible action (retreat, else stop)
-keepout_person              the wearer moved onto a knife that was not moving into them
-stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β = 1 (the
-                            wearer has control), the reactive term is dropped
-invalid_shoulder            shoulder angles NaN / wrong shape: û = 0, reference held
-mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
-invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
-missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
-keepout_stale_zone          fork marker lost: the hand and forearm zones grow with its age
-invalid_base_pose           the last valid base pose is kept
-reference_unreachable       the reference is clamped to the workspace box / reach shell
-==========================  ==========================================================
+``step`` never raises: every fault gives a safe command and a status, the most severe of the
+step's faults (:data:`~mpcshare.control.types.STATUSES`, where each is listed with what the step
+does; ``reasons`` lists every fault of the step).
 """
 
 from __future__ import annotations
@@ -82,7 +57,7 @@ from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.preview import PreviewPlan, mpc_preview
 from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
-from mpcshare.control.workspace import DEFAULT_BASE_POSE, check_base_pose, project_box_shell
+from mpcshare.control.workspace import DEFAULT_BASE_POSE, bound_reference, check_base_pose
 from mpcshare.errors import ControllerTypeError
 from robot.description import RobotDescription, as_description
 from robot.floor import FloorLimit
@@ -366,23 +341,12 @@ class SharedController:
 
     def _bound_reference(self, p_ref: np.ndarray, u: np.ndarray, dt: float, faults: list[tuple[str, str]]
                          ) -> tuple[np.ndarray, np.ndarray]:
-        """(p_ref + u·dt projected onto the workspace box ∩ the arm's reach, plate frame; u less its part
-        pointing out of them where projected, so that the smoother is not aimed through the bound)."""
-        p_int = p_ref + u * dt
-        pivot = self._to_plate(self.reach.pivot)
-        p_new, met = project_box_shell(p_int, *self._box, pivot, self.reach.r_min, self.reach.r_max)
-        if not met:
-            faults.append(("reference_unreachable", "the workspace box and the arm's reach do not meet: "
-                                                    "the reference kept in the box"))
-        elif (p_new != p_int).any():
-            faults.append(("reference_unreachable", "tip reference projected onto the workspace box and the "
-                                                    "arm's reach"))
-        out = p_int - p_new
-        norm = math.sqrt(float(out @ out))
-        if norm > 1e-12:
-            n = out / norm
-            u = u - max(0.0, float(u @ n)) * n
-            self._acc_ff = self._acc_ff - max(0.0, float(self._acc_ff @ n)) * n
+        """p_ref + u·dt kept in the workspace box ∩ the arm's reach (:func:`bound_reference`)."""
+        p_new, u, self._acc_ff, fault = bound_reference(p_ref + u * dt, u, self._acc_ff, self._box,
+                                                        self._to_plate(self.reach.pivot), self.reach.r_min,
+                                                        self.reach.r_max)
+        if fault is not None:
+            faults.append(("reference_unreachable", fault))
         return p_new, u
 
     def _track(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, p_model: np.ndarray,

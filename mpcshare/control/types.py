@@ -1,4 +1,34 @@
-"""What the online controller returns every step, and its settings."""
+"""What the online controller returns every step, and its settings.
+
+The statuses of ``SharedController.step`` (:data:`STATUSES`, most severe first), and what the
+step does in each (it never raises):
+
+==========================  ==========================================================
+status                      what the step does
+==========================  ==========================================================
+internal_error              an unexpected exception (or a learned part raised): brake
+                            toward the smoothed reference within limits; a failing
+                            gate/predictor only sets α = 0
+invalid_joint_state         q or v NaN / wrong shape: the QP holds its last command
+time_went_backwards         t ≤ previous t (or NaN): nothing is updated, brake and hold
+no_observation              no fork sample ever measured: brake and hold
+qp_failed                   both QPs failed: the QP's brake (torque limits hold)
+keepout_robot               the knife moved into a body zone's margin (never expected: the
+                            keep-out rows forbid it; :mod:`mpcshare.control.keepout`)
+keepout_retreat             the keep-out rows and the limits cannot all be met: the safest
+                            feasible action (retreat, else stop)
+keepout_person              the wearer moved onto a knife that was not moving into them
+stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β = 1 (the
+                            wearer has control), the reactive term is dropped
+invalid_shoulder            shoulder angles NaN / wrong shape: û = 0, reference held
+mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
+invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
+missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
+keepout_stale_zone          fork marker lost: the hand and forearm zones grow with its age
+invalid_base_pose           the last valid base pose is kept
+reference_unreachable       the reference is clamped to the workspace box / reach shell
+==========================  ==========================================================
+"""
 
 from __future__ import annotations
 

@@ -29,7 +29,8 @@ import numpy as np
 
 from mpcshare.errors import ControllerSetupError
 
-__all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "WorkspaceBox", "check_base_pose", "project_box_shell"]
+__all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "WorkspaceBox", "bound_reference", "check_base_pose",
+           "project_box_shell"]
 
 DEFAULT_BASE_POSE = np.eye(4)
 DEFAULT_BASE_POSE[:3, 3] = (-0.22, 0.12, 0.0)
@@ -104,6 +105,29 @@ def project_box_shell(p: np.ndarray, lower: np.ndarray, upper: np.ndarray, cente
                         and r_min - tol <= rx <= r_max + tol:
                     best, best_d = np.minimum(np.maximum(x, lower), upper), dx
     return best, math.isfinite(best_d)
+
+
+def bound_reference(p: np.ndarray, u: np.ndarray, acc: np.ndarray, box: tuple[np.ndarray, np.ndarray],
+                    pivot: np.ndarray, r_min: float, r_max: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, str | None]:
+    """(p', u', a', fault): the tip reference ``p`` [m] projected onto the box ∩ the reach shell
+    (:func:`project_box_shell`), and the velocity ``u`` [m/s] and acceleration ``a`` less their
+    part along the outward normal n = (p − p')/‖p − p'‖ where projected (u' = u − max(0, u·n)·n),
+    so that a smoother aimed ahead along u is not aimed through the bound; ``fault`` says why the
+    reference moved (None where it did not)."""
+    p_new, met = project_box_shell(p, box[0], box[1], pivot, r_min, r_max)
+    fault = None
+    if not met:
+        fault = "the workspace box and the arm's reach do not meet: the reference kept in the box"
+    elif (p_new != p).any():
+        fault = "tip reference projected onto the workspace box and the arm's reach"
+    out = p - p_new
+    norm = math.sqrt(float(out @ out))
+    if norm > 1e-12:
+        n = out / norm
+        u = u - max(0.0, float(u @ n)) * n
+        acc = acc - max(0.0, float(acc @ n)) * n
+    return p_new, u, acc, fault
 
 
 def check_base_pose(T: object) -> np.ndarray:

@@ -57,3 +57,18 @@ def test_inside_is_unchanged_and_disjoint_sets_keep_the_box():
     assert not met and np.allclose(x, [0.30, 0.0, -0.03])  # the box's point, floor first
     x, met = project_box_shell(c, LO, HI, c, 0.05, 0.3)  # at the pivot itself: out through the inner sphere
     assert met and np.linalg.norm(x - c) == pytest.approx(0.05)
+
+
+def test_bound_reference_drops_the_outward_part_of_the_velocity_only():
+    from mpcshare.control.workspace import bound_reference
+
+    box = (np.array([-0.1, -0.1, 0.0]), np.array([0.1, 0.1, 0.2]))
+    pivot, r_min, r_max = np.array([0.0, 0.0, 0.5]), 0.0, 10.0  # the reach contains the box
+    u, a = np.array([0.3, 0.0, -0.5]), np.array([0.0, 1.0, -2.0])
+    p, u2, a2, fault = bound_reference(np.array([0.05, 0.0, -0.01]), u, a, box, pivot, r_min, r_max)
+    np.testing.assert_allclose(p, [0.05, 0.0, 0.0])  # onto the floor
+    np.testing.assert_allclose(u2, [0.3, 0.0, 0.0])  # the downward part dropped, the sideways kept
+    np.testing.assert_allclose(a2, [0.0, 1.0, 0.0])
+    assert "projected" in fault
+    p, u3, a3, fault = bound_reference(np.array([0.0, 0.0, 0.1]), u, a, box, pivot, r_min, r_max)
+    assert fault is None and (u3 == u).all() and (a3 == a).all() and (p == [0.0, 0.0, 0.1]).all()
