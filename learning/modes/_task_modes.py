@@ -18,7 +18,6 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted
 
 from ._hmm import (
-    COV_TYPES,
     AbsDeltaMonitor,
     RegularizedGaussianHMM,
     check_sequences,
@@ -28,6 +27,7 @@ from ._hmm import (
     split_sequences,
 )
 from ._online import HMMFilterParams, ModeFilter, forward_filter_log
+from ._params import check_params
 
 __all__ = ["DegenerateModesWarning", "TaskModes"]
 
@@ -126,29 +126,7 @@ class TaskModes(BaseEstimator):
 
     # ------------------------------------------------------------------ fitting
     def _check_params(self) -> None:
-        if int(self.n_modes) != self.n_modes or self.n_modes < 1:
-            raise ValueError(f"n_modes must be a positive integer, got {self.n_modes!r}")
-        if self.covariance_type not in COV_TYPES:
-            raise ValueError(f"covariance_type must be one of {COV_TYPES}, "
-                             f"got {self.covariance_type!r}")
-        if int(self.n_restarts) != self.n_restarts or self.n_restarts < 1:
-            raise ValueError(f"n_restarts must be a positive integer, got {self.n_restarts!r}")
-        if int(self.n_iter) != self.n_iter or self.n_iter < 1:
-            raise ValueError(f"n_iter must be a positive integer, got {self.n_iter!r}")
-        if not isinstance(self.temporal, (bool, np.bool_)):
-            raise ValueError(f"temporal must be True (HMM) or False (Gaussian mixture), got {self.temporal!r}")
-        if not self.sticky >= 0:
-            raise ValueError(f"sticky must be >= 0, got {self.sticky!r}")
-        if not self.tol >= 0:
-            raise ValueError(f"tol must be >= 0, got {self.tol!r}")
-        if not self.min_covar > 0:
-            raise ValueError(f"min_covar must be > 0, got {self.min_covar!r}")
-        if self.n_pca is not None:
-            ok = (isinstance(self.n_pca, (int, np.integer)) and self.n_pca >= 1) or \
-                 (isinstance(self.n_pca, float) and 0 < self.n_pca < 1)
-            if not ok:
-                raise ValueError("n_pca must be None, a positive int or a float in (0, 1), "
-                                 f"got {self.n_pca!r}")
+        check_params(self)
 
     @one_thread
     def fit(self, X: np.ndarray, lengths: Sequence[int] | None = None) -> TaskModes:
