@@ -249,74 +249,82 @@ def symmetric_pass(ctx: LeafContext, pool, bar=None, tile: int = 256, chunk: int
     q_i survives whatever the bounds were (see ``_bounds``), so q and the
     partner (smallest index among the maximisers) are the same as the one-sided search.
     """
-    f, q, partner, kern, lb = ctx.f, ctx.q, ctx.partner, ctx.kernel, ctx.lb
-    n = len(f.perm)
-    order = np.argsort(lb, kind="stable")
-    kern.sym_prepare(order)
-    lock = threading.Lock()
-    sx, sy = f.scale_x, f.scale_y
+    n = len(ctx.f.perm)
+    tiles = _SymmetricTiles(ctx, tile, chunk, batch, sym_full_fraction)
+    return run_tiles(tiles.task, n, tile, pool, bar, ctx.kernel)
 
-    has_full = f.xs is not None
 
-    def raise_lb(idx: np.ndarray, L: np.ndarray) -> None:
-        with lock:
+class _SymmetricTiles:
+    """The tile tasks of :func:`symmetric_pass` and the state they share (the pass order, the lock
+    under which survivors update q, partner and the lower bounds of both points)."""
+
+    def __init__(self, ctx: LeafContext, tile: int, chunk: int, batch: int, full_fraction: float) -> None:
+        self.ctx, self.tile, self.chunk, self.batch, self.full_fraction = ctx, tile, chunk, batch, full_fraction
+        self.n = len(ctx.f.perm)
+        self.order = np.argsort(ctx.lb, kind="stable")
+        ctx.kernel.sym_prepare(self.order)
+        self.lock = threading.Lock()
+
+    def raise_lb(self, idx: np.ndarray, L: np.ndarray) -> None:
+        lb = self.ctx.lb
+        with self.lock:
             lb[idx] = np.maximum(lb[idx], L)
 
-    def credit(gi: np.ndarray, gj: np.ndarray, r: np.ndarray, both: bool) -> None:
-        with lock:
-            update_best(q, partner, gi, f.perm[gj], r)
+    def credit(self, gi: np.ndarray, gj: np.ndarray, r: np.ndarray, both: bool) -> None:
+        """Exact quotients r of pairs (gi, gj) to q and partner of gi (and of gj where ``both``)."""
+        c = self.ctx
+        with self.lock:
+            update_best(c.q, c.partner, gi, c.f.perm[gj], r)
             if both:
-                update_best(q, partner, gj, f.perm[gi], r)
-            lb[gi] = np.maximum(lb[gi], q[gi])
+                update_best(c.q, c.partner, gj, c.f.perm[gi], r)
+            c.lb[gi] = np.maximum(c.lb[gi], c.q[gi])
             if both:
-                lb[gj] = np.maximum(lb[gj], q[gj])
+                c.lb[gj] = np.maximum(c.lb[gj], c.q[gj])
 
-    def task(s: int) -> tuple[PairCounters, int]:
+    def flush(self, pend: list, st: PairCounters) -> None:
+        """Survivors evaluated in batches (per-call overhead), then credited; ``pend`` emptied."""
+        for diag in (True, False):
+            sel = [(gi, gj, pi, pj) for gi, gj, dg, pi, pj in pend if dg == diag]
+            if not sel:
+                continue
+            gi = np.concatenate([a[0] for a in sel])
+            gj = np.concatenate([a[1] for a in sel])
+            # exact quotients by pass positions: the data in pass order (cache-friendly)
+            r = self.ctx.kernel.sym_exact(np.concatenate([a[2] for a in sel]), np.concatenate([a[3] for a in sel]))
+            st.pairs_exact += len(r)
+            self.credit(gi, gj, r, not diag)
+        pend.clear()
+
+    def task(self, s: int) -> tuple[PairCounters, int]:
+        """Row tile [s, s + tile) of the pass order against itself and every later point."""
+        f, kern, lb, order, n = self.ctx.f, self.ctx.kernel, self.ctx.lb, self.order, self.n
         st = PairCounters()
-        e = min(s + tile, n)
+        e = min(s + self.tile, n)
         rows = order[s:e]
-        spans = [(s, e)] + [(c0, min(c0 + chunk, n)) for c0 in range(e, n, chunk)]
+        spans = [(s, e)] + [(c0, min(c0 + self.chunk, n)) for c0 in range(e, n, self.chunk)]
         pend: list[tuple[np.ndarray, np.ndarray, bool, np.ndarray, np.ndarray]] = []
         n_pend = 0
-        screen = ChunkScreen(kern, has_full, sym_full_fraction)
-
-        def flush() -> None:
-            # Survivors are evaluated in batches (per-call overhead), then credited.
-            for diag in (True, False):
-                sel = [(gi, gj, pi, pj) for gi, gj, dg, pi, pj in pend if dg == diag]
-                if not sel:
-                    continue
-                gi = np.concatenate([a[0] for a in sel])
-                gj = np.concatenate([a[1] for a in sel])
-                # exact quotients by pass positions: the data in pass order (cache-friendly)
-                r = kern.sym_exact(np.concatenate([a[2] for a in sel]), np.concatenate([a[3] for a in sel]))
-                st.pairs_exact += len(r)
-                credit(gi, gj, r, not diag)
-            pend.clear()
-
+        screen = ChunkScreen(kern, f.xs is not None, self.full_fraction)
         for c0, c1 in spans:
             diag = c0 == s
             cols = order[c0:c1]
             n_ac = (e - s) * (c1 - c0)
-            ri, cj, chunk_full = screen.z_screen(s, e, c0, c1, lb[rows], lb[cols], sx, sy, st)
+            ri, cj, chunk_full = screen.z_screen(s, e, c0, c1, lb[rows], lb[cols], f.scale_x, f.scale_y, st)
             if chunk_full:
-                ri, cj, Lr, Lc = kern.sym_tight(rows, cols, lb[rows], lb[cols],
-                                                None if diag else np.inf)
+                ri, cj, Lr, Lc = kern.sym_tight(rows, cols, lb[rows], lb[cols], None if diag else np.inf)
                 st.pairs_full_screened += n_ac
-                raise_lb(rows, Lr)
+                self.raise_lb(rows, Lr)
                 if not diag:
-                    raise_lb(cols, Lc)
+                    self.raise_lb(cols, Lc)
             if len(ri) == 0:
                 continue
             pend.append((rows[ri], order[c0 + cj], diag, s + ri, c0 + cj))
             n_pend += len(ri)
-            if n_pend >= batch:
-                flush()
+            if n_pend >= self.batch:
+                self.flush(pend, st)
                 n_pend = 0
-        flush()
+        self.flush(pend, st)
         return st, (e - s) * (e - s - 1) // 2 + (e - s) * (n - e)
-
-    return run_tiles(task, n, tile, pool, bar, kern)
 
 
 class ChunkScreen:
