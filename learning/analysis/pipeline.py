@@ -262,6 +262,17 @@ def _select_modes(Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig, pr
     return sel
 
 
+def _fit_all_modes(Z: np.ndarray, lengths: np.ndarray, config: AnalysisConfig, shared: bool
+                   ) -> dict[int, tuple[TaskModes, np.ndarray]]:
+    """The HMM of ``config.n_modes`` and, where the search shares the main pass (``shared``), those
+    of its other numbers of modes: number of modes → (model, per-sample labels)."""
+    fitted = {config.n_modes: fit_modes(Z, lengths, config.n_modes, config)}
+    for n in config.search_modes if shared else ():
+        if n not in fitted:
+            fitted[n] = fit_modes(Z, lengths, n, config)
+    return fitted
+
+
 def _shared_pass(w: WindowedData, rand: np.ndarray, fitted: dict[int, tuple[TaskModes, np.ndarray]],
                  config: AnalysisConfig, shared: bool, progress: bool) -> tuple[np.ndarray, dict[float, np.ndarray]]:
     """(Q, known_pass): the quotients without modes (row 0), within the test's random groupings
@@ -318,17 +329,12 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
 
     # 2. HMM modes
     Z, lengths = std.obs_sequences()
-    fitted: dict[int, tuple[TaskModes, np.ndarray]] = {}
-    fitted[config.n_modes] = fit_modes(Z, lengths, config.n_modes, config)
+    # the search's other numbers of modes too, where its random groupings join step 3's pass
+    shared = bool(n_search) and float(config.window_s) in {float(v) for v in config.search_windows}
+    fitted = _fit_all_modes(Z, lengths, config, shared)
     model, labels = fitted[config.n_modes]
     modes = labels[w.source_index]
     true = w.mode if w.mode is not None and np.any(w.mode >= 0) else None
-    # the search's other numbers of modes too, where its random groupings join step 3's pass
-    shared = bool(n_search) and float(config.window_s) in {float(v) for v in config.search_windows}
-    if shared:
-        for n in config.search_modes:
-            if n not in fitted:
-                fitted[n] = fit_modes(Z, lengths, n, config)
     steps.done("modes")
 
     # 3. quotients without modes and within the random segmentations of the test, in one
