@@ -337,25 +337,19 @@ def analyze(demos: Demonstrations, config: AnalysisConfig | None = None, *,
     true = w.mode if w.mode is not None and np.any(w.mode >= 0) else None
     steps.done("modes")
 
-    # 3. quotients without modes and within the random segmentations of the test, in one
-    #    pass over the pairs (pointwise_quotients_multi; each equal to its own call). Where
-    #    the search has a candidate at this window, the same pass also takes its random
-    #    groupings (their HMMs are fitted first), so the search does not pass over these
-    #    windows again.
+    # 3. quotients without modes and within random groupings (the test's and the search's), one pass
     rand = random_labelings(modes, config.n_random, config.random_method, config.seed)
     Q, known_pass = _shared_pass(w, rand, fitted, config, shared, progress)
     q = Q[0]
     K_by_percentile = {f"{p:g}": _json_float(threshold_from_percentile(q, p)) for p in config.percentiles}
     steps.done("quotients")
 
-    # 4. quotients within modes and within the time-free reference (two calls side by
-    #    side); the two tests
+    # 4. quotients within modes and within the time-free reference; the two tests
     ev, ref_labels = _mode_tests(w, Z, model, labels, modes, Q[1:1 + len(rand)], config)
     q_modes, q_ref, q_random = ev.q_modes, ev.q_reference, ev.q_random
     steps.done("segmentation test")
 
-    # 5. voluntary share per trial: without modes, within HMM modes, within the reference
-    #    and within random groups
+    # 5. voluntary share per trial: without modes, within modes, the reference, random groups
     share_report, shares = _voluntary_shares(w.trial, q, q_modes, q_ref, q_random, config)
     steps.done("voluntary share")
 
