@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from learning.data import Demonstrations
 from mpcshare.control.types import DEFAULT_BETA
@@ -125,8 +126,12 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
     if scene is not None:
         options = {**options, "robot": scene.robot}
     controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
-    episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
-                          obs_names=list(demos.obs_names), act_names=list(demos.act_names), fork_truth=fork_truth)
+    # one BLAS thread: the controller's products are small (a 7-joint MPC's take ≈ 2 ms a solve on one
+    # thread, ≈ 20 ms with OpenBLAS's threads on a shared 2-core machine; docs/design.md)
+    with threadpool_limits(limits=1, user_api="blas"):
+        episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
+                              obs_names=list(demos.obs_names), act_names=list(demos.act_names),
+                              fork_truth=fork_truth)
     m = episode_metrics(episode)
     true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
     m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
