@@ -8,7 +8,7 @@ from scipy import stats
 from sklearn.mixture import GaussianMixture
 
 from learning.modes import TaskModes, mode_agreement
-from tests.learning.test_modes import sample_hmm
+from tests.learning.hmm_samples import sample_hmm
 
 
 @pytest.fixture(scope="module")
