@@ -86,10 +86,11 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
     rows = []
     for c in choice["candidates"]:
         m, _ = pooled_run(bundle, demos, trials, "gate", c["settings"], 30.0 if quick else None, None, 0, mode_names)
-        rows.append({"wearer_modes": c["wearer_modes"], "rms_mm": 1e3 * m["tracking_rmse_m"],
+        rows.append({"wearer_modes": c["wearer_modes"], "wearer_alpha": c.get("wearer_alpha", 0.0),
+                     "rms_mm": 1e3 * m["tracking_rmse_m"],
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"],
                      "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
-                     "saws": saws(m), "chosen": c["wearer_modes"] == choice["wearer_modes"]})
+                     "saws": saws(m), "chosen": c["settings"] == choice["settings"]})
     return rows
 
 
@@ -110,8 +111,8 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False)
     # the gate's rule chosen in the closed loop as `mpcshare train` does, on the last held-out trials;
     # the runs below are evaluated on the other held-out trials only
     choice = choose_for_bundle(bundle, demos, mode_names=mode_names, log=None)  # as `mpcshare train`: 60 s a trial
-    info["rule_choice"] = {k: choice[k] for k in ("wearer_modes", "why", "trials", "mode_costs", "price_order",
-                                                  "cutting_modes", "seconds")}
+    info["rule_choice"] = {k: choice[k] for k in ("wearer_modes", "settings", "why", "trials", "mode_costs",
+                                                  "price_order", "cutting_modes", "seconds")}
     t_train = time.perf_counter() - t0
     rest = [t for t in bundle.heldout_trials if t not in choice["trials"]]
     trials = list(rest[:2] if quick else rest)

@@ -50,6 +50,13 @@ CRITERION = ("among the candidates with effort <= max_effort x voluntary, those 
              "max_effort x voluntary); if none is within the cap, the lowest tracking RMS")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3}
+#: the robot's shares α while the wearer leads that each non-empty wearer-mode set is tried with (the gate's
+#: ``wearer_alpha``). Only 0, the wearer alone: 0.25 (``mix25`` within the wearer's modes) was tried on 5
+#: worlds (bench_family --quick, every candidate on the evaluation trials): it lowered the line ratio of 2
+#: of 20 sets by more than 0.01 (default data [0, 1]: 1.05 → 0.80, [0, 1, 2]: 0.97 → 0.73) and raised it
+#: on 16 (up to 1.60 → 3.21 on the family, where the robot's stroke is noise), at twice the choice's
+#: cost; pass ``wearer_alphas`` to try it.
+WEARER_ALPHAS = (0.0,)
 
 
 def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive: dict[str, float]) -> float | None:
@@ -71,6 +78,11 @@ def candidate_sets(order: Sequence[int], cutting: Sequence[int], n_modes: int) -
             if s and len(s) < n_modes and s not in sets:
                 sets.append(s)
     return sets + [[]]
+
+
+def _variants(sets: list[list[int]], wearer_alphas: Sequence[float]) -> list[tuple[list[int], float]]:
+    """Each wearer-mode set with each robot share of ``wearer_alphas`` (the empty set once, with 0)."""
+    return [(m, float(a)) for m in sets for a in (wearer_alphas if m else (0.0,))]
 
 
 def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
@@ -150,11 +162,13 @@ def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, A
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 duration_s: float | None = RULE_DURATION_S,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
-                mode_names: Sequence[str] | None = None, log: Callable[[str], None] | None = None) -> dict[str, Any]:
+                mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
+                log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
     ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
-    task's stroke; None: no sawing figures). Returns ``{"settings", "wearer_modes", "why",
+    task's stroke; None: no sawing figures); ``wearer_alphas``: the robot's shares while the wearer
+    leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`). Returns ``{"settings", "wearer_modes", "why",
     "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "trials", "duration_s", "seconds"}``. Raises ValueError when the bundle has no mode model or no
     trial is given.
@@ -169,16 +183,18 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     order = price_order(costs)
     cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
     rows = []
-    for modes in candidate_sets(order, cutting, n_modes):
-        settings = {"wearer_modes": modes, **HANDOVER_SETTINGS}
+    for modes, a_w in _variants(candidate_sets(order, cutting, n_modes), wearer_alphas):
+        # every setting written out, so that none is taken from a bundle's earlier choice (rule_settings)
+        settings = {"wearer_modes": modes, **HANDOVER_SETTINGS, "wearer_alpha": a_w}
         m, _ = run("gate", settings)
-        rows.append({"wearer_modes": modes, "settings": settings, **m,
+        rows.append({"wearer_modes": modes, "wearer_alpha": a_w, "settings": settings, **m,
                      "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
         if log is not None:
             r = rows[-1]
             lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-            log(f"  gate with wearer modes {r['wearer_modes']}: RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
+            log(f"  gate with wearer modes {r['wearer_modes']} (robot share {a_w:g}): "
+                f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
                 f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
     best, why = _criterion(rows, vol, rea, max_effort)
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
@@ -219,15 +235,16 @@ def rule_markdown(choice: dict[str, Any]) -> str:
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
              *_costs_markdown(choice),
-             "| run | wearer modes | RMS [mm] | effort vs voluntary | line ratio | stroke corr. |",
-             "|---|---|---|---|---|---|"]
+             "| run | wearer modes | robot share while the wearer leads | RMS [mm] | effort vs voluntary | "
+             "line ratio | stroke corr. |", "|---|---|---|---|---|---|---|"]
     for name in ("voluntary", "reactive"):
         m = choice[name]
-        lines.append(f"| {name} | | {m['tracking_rmse_m'] * 1e3:.1f} | "
+        lines.append(f"| {name} | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
     for r in choice["candidates"]:
         lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-        lines.append(f"| gate | {r['wearer_modes']} | {r['tracking_rmse_m'] * 1e3:.1f} | "
+        lines.append(f"| gate | {r['wearer_modes']} | {r.get('wearer_alpha', 0.0):g} | "
+                     f"{r['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
     return "\n".join(lines) + "\n"
 

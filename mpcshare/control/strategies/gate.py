@@ -40,6 +40,13 @@ lead, and keeps it for ``hold_s`` after the evidence fades (off when ``push_mps`
 ``wearer_modes`` lists them and v is their indicator (v_j = 1 for a wearer mode, else 0): s_t is
 then the forecast probability of being in a wearer mode within ``lead_s``.
 
+**The robot's share while the wearer leads.** With ``wearer_alpha`` a_w > 0 (below 0.5, so the
+wearer still reads that they lead) a wearer-led mode is the constant mixture û = a_w·û_r +
+(1 − a_w)·û_v rather than the wearer alone: where the robot's forecast and the wearer's plan err
+partly independently, the mixture's error a_w·e_r + (1 − a_w)·e_v has less variance than either
+(the constant ``mix25`` lies below the voluntary–reactive line on the project's data, issue 28).
+Where the robot is far worse than the wearer it only adds error, so the closed-loop choice decides.
+
 Settings (:data:`DEFAULTS`, and ``wearer_modes``) come from the controller's ``strategy_options``
 over the bundle's ``rule_settings``. A bundle without per-mode figures falls back to the paper's gate
 (:mod:`mpcshare.control.strategies.paper_gate`), and its reasons say so.
@@ -60,7 +67,7 @@ __all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast
 
 #: The rule's settings and their defaults (see the module docstring).
 DEFAULTS: dict[str, float] = {"share_on": 0.3, "share_off": 0.2, "lead_s": 0.5, "hold_s": 0.5,
-                              "push_mps": math.inf, "push_s": 0.3}
+                              "push_mps": math.inf, "push_s": 0.3, "wearer_alpha": 0.0}
 
 
 def check_settings(options: dict[str, Any]) -> dict[str, float]:
@@ -75,6 +82,9 @@ def check_settings(options: dict[str, Any]) -> dict[str, float]:
     for k in ("lead_s", "hold_s", "push_s"):
         if not (math.isfinite(s[k]) and s[k] >= 0):
             raise ValueError(f"gate setting {k} must be finite and >= 0 s, got {s[k]!r}")
+    if not 0.0 <= s["wearer_alpha"] < 0.5:
+        raise ValueError(f"gate setting wearer_alpha must be in [0, 0.5) (the wearer leads below 0.5), "
+                         f"got {s['wearer_alpha']!r}")
     if not s["push_mps"] > 0:
         raise ValueError(f"gate setting push_mps must be > 0 m/s (inf: off), got {s['push_mps']!r}")
     return s
@@ -189,8 +199,10 @@ class ModeCostGate:
             elif t - self._below_since >= s["hold_s"] and dwell_ok:
                 self.wearer = False
         why = "the wearer pushes" if pushed else f"wearer-mode score {score:.2f}"
-        reason = why + (": the wearer leads" if self.wearer else ": the robot leads")
-        return Target(0.0 if self.wearer else 1.0, reason, ramp=True)
+        if not self.wearer:
+            return Target(1.0, why + ": the robot leads", ramp=True)
+        a = s["wearer_alpha"]
+        return Target(a, why + ": the wearer leads", ramp=True, beta=1.0 - a if a > 0 else None)
 
 
 class _PaperFallback(PaperGate):

@@ -53,13 +53,15 @@ class _Bundle:
 
 def _fake_runs(figures, by_modes, calls):
     """pooled_run replaced: the parties' figures and episodes (mode 1 costs the robot most per effort), and
-    per gate candidate (its wearer modes) given (RMS, effort, stroke correlation)."""
+    per gate candidate (its wearer modes, or (modes, robot share) where that differs) given (RMS, effort,
+    stroke correlation)."""
     mode = np.repeat([0, 1, 2], 100)
 
     def fake(bundle, demos, trials, strategy, options, duration_s, wearer, seed, mode_names=None):
         calls.append((strategy, None if options is None else tuple(options["wearer_modes"])))
         if strategy == "gate":
-            rms, eff, saw = by_modes[tuple(options["wearer_modes"])]
+            modes, a_w = tuple(options["wearer_modes"]), options.get("wearer_alpha", 0.0)
+            rms, eff, saw = by_modes.get((modes, a_w), by_modes[modes])
             return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
                     "saw_amplitude_ratio": 0.9}, []
         rms, eff, saw = figures[strategy]
@@ -111,6 +113,29 @@ def test_where_the_wearer_saws_the_choice_saws(monkeypatch):
     assert choice["wearer_modes"] == [1, 2] and "that saw" in choice["why"]
     by_modes[(1, 2)] = (0.0125, 0.07, 0.9)  # the sawing candidate costs too much: the best line among the rest
     assert choose_rule(_Bundle(), None, [3])["wearer_modes"] == [1]
+
+
+def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better(monkeypatch):
+    """The mixture within the wearer's modes (wearer_alpha 0.25) wins only where its closed loop is better,
+    and is then in the settings the saved gate reads."""
+    figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
+    by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
+    calls: list = []
+    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
+    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25))
+    # each non-empty set alone and with the robot's share 0.25 while the wearer leads; the empty set once
+    assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1,), (1, 2), (1, 2), ()]
+    assert choice["settings"]["wearer_alpha"] == 0.0  # a tie: the wearer alone (tried first)
+    # every candidate writes its share out: a bundle's earlier choice (its rule_settings, under the
+    # controller's options) must not lend a candidate its own
+    assert all(set(c["settings"]) >= {"wearer_modes", "wearer_alpha"} for c in choice["candidates"])
+    by_modes[((1,), 0.25)] = (0.012, 0.042, None)  # 0.012 at 0.525x: line 0.74, better than 0.82
+    assert choose_rule(_Bundle(), None, [3])["settings"]["wearer_alpha"] == 0.0  # not tried by default
+    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25))
+    assert choice["wearer_modes"] == [1] and choice["settings"]["wearer_alpha"] == 0.25
+    assert check_settings(choice["settings"])["wearer_alpha"] == 0.25
+    assert "| gate | [1] | 0.25 |" in rule_markdown(choice)
+    assert len(choose_rule(_Bundle(), None, [3])["candidates"]) == 3
 
 
 def test_a_bundle_without_a_mode_model_is_refused():

@@ -79,7 +79,8 @@ def test_overrides_dwell_and_fallback():
     assert arb.decide(1.0, 0.9, mode_proba=_onehot(1)).alpha == 0.0
     d = arb.decide(2.5, 0.9, novelty=9.0, mode_proba=_onehot(0))
     assert d.alpha == 0.0 and d.reason.startswith("novelty")
-    paper = Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.0)  # no per-mode figures: the paper's gate, said so
+    # no per-mode figures: the paper's gate, said so
+    paper = Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.0)
     d = paper.decide(0.0, 0.9, mode_proba=_onehot(1))
     assert d.alpha == 1.0 and d.reason.startswith("no per-mode figures")
     assert math.isnan(Arbiter("gate", mode_stats={"voluntary_share": V}).policy.score(None))
@@ -109,3 +110,21 @@ def test_measured_wearer_modes_replace_the_shares():
     for bad in ([3], [-1]):
         with pytest.raises(ValueError, match="valid: 0..2"):
             _arbiter(wearer_modes=bad)
+
+
+def test_a_robot_share_while_the_wearer_leads_is_the_convex_mixture():
+    """``wearer_alpha`` a_w: in a wearer mode û = a_w·û_r + (1 − a_w)·û_v (the wearer still leads: a_w < 0.5);
+    the robot's modes are unchanged (α = 1, the user's β)."""
+    arb = _arbiter(wearer_modes=[1], wearer_alpha=0.25, share_on=0.5, share_off=0.3, lead_s=0.0, hold_s=0.0)
+    d = arb.decide(0.0, 0.9, mode_proba=_onehot(0))
+    assert (d.alpha, d.beta) == (1.0, 0.5)
+    d = arb.decide(0.1, 0.9, mode_proba=_onehot(1))
+    assert (d.alpha, d.beta) == (0.25, 0.75) and "the wearer leads" in d.reason
+    assert [h.alpha_to for h in arb.handovers] == [1.0, 0.25]  # the start (robot), then to the wearer
+    plain = _arbiter(wearer_modes=[1], share_on=0.5, share_off=0.3, lead_s=0.0, hold_s=0.0)
+    plain.decide(0.0, 0.9, mode_proba=_onehot(0))
+    d = plain.decide(0.1, 0.9, mode_proba=_onehot(1))
+    assert (d.alpha, d.beta) == (0.0, 1.0)  # the default: the wearer alone
+    for bad in (0.5, -0.1):
+        with pytest.raises(ValueError, match=r"wearer_alpha must be in \[0, 0.5\)"):
+            _arbiter(wearer_alpha=bad)
