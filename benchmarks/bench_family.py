@@ -49,7 +49,8 @@ MIXES = ("mix25", "mix50", "mix75")
 RUNS = ("voluntary", "reactive", *MIXES, "paper_gate", "gate", "blend", "random_handover", "oracle_handover")
 FIGURES = {"tracking_rmse_m": ("rms_mm", 1e3), "voluntary_effort": ("effort_rad", 1.0),
            "line_ratio": ("line_ratio", 1.0), "saw_correlation": ("stroke_correlation", 1.0),
-           "reactive_share": ("robot_share", 1.0), "limit_violations": ("limit_violations", 1)}
+           "reactive_share": ("robot_share", 1.0), "limit_violations": ("limit_violations", 1),
+           "pickup_rms_m": ("pickup_rms_mm", 1e3), "pickup_error_share": ("pickup_error_share", 1.0)}
 
 
 def _data(world: str, quick: bool) -> tuple[Any, tuple[str, ...], dict[str, Any]]:

@@ -24,12 +24,13 @@ With p the knife tip and p* the wearer's intent (plate frame [m], control period
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-__all__ = ["SAWING_MIN_AMPLITUDE", "SAWING_MIN_CORRELATION", "STROKE_BAND_HZ", "TASK_KEYS",
-           "SawingFidelity", "bandpass", "episode_task_metrics", "rms_by_mode",
+__all__ = ["PICKUP_WINDOW_S", "SAWING_MIN_AMPLITUDE", "SAWING_MIN_CORRELATION", "STROKE_BAND_HZ", "TASK_KEYS",
+           "SawingFidelity", "bandpass", "episode_task_metrics", "pickup_error", "rms_by_mode",
            "sawing_fidelity", "time_lag", "wearer_share_by_mode"]
 
 STROKE_BAND_HZ = (0.8, 3.0)  # [Hz] the band of the sawing strokes (2 Hz strokes in the demonstrations)
@@ -153,7 +154,40 @@ def rms_by_mode(tip: np.ndarray, intent: np.ndarray, modes: np.ndarray,
 SAWING_MIN_CORRELATION = 0.7
 SAWING_MIN_AMPLITUDE = 0.6
 TASK_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "strokes_intended",
-             "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps")
+             "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps",
+             "pickups", "pickup_rms_m", "pickup_s", "pickup_error_share")
+#: [s] how long after a hand-over to the wearer counts as their pick-up (:func:`pickup_error`): the
+#: default wearer's reaction (0.3 s) and one corrective time constant (1/K ≈ 0.67 s at K = 1.5/s) about
+PICKUP_WINDOW_S = 1.0
+
+
+def pickup_error(tip: np.ndarray, intent: np.ndarray, alpha: np.ndarray, dt: float,
+                 window_s: float = PICKUP_WINDOW_S) -> dict[str, Any]:
+    """What the hand-overs to the wearer cost while they pick up (issue 28): over the ``window_s`` [s]
+    after each step where α crosses below 0.5 (the robot led the step before, the wearer leads now),
+
+        pickup_rms_m = √(mean ‖p − p*‖² over those steps),   pickup_s = their time [s],
+        pickup_error_share = Σ_window ‖p − p*‖² / Σ_all ‖p − p*‖²,   pickups = the number of hand-overs;
+
+    ``pickup_rms_m`` and the share are None without such a hand-over."""
+    tip, intent = _check(tip, intent)
+    a = np.asarray(alpha, dtype=float)
+    if a.shape != (tip.shape[0],):
+        raise ValueError(f"alpha has shape {a.shape}, the episode {tip.shape[0]} steps")
+    lead = a >= 0.5  # NaN: the wearer leads
+    starts = np.flatnonzero(lead[:-1] & ~lead[1:]) + 1
+    inside = np.zeros(a.size, dtype=bool)
+    n_win = max(int(round(window_s / dt)), 1)
+    for k in starts:
+        inside[k:k + n_win] = True
+    err2 = np.sum((tip - intent) ** 2, axis=1)
+    ok = np.isfinite(err2)
+    total, win = float(np.sum(err2[ok])), inside & ok
+    if not starts.size or not win.any():
+        return {"pickups": 0, "pickup_rms_m": None, "pickup_s": 0.0, "pickup_error_share": None}
+    return {"pickups": int(starts.size), "pickup_rms_m": float(np.sqrt(np.mean(err2[win]))),
+            "pickup_s": float(win.sum() * dt), "pickup_error_share": float(np.sum(err2[win]) / total) if total > 0
+            else None}
 
 
 def wearer_share_by_mode(alpha: np.ndarray, true_mode: np.ndarray, mode_names: tuple[str, ...] | None = None
@@ -178,7 +212,7 @@ def episode_task_metrics(tip: np.ndarray, intent: np.ndarray, dt: float, true_mo
     ``true_mode`` (N,): the demonstration's mode labels at the control steps (None: unknown, no
     sawing or per-mode figures); the cutting mode is the label named ``cutting`` in ``mode_names``.
     ``alpha`` (N,): the controller's α per step, for the wearer's share per mode (a NaN α counts
-    as the wearer leading).
+    as the wearer leading) and the cost of their pick-ups (:func:`pickup_error`).
     """
     lag, rms_lag = time_lag(tip, intent, dt)
     out: dict = {"lag_s": None if not np.isfinite(lag) else lag,
@@ -186,6 +220,10 @@ def episode_task_metrics(tip: np.ndarray, intent: np.ndarray, dt: float, true_mo
                  "saw_amplitude_ratio": None, "saw_correlation": None, "strokes_intended": 0,
                  "strokes_executed": 0, "stroke_share": None, "cutting_s": 0.0, "rms_by_mode_m": {},
                  "wearer_share_by_mode": {}, "mode_steps": {}}
+    if alpha is not None:
+        out.update(pickup_error(tip, intent, alpha, dt))
+    else:
+        out.update(pickups=0, pickup_rms_m=None, pickup_s=0.0, pickup_error_share=None)
     if true_mode is None or not np.any(np.asarray(true_mode) >= 0):
         return out
     out["rms_by_mode_m"] = rms_by_mode(tip, intent, true_mode, mode_names)

@@ -50,7 +50,10 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
 
 def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np.ndarray]) -> dict[str, Any]:
     """Pool the task figures: lag and RMS at it weighted by steps; the sawing amplitude and correlation
-    weighted by cutting time; strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n)."""
+    weighted by cutting time; strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n);
+    the wearer's pick-ups (:func:`sim.task_metrics.pickup_error`) counted and timed in sum, their RMS
+    √(Σ s·rms² / Σ s) over their times s, their share of the squared error weighted by each episode's
+    Σ‖e‖² = n·rms²."""
     n = np.array([len(s) for s in step_times], dtype=float)
 
     def weighted(key: str, w: np.ndarray) -> float | None:
@@ -70,7 +73,21 @@ def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np
             "saw_amplitude_ratio": weighted("saw_amplitude_ratio", cut),
             "saw_correlation": weighted("saw_correlation", cut), "strokes_intended": intended,
             "strokes_executed": executed, "stroke_share": executed / intended if intended else None,
-            "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode, **_pool_wearer_share(metrics)}
+            "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode, **_pool_wearer_share(metrics),
+            **_pool_pickups(metrics, n)}
+
+
+def _pool_pickups(metrics: Sequence[dict[str, Any]], n: np.ndarray) -> dict[str, Any]:
+    """The pick-up figures over episodes (:func:`pool_task_metrics`)."""
+    secs = np.array([float(m.get("pickup_s") or 0.0) for m in metrics])
+    rms = np.array([np.nan if m.get("pickup_rms_m") is None else m["pickup_rms_m"] for m in metrics])
+    share = np.array([np.nan if m.get("pickup_error_share") is None else m["pickup_error_share"] for m in metrics])
+    sq = n * np.array([float(m.get("tracking_rmse_m") or 0.0) ** 2 for m in metrics])  # Σ‖e‖² per episode
+    ok_r, ok_s = np.isfinite(rms) & (secs > 0), np.isfinite(share) & (sq > 0)
+    return {"pickups": sum(int(m.get("pickups") or 0) for m in metrics), "pickup_s": float(secs.sum()),
+            "pickup_rms_m": float(np.sqrt(np.sum(secs[ok_r] * rms[ok_r] ** 2) / np.sum(secs[ok_r])))
+            if ok_r.any() else None,
+            "pickup_error_share": float(np.sum(sq[ok_s] * share[ok_s]) / np.sum(sq)) if ok_s.any() else None}
 
 
 def pool_keepout_metrics(metrics: Sequence[dict[str, Any]]) -> dict[str, Any]:

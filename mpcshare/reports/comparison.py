@@ -35,12 +35,14 @@ _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("realtime_factor", "× real time", 1.0, "{:.1f}"))
 #: the task's figures (sim.task_metrics): on time, and sawing while cutting
 _TASK_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
-            ("line_ratio", "line ratio", 1.0, "{:.2f}"),
+                 ("line_ratio", "line ratio", 1.0, "{:.2f}"),
                  ("lag_s", "lag [ms]", 1e3, "{:.0f}"),
                  ("rms_at_lag_m", "RMS at that lag [mm]", 1e3, "{:.1f}"),
                  ("saw_amplitude_ratio", "sawing amplitude", 1.0, "{:.2f}"),
                  ("saw_correlation", "sawing correlation", 1.0, "{:.2f}"),
-                 ("stroke_share", "strokes executed [%]", 100.0, "{:.0f}"))
+                 ("stroke_share", "strokes executed [%]", 100.0, "{:.0f}"),
+                 ("pickup_rms_m", "RMS while the wearer picks up [mm]", 1e3, "{:.1f}"),
+                 ("pickup_error_share", "pick-ups' share of the squared error [%]", 100.0, "{:.0f}"))
 #: how close the knife came to the wearer (sim.keepout_metrics)
 _KEEPOUT_COLUMNS = (("keepout_min_clearance_m", "min clearance [mm]", 1e3, "{:.1f}"),
                     ("keepout_time_inside_s", "time inside [s]", 1.0, "{:.2f}"),

@@ -103,3 +103,44 @@ def test_wearer_share_by_mode_counts_alpha_below_half_and_nan():
     assert counts == {"cutting": 3, "collecting": 2}
     with pytest.raises(ValueError, match="one shape"):
         wearer_share_by_mode(alpha[:3], modes, None)
+
+
+def test_pickup_error_against_a_direct_computation():
+    """Two hand-overs to the wearer (α falls below 0.5 at steps 100 and 400, 10 ms steps): the 1 s after
+    each holds its error; one back to the robot (step 300) does not count."""
+    from sim.task_metrics import pickup_error
+
+    dt, n = 0.01, 700
+    alpha = np.ones(n)
+    alpha[100:300] = 0.0
+    alpha[400:] = 0.25  # the wearer leads at any α below 0.5
+    intent = np.zeros((n, 3))
+    tip = np.zeros((n, 3))
+    tip[:, 0] = 0.002
+    tip[100:150, 0] = 0.03  # the pick-up's error
+    tip[400:420, 1] = 0.02
+    out = pickup_error(tip, intent, alpha, dt)
+    win = np.r_[100:200, 400:500]
+    err2 = np.sum((tip - intent) ** 2, axis=1)
+    assert out["pickups"] == 2 and out["pickup_s"] == pytest.approx(2.0)
+    assert out["pickup_rms_m"] == pytest.approx(np.sqrt(err2[win].mean()))
+    assert out["pickup_error_share"] == pytest.approx(err2[win].sum() / err2.sum())
+    none = pickup_error(tip, intent, np.ones(n), dt)  # the robot leads throughout
+    assert none["pickups"] == 0 and none["pickup_rms_m"] is None and none["pickup_error_share"] is None
+    short = pickup_error(tip, intent, alpha, dt, window_s=0.3)
+    assert short["pickup_s"] == pytest.approx(0.6) and short["pickup_rms_m"] > out["pickup_rms_m"]
+    with pytest.raises(ValueError, match="alpha has shape"):
+        pickup_error(tip, intent, alpha[:-1], dt)
+
+
+def test_pooled_pickups_weigh_by_time_and_squared_error():
+    from mpcshare.experiments.pooling import pool_task_metrics
+
+    a = {"pickups": 2, "pickup_rms_m": 0.03, "pickup_s": 2.0, "pickup_error_share": 0.5, "tracking_rmse_m": 0.01}
+    b = {"pickups": 0, "pickup_rms_m": None, "pickup_s": 0.0, "pickup_error_share": None, "tracking_rmse_m": 0.02}
+    c = {"pickups": 1, "pickup_rms_m": 0.01, "pickup_s": 1.0, "pickup_error_share": 0.2, "tracking_rmse_m": 0.01}
+    pooled = pool_task_metrics([a, b, c], [np.zeros(1000)] * 3)
+    assert pooled["pickups"] == 3 and pooled["pickup_s"] == pytest.approx(3.0)
+    assert pooled["pickup_rms_m"] == pytest.approx(np.sqrt((2 * 0.03**2 + 1 * 0.01**2) / 3))
+    sq = np.array([1e-4, 4e-4, 1e-4]) * 1000  # n·rms² per episode
+    assert pooled["pickup_error_share"] == pytest.approx((sq[0] * 0.5 + sq[2] * 0.2) / sq.sum())
