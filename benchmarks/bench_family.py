@@ -87,7 +87,8 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
     rows = []
     for c in choice["candidates"]:
         m, _ = pooled_run(bundle, demos, trials, "gate", c["settings"], 30.0 if quick else None, None, 0, mode_names)
-        rows.append({"wearer_modes": c["wearer_modes"], "wearer_alpha": c.get("wearer_alpha", 0.0),
+        rows.append({"wearer_modes": c["wearer_modes"], "timing": c.get("timing"),
+                     "wearer_alpha": c.get("wearer_alpha", 0.0),
                      "rms_mm": 1e3 * m["tracking_rmse_m"],
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"],
                      "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),

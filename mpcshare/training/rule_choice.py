@@ -12,7 +12,9 @@ not recorded), so :func:`choose_rule` measures it:
 2. candidates (:func:`candidate_sets`): the wearer leads the top 1, 2, … modes by price (the
    lower hull of effort against error over whole-mode assignments); each of them together
    with the modes that carry the labelled cutting, where the data name one (the task: the knife
-   must saw, and only the wearer knows the stroke); and the robot leading every mode;
+   must saw, and only the wearer knows the stroke); and the robot leading every mode; each set with
+   two hand-over timings (:data:`HANDOVER_TIMINGS`: ``prompt``, the wearer leads once a wearer mode is
+   likely within 0.5 s; ``early``, once it is possible within 1.5 s, kept 1 s longer);
 3. each candidate is simulated in the closed loop (hand-over costs included) and scored by its
    **line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to
    that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
@@ -42,14 +44,22 @@ from mpcshare.training.mode_cost import cutting_modes, mode_costs, price_order
 from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 from sim.wearer import WearerConfig
 
-__all__ = ["CRITERION", "HANDOVER_SETTINGS", "candidate_sets", "choose_for_bundle", "choose_rule", "line_ratio",
-           "pooled_run", "rule_markdown", "saws"]
+__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "candidate_sets",
+           "choose_for_bundle", "choose_rule", "line_ratio", "pooled_run", "rule_markdown", "saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
              "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
              "max_effort x voluntary); if none is within the cap, the lowest tracking RMS")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
-HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3}
+HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": 0.5, "hold_s": 0.5}
+#: the early timing: the wearer takes the lead at a forecast probability of 0.2 within 1.5 s and keeps it
+#: for 1 s after it falls below 0.1. A hand-over to the wearer costs most when it comes just after the
+#: knife's intent has jumped into a wearer mode (the pick-up, docs/design.md); earlier, while the robot
+#: still tracks, the wearer inherits a small error and leads through the jump (family world 0, modes
+#: [0, 1]: line 1.04 → 0.97; default data [0, 2]: 0.76 → 0.71; at more effort: 0.34 → 0.46, 0.60 → 0.72)
+EARLY_HANDOVER_SETTINGS = {"share_on": 0.2, "share_off": 0.1, "lead_s": 1.5, "hold_s": 1.0}
+#: the hand-over timings each non-empty wearer-mode set is tried with: name → the gate's settings
+HANDOVER_TIMINGS = {"prompt": HANDOVER_SETTINGS, "early": EARLY_HANDOVER_SETTINGS}
 #: the robot's shares α while the wearer leads that each non-empty wearer-mode set is tried with (the gate's
 #: ``wearer_alpha``). Only 0, the wearer alone: 0.25 (``mix25`` within the wearer's modes) was tried on 5
 #: worlds (bench_family --quick, every candidate on the evaluation trials): it lowered the line ratio of 2
@@ -80,9 +90,12 @@ def candidate_sets(order: Sequence[int], cutting: Sequence[int], n_modes: int) -
     return sets + [[]]
 
 
-def _variants(sets: list[list[int]], wearer_alphas: Sequence[float]) -> list[tuple[list[int], float]]:
-    """Each wearer-mode set with each robot share of ``wearer_alphas`` (the empty set once, with 0)."""
-    return [(m, float(a)) for m in sets for a in (wearer_alphas if m else (0.0,))]
+def _variants(sets: list[list[int]], timings: Sequence[str], wearer_alphas: Sequence[float]
+              ) -> list[tuple[list[int], str, float]]:
+    """Each wearer-mode set with each hand-over timing and each robot share of ``wearer_alphas`` (the empty
+    set, with no hand-over, once: the first timing, share 0)."""
+    return [(m, h, float(a)) for m in sets for h in (timings if m else timings[:1])
+            for a in (wearer_alphas if m else (0.0,))]
 
 
 def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
@@ -163,11 +176,13 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 duration_s: float | None = RULE_DURATION_S,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
+                timings: Sequence[str] = tuple(HANDOVER_TIMINGS),
                 log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
     ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
-    task's stroke; None: no sawing figures); ``wearer_alphas``: the robot's shares while the wearer
+    task's stroke; None: no sawing figures); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
+    wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer
     leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`). Returns ``{"settings", "wearer_modes", "why",
     "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "trials", "duration_s", "seconds"}``. Raises ValueError when the bundle has no mode model or no
@@ -183,17 +198,20 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     order = price_order(costs)
     cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
     rows = []
-    for modes, a_w in _variants(candidate_sets(order, cutting, n_modes), wearer_alphas):
+    unknown = sorted(set(timings) - set(HANDOVER_TIMINGS))
+    if unknown or not timings:
+        raise ValueError(f"unknown hand-over timing(s) {unknown or timings!r}; valid: {', '.join(HANDOVER_TIMINGS)}")
+    for modes, timing, a_w in _variants(candidate_sets(order, cutting, n_modes), list(timings), wearer_alphas):
         # every setting written out, so that none is taken from a bundle's earlier choice (rule_settings)
-        settings = {"wearer_modes": modes, **HANDOVER_SETTINGS, "wearer_alpha": a_w}
+        settings = {"wearer_modes": modes, **HANDOVER_TIMINGS[timing], "wearer_alpha": a_w}
         m, _ = run("gate", settings)
-        rows.append({"wearer_modes": modes, "wearer_alpha": a_w, "settings": settings, **m,
+        rows.append({"wearer_modes": modes, "timing": timing, "wearer_alpha": a_w, "settings": settings, **m,
                      "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
         if log is not None:
             r = rows[-1]
             lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-            log(f"  gate with wearer modes {r['wearer_modes']} (robot share {a_w:g}): "
+            log(f"  gate with wearer modes {r['wearer_modes']} ({timing} hand-over, robot share {a_w:g}): "
                 f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
                 f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
     best, why = _criterion(rows, vol, rea, max_effort)
@@ -235,15 +253,15 @@ def rule_markdown(choice: dict[str, Any]) -> str:
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
              *_costs_markdown(choice),
-             "| run | wearer modes | robot share while the wearer leads | RMS [mm] | effort vs voluntary | "
-             "line ratio | stroke corr. |", "|---|---|---|---|---|---|---|"]
+             "| run | wearer modes | hand-over | robot share while the wearer leads | RMS [mm] | effort vs voluntary | "
+             "line ratio | stroke corr. |", "|---|---|---|---|---|---|---|---|"]
     for name in ("voluntary", "reactive"):
         m = choice[name]
-        lines.append(f"| {name} | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
+        lines.append(f"| {name} | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
     for r in choice["candidates"]:
         lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-        lines.append(f"| gate | {r['wearer_modes']} | {r.get('wearer_alpha', 0.0):g} | "
+        lines.append(f"| gate | {r['wearer_modes']} | {r.get('timing', 'prompt')} | {r.get('wearer_alpha', 0.0):g} | "
                      f"{r['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
     return "\n".join(lines) + "\n"

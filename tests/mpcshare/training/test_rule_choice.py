@@ -61,7 +61,8 @@ def _fake_runs(figures, by_modes, calls):
         calls.append((strategy, None if options is None else tuple(options["wearer_modes"])))
         if strategy == "gate":
             modes, a_w = tuple(options["wearer_modes"]), options.get("wearer_alpha", 0.0)
-            rms, eff, saw = by_modes.get((modes, a_w), by_modes[modes])
+            timing = "early" if options["share_on"] == rule_choice.EARLY_HANDOVER_SETTINGS["share_on"] else "prompt"
+            rms, eff, saw = by_modes.get((modes, timing), by_modes.get((modes, a_w), by_modes[modes]))
             return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
                     "saw_amplitude_ratio": 0.9}, []
         rms, eff, saw = figures[strategy]
@@ -83,7 +84,9 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["price_order"] == [1, 2, 0]  # mode 1: 0.0009 - 0.000025 m² saved for 0.04 rad
-    assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1, 2), ()]
+    # each non-empty set with the prompt and the early hand-over; the empty set (no hand-over) once
+    assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1,), (1, 2), (1, 2), ()]
+    assert [c["timing"] for c in choice["candidates"]] == ["prompt", "early"] * 2 + ["prompt"]
     assert choice["wearer_modes"] == [1] and "lowest line ratio" in choice["why"]  # 0.82 at 0.5x
     assert choice["settings"]["wearer_modes"] == [1]
     assert choice["mode_costs"]["rms_robot_mm"] == pytest.approx([6.0, 30.0, 12.0])
@@ -122,7 +125,7 @@ def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
     calls: list = []
     monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
-    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25))
+    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25), timings=("prompt",))
     # each non-empty set alone and with the robot's share 0.25 while the wearer leads; the empty set once
     assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1,), (1, 2), (1, 2), ()]
     assert choice["settings"]["wearer_alpha"] == 0.0  # a tie: the wearer alone (tried first)
@@ -131,11 +134,28 @@ def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better
     assert all(set(c["settings"]) >= {"wearer_modes", "wearer_alpha"} for c in choice["candidates"])
     by_modes[((1,), 0.25)] = (0.012, 0.042, None)  # 0.012 at 0.525x: line 0.74, better than 0.82
     assert choose_rule(_Bundle(), None, [3])["settings"]["wearer_alpha"] == 0.0  # not tried by default
-    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25))
+    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25), timings=("prompt",))
     assert choice["wearer_modes"] == [1] and choice["settings"]["wearer_alpha"] == 0.25
     assert check_settings(choice["settings"])["wearer_alpha"] == 0.25
-    assert "| gate | [1] | 0.25 |" in rule_markdown(choice)
-    assert len(choose_rule(_Bundle(), None, [3])["candidates"]) == 3
+    assert "| gate | [1] | prompt | 0.25 |" in rule_markdown(choice)
+    assert len(choose_rule(_Bundle(), None, [3])["candidates"]) == 5  # 2 sets x 2 timings + the empty set
+
+
+def test_the_early_hand_over_is_chosen_where_it_measures_better(monkeypatch):
+    """The early timing (the wearer leads once a wearer mode is possible within 1.5 s, 1 s longer) wins only
+    where its closed loop is better, and its settings are then what the saved gate reads."""
+    figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
+    by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
+    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
+    assert choose_rule(_Bundle(), None, [3])["settings"]["share_on"] == 0.5  # a tie: the prompt one
+    by_modes[((1,), "early")] = (0.012, 0.05, None)  # 0.012 at 0.625x: line 0.73, better than 0.82
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["wearer_modes"] == [1] and choice["settings"] == {
+        "wearer_modes": [1], **rule_choice.EARLY_HANDOVER_SETTINGS, "wearer_alpha": 0.0}
+    assert check_settings(choice["settings"])["lead_s"] == 1.5
+    assert "| gate | [1] | early | 0 |" in rule_markdown(choice)
+    with pytest.raises(ValueError, match="unknown hand-over timing.*valid: prompt, early"):
+        choose_rule(_Bundle(), None, [3], timings=("late",))
 
 
 def test_a_bundle_without_a_mode_model_is_refused():
