@@ -24,7 +24,9 @@ voluntary effort (the issue-28 target 0.75), those that saw while cutting (:func
 task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line
 ratio; where the line is ill-posed (the robot alone costs the wearer at least ``max_effort`` × the
 effort of doing it alone), the lowest tracking RMS of those. When none is within the effort cap,
-the lowest tracking RMS: where nothing saves effort, track best. The choice, every candidate's
+the same without the cap (sawing first, the lowest line ratio; the lowest RMS where no line ratio is
+defined): the lowest RMS alone would pick the candidate that hands the wearer nearly everything (the
+early timing's, at 1.00x the effort, on the demo's choice trials). The choice, every candidate's
 figures, the per-mode costs and why are returned for the bundle's ``metrics`` and ``training.md``.
 """
 
@@ -49,7 +51,8 @@ __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVE
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
              "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
-             "max_effort x voluntary); if none is within the cap, the lowest tracking RMS")
+             "max_effort x voluntary); if none is within the cap, the same without the cap (the lowest line "
+             "ratio of those that saw)")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": 0.5, "hold_s": 0.5}
 #: the early timing: the wearer takes the lead at a forecast probability of 0.2 within 1.5 s and keeps it
@@ -154,9 +157,16 @@ def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, A
     """The chosen row and why (module docstring, :data:`CRITERION`)."""
     within = [r for r in rows if r["effort_vs_voluntary"] <= max_effort]
     if not within:
-        best = min(rows, key=lambda r: r["tracking_rmse_m"])
-        return best, (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest tracking RMS "
-                      f"({best['tracking_rmse_m'] * 1e3:.1f} mm)")
+        sawing = [r for r in rows if saws(r)]
+        pool, task = (sawing, " of those that saw while cutting") if saws(vol) and sawing else (rows, "")
+        ranked = [r for r in pool if r["line_ratio"] is not None]
+        if ranked:
+            best = min(ranked, key=lambda r: r["line_ratio"])
+            return best, (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest line ratio "
+                          f"({best['line_ratio']:.3f}){task}")
+        best = min(pool, key=lambda r: r["tracking_rmse_m"])
+        return best, (f"no candidate has effort <= {max_effort:g}x voluntary and none a line ratio; the lowest "
+                      f"tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm){task}")
     sawing = [r for r in within if saws(r)]
     pool, task = (sawing, ", of those that saw while cutting") if saws(vol) and sawing else (within, "")
     posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
