@@ -92,7 +92,7 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     assert choice["mode_costs"]["rms_robot_mm"] == pytest.approx([6.0, 30.0, 12.0])
     by_modes[(1,)] = (0.014, 0.07, None)
     choice = choose_rule(_Bundle(), None, [3])
-    assert choice["wearer_modes"] == [1, 2] and "no candidate" in choice["why"]  # the lowest line without the cap (0.90)
+    assert choice["wearer_modes"] == [1, 2] and "no candidate" in choice["why"]  # the lowest line (0.90)
     # none within the cap: the lowest line ratio without it, not the lowest RMS (which would hand the wearer
     # nearly everything): [1] at 0.775x tracks at 0.885 of the line, [1, 2] at 0.99x at 1.03
     both = {(1,): (0.0115, 0.062, None), (1, 2): (0.0105, 0.079, None), (): (0.021, 0.075, None)}
