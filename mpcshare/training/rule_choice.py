@@ -38,6 +38,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
+from mpcshare.control.strategies.gate import DEFAULTS as GATE_DEFAULTS
 from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.line_ratio import line_ratio as _line_ratio
@@ -54,7 +55,8 @@ CRITERION = ("among the candidates with effort <= max_effort x voluntary, those 
              "max_effort x voluntary); if none is within the cap, the same without the cap (the lowest line "
              "ratio of those that saw)")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
-HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": 0.5, "hold_s": 0.5}
+HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GATE_DEFAULTS["lead_s"],
+                     "hold_s": GATE_DEFAULTS["hold_s"]}
 #: the early timing: the wearer takes the lead at a forecast probability of 0.2 within 1.5 s and keeps it
 #: for 1 s after it falls below 0.1. A hand-over to the wearer costs most when it comes just after the
 #: knife's intent has jumped into a wearer mode (the pick-up, docs/design.md); earlier, while the robot
