@@ -7,7 +7,9 @@ with the defaults a user gets (:class:`mpcshare.training.config.TrainConfig`; ``
 with the default wearer, for each of ``--seeds`` sim seeds: ``voluntary``, ``reactive``, the
 constant mixtures ``mix25``/``mix50``/``mix75``, ``paper_gate``, ``gate``, ``blend``,
 ``random_handover`` (matched to ``gate``, mean of 5 draws) and ``oracle_handover`` (best replay,
-an upper bound). Per world it prints one JSON line (``"world"``): per run the tracking RMS [mm],
+an upper bound); with ``--oracle-line`` also ``oracle_line`` (the effort-aware hand-over oracle: the lowest
+line ratio a schedule that knows the future reaches within 0.75x the wearer's effort, replayed).
+Per world it prints one JSON line (``"world"``): per run the tracking RMS [mm],
 the effort [rad], the line ratio (:mod:`mpcshare.line_ratio`), the stroke-band correlation while
 cutting, the robot's share and the limit violations; ``best_mix`` (the constant α with the lowest
 line ratio); one-sided paired Wilcoxon p-values over (trial, seed) pairs of ``gate`` against
@@ -96,13 +98,14 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
     return rows
 
 
-def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False) -> dict[str, Any]:
+def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
+              oracle_line: bool = False) -> dict[str, Any]:
     """Train on the world, simulate every run on its held-out trials, summarise (module docstring)."""
     import torch
 
     torch.set_num_threads(1)
     from mpcshare.experiments import compare_strategies
-    from mpcshare.run_table import DEFAULT_RUNS
+    from mpcshare.run_table import BOUND_RUNS, DEFAULT_RUNS
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
     from mpcshare.training.rule_choice import choose_for_bundle
@@ -118,18 +121,19 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False)
     t_train = time.perf_counter() - t0
     rest = [t for t in bundle.heldout_trials if t not in choice["trials"]]
     trials = list(rest[:2] if quick else rest)
-    runs = [r for r in DEFAULT_RUNS if r.name in RUNS]
-    per_pair: dict[str, list[float]] = {r: [] for r in RUNS}
+    names = RUNS + (("oracle_line",) if oracle_line else ())
+    runs = [r for r in DEFAULT_RUNS + BOUND_RUNS if r.name in names]
+    per_pair: dict[str, list[float]] = {r: [] for r in names}
     pooled: dict[str, dict[str, Any]] = {}
     for seed in range(seeds):
         comp = compare_strategies(bundle, demos, trials, runs=runs, duration_s=30.0 if quick else None, seed=seed,
                                   log=None, mode_names=mode_names)
-        for name in RUNS:
+        for name in names:
             per_pair[name] += [comp.per_trial[name][str(t)]["tracking_rmse_m"] for t in trials]
         if seed == 0:
             pooled = comp.strategies
     out = {name: {k2: (None if pooled[name].get(k) is None else pooled[name][k] * s) for k, (k2, s) in FIGURES.items()}
-           for name in RUNS}
+           for name in names}
     best_mix = min(MIXES, key=lambda m: (pooled[m]["line_ratio"] is None, pooled[m]["line_ratio"] or 0.0,
                                          pooled[m]["tracking_rmse_m"]))
     better = min(pooled["voluntary"]["tracking_rmse_m"], pooled["reactive"]["tracking_rmse_m"])
@@ -149,9 +153,10 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False)
 def distribution(results: list[dict[str, Any]]) -> dict[str, Any]:
     """Median, min, max and the shares ≤ 0.9 and ≤ 0.8 of the line ratios over ``results``."""
     out: dict[str, Any] = {"n_worlds": len(results)}
-    for name in ("gate", "paper_gate", "blend", "best_mix", "random_handover", "oracle_handover"):
-        v = np.array([r["runs"][r["best_mix"] if name == "best_mix" else name]["line_ratio"] for r in results
-                      if r["runs"][r["best_mix"] if name == "best_mix" else name]["line_ratio"] is not None])
+    for name in ("gate", "paper_gate", "blend", "best_mix", "random_handover", "oracle_handover", "oracle_line"):
+        key = lambda r: r["best_mix"] if name == "best_mix" else name  # noqa: E731
+        v = np.array([r["runs"][key(r)]["line_ratio"] for r in results
+                      if key(r) in r["runs"] and r["runs"][key(r)]["line_ratio"] is not None])
         if v.size:
             out[f"{name}_line_ratio"] = {"median": float(np.median(v)), "min": float(v.min()),
                                          "max": float(v.max()), "share_le_0.9": float(np.mean(v <= 0.9)),
@@ -178,6 +183,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--all-candidates", action="store_true",
                    help="also run every candidate of the rule's choice on the evaluation trials (the best set in "
                         "hindsight: an upper bound on the choice)")
+    p.add_argument("--oracle-line", action="store_true",
+                   help="also run oracle_line, the effort-aware hand-over oracle (6 replays a trial)")
     a = p.parse_args(argv)
     a.seeds = a.seeds if a.seeds is not None else (1 if a.quick else 4)
     seeds = list(range(3 if a.quick else 10)) if a.worlds is None else a.worlds
@@ -186,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=ctx) as pool:
-        futures = {pool.submit(run_world, w, a.quick, a.seeds, a.all_candidates): w for w in worlds}
+        futures = {pool.submit(run_world, w, a.quick, a.seeds, a.all_candidates, a.oracle_line): w for w in worlds}
         for fut in as_completed(futures):
             r = fut.result()
             results.append(r)

@@ -13,8 +13,8 @@ one registry (``REGISTRY``); each module's docstring holds its rule and sources.
 :class:`Arbiter` builds the strategy's per-episode policy and turns its target into α, β:
 
 * the safety overrides (for the shared strategies: no gate decision available, π̂ not finite,
-  novelty above the bundle's ``novelty_threshold``, gate probability not finite) set α = 0,
-  β = 1 at once and restart the policy;
+  novelty above the bundle's ``novelty_threshold`` for ``novelty_persist_s``, gate probability not
+  finite) set α = 0, β = 1 at once and restart the policy;
 * a ramped target moves α at most 1/``handover_s`` per second (0: at once);
 * β = 1 − α·(1 − β_user) unless the policy names its own β (the paper's β at α ∈ {0, 1}).
 
@@ -98,6 +98,11 @@ class Arbiter:
         schedule: for strategy ``schedule`` only: t [s] → α target ∈ {0, 1}.
         handover_s: α moves between 0 and 1 over this time [s] instead of at once (0: at once);
             β follows as 1 − α·(1 − β_user). The overrides still act at once.
+        novelty_persist_s: the novelty override acts once the novelty has exceeded
+            ``novelty_threshold`` without a break for this long [s] (0: at once). The threshold is
+            a per-step percentile of the training data, so single ticks above it are expected on
+            familiar data too; each costs a hand-over to the wearer and back. A NaN
+            novelty (the mode filter failed) acts at once.
         mode_stats, transmat, model_dt, options: what the expected-cost ``gate`` reads (the
             bundle's per-mode figures, the mode model's transition matrix per model period
             ``model_dt`` [s], its settings); see :mod:`mpcshare.control.strategies.gate`.
@@ -109,6 +114,7 @@ class Arbiter:
                  min_dwell_s: float = ControllerConfig.min_dwell_s,
                  blend_range: tuple[float, float] = ControllerConfig.blend_range,
                  handover_s: float = ControllerConfig.handover_s,
+                 novelty_persist_s: float = ControllerConfig.novelty_persist_s,
                  schedule: Callable[[float], float] | None = None, mode_stats: dict[str, Any] | None = None,
                  transmat: np.ndarray | None = None, model_dt: float = 0.1,
                  options: dict[str, Any] | None = None) -> None:
@@ -129,6 +135,9 @@ class Arbiter:
             raise ControllerSetupError("novelty_threshold must not be NaN (use inf to disable)")
         if not (math.isfinite(handover_s) and handover_s >= 0):
             raise ControllerSetupError(f"handover_s must be finite and ≥ 0, got {handover_s!r}")
+        if not (math.isfinite(novelty_persist_s) and novelty_persist_s >= 0):
+            raise ControllerSetupError(f"novelty_persist_s must be finite and ≥ 0, got {novelty_persist_s!r}")
+        self.novelty_persist_s = float(novelty_persist_s)
         self.novelty_threshold = float(novelty_threshold)
         self.handover_s = float(handover_s)
         self.context = StrategyContext(beta=self.beta, on_threshold=float(on_threshold),
@@ -147,6 +156,7 @@ class Arbiter:
         self.alpha = float(getattr(self.policy, "initial_alpha", 0.0))
         self.last_switch_t = -math.inf
         self._last_t = -math.inf
+        self._novel_since = math.inf
         self.policy.reset()
 
     def decide(self, t: float, gate_proba: float | None, novelty: float = 0.0, prediction_finite: bool = True,
@@ -155,7 +165,7 @@ class Arbiter:
         """α, β at time ``t`` [s] from the step's inputs (``mpcshare.control.strategies.StepInputs``)."""
         inputs = StepInputs(gate_proba, novelty, prediction_finite, available, mode_proba, u_r, u_v)
         if self.policy.overrides:
-            why = override_reason(inputs, self.novelty_threshold)
+            why = override_reason(inputs, self._persistent_threshold(t, novelty))
             if why is not None:
                 self.policy.reset()
                 return self._set(t, 0.0, 1.0, why)
@@ -169,6 +179,15 @@ class Arbiter:
         else:
             beta = self.beta if a == 1.0 else (1.0 if a == 0.0 else 1.0 - a * (1.0 - self.beta))
         return self._set(t, a, beta, target.reason)
+
+    def _persistent_threshold(self, t: float, novelty: float) -> float:
+        """The novelty threshold in force at ``t``: the bundle's once the novelty has stayed above it for
+        ``novelty_persist_s``, else inf (the override waits; a NaN novelty still acts at once)."""
+        if novelty <= self.novelty_threshold:
+            self._novel_since = math.inf
+            return self.novelty_threshold
+        self._novel_since = min(self._novel_since, float(t))
+        return self.novelty_threshold if t - self._novel_since >= self.novelty_persist_s else math.inf
 
     def _set(self, t: float, alpha: float, beta: float, reason: str) -> Decision:
         if (alpha >= 0.5) != (self.alpha >= 0.5):

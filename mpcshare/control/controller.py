@@ -125,7 +125,8 @@ class SharedController:
         self.arbiter = Arbiter(strategy, beta, novelty_threshold=float(bundle.novelty_threshold),
                                on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
                                min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range,
-                               handover_s=cfg.handover_s, schedule=schedule,
+                               handover_s=cfg.handover_s, novelty_persist_s=cfg.novelty_persist_s,
+                               schedule=schedule,
                                **arbitration_inputs(bundle, cfg.strategy_options))
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
         if preview is not None and not callable(getattr(preview, "sample", None)):

@@ -32,7 +32,13 @@ from threadpoolctl import threadpool_limits
 
 from learning.data import Demonstrations
 from mpcshare.control.types import DEFAULT_BETA
-from mpcshare.experiments.handover import SCHEDULE_SOURCES, oracle_handover_schedules, random_handover_schedules
+from mpcshare.experiments.handover import (
+    LINE_ORACLE_MAX_EFFORT,
+    SCHEDULE_SOURCES,
+    line_oracle_schedules,
+    oracle_handover_schedules,
+    random_handover_schedules,
+)
 from mpcshare.experiments.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
 from mpcshare.line_ratio import add_line_ratios
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
@@ -265,9 +271,30 @@ class _Runner:
             done.append(min(done + [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle"]],
                             key=lambda em: em[1]["tracking_rmse_m"]))
             done = done[-1:]
+        elif run.schedule == "oracle_line":  # the lowest line ratio within the effort cap, the pure runs included
+            pure = [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle_line"]]
+            done = [best_on_line(done + pure, pure[0][1], pure[1][1])]
         steps = [np.asarray(e.step_time, dtype=float) for e, _ in done]
         seconds = [float(e.t[-1] - e.t[0]) + float(np.median(np.diff(e.t))) for e, _ in done]
         return [m for _, m in done], steps, seconds
+
+
+def best_on_line(done: Sequence[tuple[Any, dict[str, Any]]], voluntary: dict[str, Any], reactive: dict[str, Any],
+                 max_effort: float = LINE_ORACLE_MAX_EFFORT) -> tuple[Any, dict[str, Any]]:
+    """Of the (episode, metrics) ``done`` (the replays and the pure runs' own episodes, at line ratio 1), the
+    one with the lowest line ratio against the pure runs' metrics among those with effort <= ``max_effort`` ×
+    voluntary (of all, when none is)."""
+    from mpcshare.line_ratio import line_ratio
+
+    v = (voluntary["voluntary_effort"], voluntary["tracking_rmse_m"])
+    r = (reactive["voluntary_effort"], reactive["tracking_rmse_m"])
+    rows = []
+    for ep, m in done:
+        lr = line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], v, r)
+        if lr is not None:
+            rows.append((lr, m["voluntary_effort"] <= max_effort * v[0], (ep, m)))
+    within = [row for row in rows if row[1]] or rows
+    return min(within, key=lambda row: row[0])[2] if within else done[0]
 
 
 def _joint_stride(episode: Any, rate_hz: float | None) -> int:
@@ -310,6 +337,8 @@ def _draw_options(run: StrategyRun, tid: int, seed: int,
         schedules = random_handover_schedules(source(SCHEDULE_SOURCES["random"][0], tid)[0], run.draws, [seed, tid])
     elif run.schedule == "oracle":
         schedules = oracle_handover_schedules(source("voluntary", tid)[0], source("reactive", tid)[0])
+    elif run.schedule == "oracle_line":
+        schedules = line_oracle_schedules(source("voluntary", tid)[0], source("reactive", tid)[0])
     else:
         raise ValueError(f"unknown schedule {run.schedule!r} of run {run.name!r}; valid choices: "
                          f"{', '.join(SCHEDULE_SOURCES)}")

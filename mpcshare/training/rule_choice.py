@@ -14,7 +14,9 @@ not recorded), so :func:`choose_rule` measures it:
    with the modes that carry the labelled cutting, where the data name one (the task: the knife
    must saw, and only the wearer knows the stroke); and the robot leading every mode; each set with
    two hand-over timings (:data:`HANDOVER_TIMINGS`: ``prompt``, the wearer leads once a wearer mode is
-   likely within 0.5 s; ``early``, once it is possible within 1.5 s, kept 1 s longer);
+   likely within 0.5 s; ``early``, once it is possible within 1.5 s, kept 1 s longer); and each set,
+   the empty one too, with the robot's share while it leads at 1 and at 0.5 (:data:`ROBOT_ALPHAS`, the
+   gate's ``robot_alphas``: at 0.5 a robot-led step is the mixture 0.5·û_r + 0.5·û_v, ``mix50``);
 3. each candidate is simulated in the closed loop (hand-over costs included) and scored by its
    **line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to
    that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
@@ -47,7 +49,8 @@ from mpcshare.training.mode_cost import cutting_modes, mode_costs, price_order
 from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 from sim.wearer import WearerConfig
 
-__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "candidate_sets",
+__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
+           "candidate_sets",
            "choose_for_bundle", "choose_rule", "line_ratio", "pooled_run", "rule_markdown", "saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
@@ -72,6 +75,11 @@ HANDOVER_TIMINGS = {"prompt": HANDOVER_SETTINGS, "early": EARLY_HANDOVER_SETTING
 #: on 16 (up to 1.60 → 3.21 on the family, where the robot's stroke is noise), at twice the choice's
 #: cost; pass ``wearer_alphas`` to try it.
 WEARER_ALPHAS = (0.0,)
+#: the robot's shares α while it leads (the gate's ``robot_alphas``, the same in every mode) that each set is
+#: tried with. The robot at full share (α = 1, the user's β) lay above the voluntary–reactive line on the
+#: family of worlds where the mixture at 0.5 lay below it (family worlds 0 and 3, the robot leading every
+#: mode: line 0.96 and 1.02 at 1, 0.90 and 0.99 at 0.5; docs/design.md, "The robot's share while it leads").
+ROBOT_ALPHAS = (1.0, 0.5)
 
 
 def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive: dict[str, float]) -> float | None:
@@ -95,12 +103,13 @@ def candidate_sets(order: Sequence[int], cutting: Sequence[int], n_modes: int) -
     return sets + [[]]
 
 
-def _variants(sets: list[list[int]], timings: Sequence[str], wearer_alphas: Sequence[float]
-              ) -> list[tuple[list[int], str, float]]:
-    """Each wearer-mode set with each hand-over timing and each robot share of ``wearer_alphas`` (the empty
-    set, with no hand-over, once: the first timing, share 0)."""
-    return [(m, h, float(a)) for m in sets for h in (timings if m else timings[:1])
-            for a in (wearer_alphas if m else (0.0,))]
+def _variants(sets: list[list[int]], timings: Sequence[str], wearer_alphas: Sequence[float],
+              robot_alphas: Sequence[float] = (1.0,)) -> list[tuple[list[int], str, float, float]]:
+    """Each wearer-mode set with each hand-over timing, each robot share while the wearer leads
+    (``wearer_alphas``) and each robot share while the robot leads (``robot_alphas``); the empty set, with
+    no hand-over, with the first timing and wearer share 0 only."""
+    return [(m, h, float(a), float(r)) for m in sets for h in (timings if m else timings[:1])
+            for a in (wearer_alphas if m else (0.0,)) for r in robot_alphas]
 
 
 def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
@@ -188,14 +197,15 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 duration_s: float | None = RULE_DURATION_S,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
-                timings: Sequence[str] = tuple(HANDOVER_TIMINGS),
+                timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
                 log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
     ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
     task's stroke; None: no sawing figures); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
     wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer
-    leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`). Returns ``{"settings", "wearer_modes", "why",
+    leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's
+    shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`). Returns ``{"settings", "wearer_modes", "why",
     "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "trials", "duration_s", "seconds"}``. Raises ValueError when the bundle has no mode model or no
     trial is given.
@@ -213,17 +223,24 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     unknown = sorted(set(timings) - set(HANDOVER_TIMINGS))
     if unknown or not timings:
         raise ValueError(f"unknown hand-over timing(s) {unknown or timings!r}; valid: {', '.join(HANDOVER_TIMINGS)}")
-    for modes, timing, a_w in _variants(candidate_sets(order, cutting, n_modes), list(timings), wearer_alphas):
+    bad = [a for a in robot_alphas if not 0.5 <= float(a) <= 1.0]
+    if bad or not robot_alphas:
+        raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
+    for modes, timing, a_w, a_r in _variants(candidate_sets(order, cutting, n_modes), list(timings), wearer_alphas,
+                                             robot_alphas):
         # every setting written out, so that none is taken from a bundle's earlier choice (rule_settings)
-        settings = {"wearer_modes": modes, **HANDOVER_TIMINGS[timing], "wearer_alpha": a_w}
+        settings = {"wearer_modes": modes, **HANDOVER_TIMINGS[timing], "wearer_alpha": a_w,
+                    "robot_alphas": [a_r] * n_modes}
         m, _ = run("gate", settings)
-        rows.append({"wearer_modes": modes, "timing": timing, "wearer_alpha": a_w, "settings": settings, **m,
+        rows.append({"wearer_modes": modes, "timing": timing, "wearer_alpha": a_w, "robot_alpha": a_r,
+                     "settings": settings, **m,
                      "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
                      "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
         if log is not None:
             r = rows[-1]
             lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-            log(f"  gate with wearer modes {r['wearer_modes']} ({timing} hand-over, robot share {a_w:g}): "
+            log(f"  gate with wearer modes {r['wearer_modes']} ({timing} hand-over, robot share {a_w:g} while the "
+                f"wearer leads, {a_r:g} while it leads): "
                 f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
                 f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
     best, why = _criterion(rows, vol, rea, max_effort)
@@ -265,15 +282,16 @@ def rule_markdown(choice: dict[str, Any]) -> str:
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
              *_costs_markdown(choice),
-             "| run | wearer modes | hand-over | robot share while the wearer leads | RMS [mm] | effort vs voluntary | "
-             "line ratio | stroke corr. |", "|---|---|---|---|---|---|---|---|"]
+             "| run | wearer modes | hand-over | robot share while the wearer leads | robot share while it leads | "
+             "RMS [mm] | effort vs voluntary | line ratio | stroke corr. |", "|---|---|---|---|---|---|---|---|---|"]
     for name in ("voluntary", "reactive"):
         m = choice[name]
-        lines.append(f"| {name} | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
+        lines.append(f"| {name} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
     for r in choice["candidates"]:
         lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
         lines.append(f"| gate | {r['wearer_modes']} | {r.get('timing', 'prompt')} | {r.get('wearer_alpha', 0.0):g} | "
+                     f"{r.get('robot_alpha', 1.0):g} | "
                      f"{r['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
     return "\n".join(lines) + "\n"

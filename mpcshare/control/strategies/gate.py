@@ -47,7 +47,15 @@ partly independently, the mixture's error a_w·e_r + (1 − a_w)·e_v has less v
 (the constant ``mix25`` lies below the voluntary–reactive line on the project's data, issue 28).
 Where the robot is far worse than the wearer it only adds error, so the closed-loop choice decides.
 
-Settings (:data:`DEFAULTS`, and ``wearer_modes``) come from the controller's ``strategy_options``
+**The robot's share while it leads, per mode.** With ``robot_alphas`` a = (a_1 … a_K), a_j ∈ [0.5, 1]
+(the wearer still reads that the robot leads), a robot-led step is the mixture û = α·û_r + (1 − α)·û_v
+with α = π·a, the share expected under the mode posterior π (smooth: no hand-over, the wearer's role does
+not change). Where the robot's forecast of a mode errs partly at random, shrinking its command toward
+the wearer's corrections (a_j < 1) lowers both the error and the corrections the wearer must make: the
+constant ``mix50`` lies below the voluntary–reactive line on the family of worlds where the robot
+leading every mode at full share lies above it (issue 28). Default: 1 in every mode (α = 1, the user's β).
+
+Settings (:data:`DEFAULTS`, ``wearer_modes`` and ``robot_alphas``) come from the controller's ``strategy_options``
 over the bundle's ``rule_settings``. A bundle without per-mode figures falls back to the paper's gate
 (:mod:`mpcshare.control.strategies.paper_gate`), and its reasons say so.
 """
@@ -62,7 +70,7 @@ import numpy as np
 from mpcshare.control.strategies.base import ArbiterView, StepInputs, StrategyContext, StrategySpec, Target
 from mpcshare.control.strategies.paper_gate import PaperGate
 
-__all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast", "voluntary_shares",
+__all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast", "robot_shares", "voluntary_shares",
            "wearer_indicator"]
 
 #: The rule's settings and their defaults (see the module docstring).
@@ -73,9 +81,10 @@ DEFAULTS: dict[str, float] = {"share_on": 0.3, "share_off": 0.2, "lead_s": 0.5, 
 def check_settings(options: dict[str, Any]) -> dict[str, float]:
     """The rule's numeric settings: :data:`DEFAULTS` updated with ``options`` (``wearer_modes`` is read
     by :func:`wearer_indicator`); ValueError naming a wrong one."""
-    unknown = sorted(set(options) - set(DEFAULTS) - {"wearer_modes"})
+    unknown = sorted(set(options) - set(DEFAULTS) - {"wearer_modes", "robot_alphas"})
     if unknown:
-        raise ValueError(f"unknown gate setting(s) {unknown}; valid: {', '.join(DEFAULTS)}, wearer_modes")
+        raise ValueError(f"unknown gate setting(s) {unknown}; valid: {', '.join(DEFAULTS)}, wearer_modes, "
+                         "robot_alphas")
     s = {k: float(options.get(k, v)) for k, v in DEFAULTS.items()}
     if not 0.0 <= s["share_off"] <= s["share_on"] <= 1.0:
         raise ValueError(f"need 0 <= share_off <= share_on <= 1, got {s['share_off']!r}, {s['share_on']!r}")
@@ -88,6 +97,20 @@ def check_settings(options: dict[str, Any]) -> dict[str, float]:
     if not s["push_mps"] > 0:
         raise ValueError(f"gate setting push_mps must be > 0 m/s (inf: off), got {s['push_mps']!r}")
     return s
+
+
+def robot_shares(alphas: Any, n_modes: int | None) -> np.ndarray | None:
+    """(K,) the robot's share a_j while it leads mode j (the ``robot_alphas`` setting); None when not set.
+    ValueError unless K shares in [0.5, 1] with the mode model's K."""
+    if alphas is None:
+        return None
+    a = np.asarray(alphas, dtype=float)
+    if n_modes is None or a.shape != (n_modes,):
+        raise ValueError(f"gate setting robot_alphas needs one share per mode of the bundle's mode model "
+                         f"({n_modes} modes), got {alphas!r}")
+    if not np.all((a >= 0.5) & (a <= 1.0)):
+        raise ValueError(f"gate setting robot_alphas must be in [0.5, 1] (the robot leads from 0.5), got {alphas!r}")
+    return a
 
 
 def voluntary_shares(mode_stats: dict[str, Any] | None, n_modes: int | None = None) -> np.ndarray | None:
@@ -139,8 +162,9 @@ class ModeCostGate:
     overrides = True
 
     def __init__(self, v: np.ndarray, transmat: np.ndarray | None, model_dt: float, settings: dict[str, float],
-                 min_dwell_s: float) -> None:
+                 min_dwell_s: float, robot_alphas: np.ndarray | None = None) -> None:
         self.settings = s = settings
+        self.robot_alphas = robot_alphas
         self.forecast = mode_forecast(v, transmat, round(s["lead_s"] / model_dt) if model_dt > 0 else 0)
         self.min_dwell_s = float(min_dwell_s)
         self.reset()
@@ -179,6 +203,16 @@ class ModeCostGate:
         self._push = self._push + dt * ((1.0 if push else 0.0) - self._push / tau) if tau > 0 else float(push)
         return self._push >= 0.63 * tau  # a sustained push: the integral has reached 1 − 1/e of its limit
 
+    def _robot_share(self, mode_proba: np.ndarray | None) -> float:
+        """α = π·a while the robot leads (1 without ``robot_alphas``; their largest without π)."""
+        a = self.robot_alphas
+        if a is None:
+            return 1.0
+        if mode_proba is None or np.shape(mode_proba) != a.shape or not np.all(np.isfinite(mode_proba)):
+            return float(np.max(a))
+        p = np.clip(np.asarray(mode_proba, dtype=float), 0.0, None)
+        return float(np.clip(p @ a / max(float(p.sum()), 1e-12), 0.5, 1.0))
+
     def decide(self, t: float, inputs: StepInputs, arbiter: ArbiterView) -> Target:
         s = self.settings
         score = self.score(inputs.mode_proba)
@@ -200,7 +234,8 @@ class ModeCostGate:
                 self.wearer = False
         why = "the wearer pushes" if pushed else f"wearer-mode score {score:.2f}"
         if not self.wearer:
-            return Target(1.0, why + ": the robot leads", ramp=True)
+            a = self._robot_share(inputs.mode_proba)
+            return Target(a, why + ": the robot leads", ramp=True, beta=1.0 - a if a < 1 else None)
         a = s["wearer_alpha"]
         return Target(a, why + ": the wearer leads", ramp=True, beta=1.0 - a if a > 0 else None)
 
@@ -221,7 +256,8 @@ def make(ctx: StrategyContext) -> ModeCostGate | PaperGate:
     v = voluntary_shares(ctx.mode_stats, n) if v is None else v
     if v is None:
         return _PaperFallback(ctx.on_threshold, ctx.off_threshold, ctx.min_dwell_s)
-    return ModeCostGate(v, ctx.transmat, ctx.model_dt, settings, ctx.min_dwell_s)
+    return ModeCostGate(v, ctx.transmat, ctx.model_dt, settings, ctx.min_dwell_s,
+                        robot_shares(ctx.options.get("robot_alphas"), n))
 
 
 SPECS = (StrategySpec("gate", "The default shared strategy: whole modes the robot cannot predict go to the wearer, "

@@ -63,7 +63,9 @@ def test_dwell_time_limits_switch_rate():
 
 @pytest.mark.parametrize("strategy", ["paper_gate", "gate", "blend"])
 def test_overrides_force_alpha_zero_at_once(strategy):
-    arb = Arbiter(strategy, beta=0.5, novelty_threshold=10.0, min_dwell_s=5.0, handover_s=0.0)
+    """With ``novelty_persist_s`` 0 every override acts on the step it appears (the default waits 0.3 s for
+    novelty: the next test)."""
+    arb = Arbiter(strategy, beta=0.5, novelty_threshold=10.0, min_dwell_s=5.0, handover_s=0.0, novelty_persist_s=0.0)
     assert arb.decide(0.0, 1.0).alpha == 1.0
     d = arb.decide(0.1, 1.0, novelty=11.0)  # within the dwell time, yet α = 0 at once
     assert (d.alpha, d.beta) == (0.0, 1.0) and "novelty" in d.reason
@@ -72,6 +74,26 @@ def test_overrides_force_alpha_zero_at_once(strategy):
     assert "not finite" in arb.decide(0.3, 1.0, prediction_finite=False).reason
     assert arb.decide(0.4, 1.0, available=False).reason == "no gate decision available"
     assert arb.decide(0.5, float("nan")).alpha == 0.0
+
+
+@pytest.mark.parametrize("strategy", ["paper_gate", "gate", "blend"])
+def test_the_novelty_override_waits_for_novelty_that_persists(strategy):
+    """With ``novelty_persist_s`` 0.3: one 10 Hz tick above the threshold hands nothing over; novelty above it
+    for 0.3 s without a break does, and the other overrides (and a NaN novelty) still act at once."""
+    arb = Arbiter(strategy, beta=0.5, novelty_threshold=10.0, min_dwell_s=0.0, handover_s=0.0, novelty_persist_s=0.3)
+    t = [0.01 * k for k in range(200)]
+    novelty = [11.0 if 0.5 <= tk < 0.6 else 5.0 for tk in t]  # one tick above the threshold
+    novelty = [11.0 if 1.0 <= tk < 1.5 else n for tk, n in zip(t, novelty)]  # then 0.5 s above it
+    alphas = [arb.decide(tk, 1.0, novelty=n).alpha for tk, n in zip(t, novelty)]
+    assert min(alphas[:100]) == 1.0  # the single tick: the robot keeps the lead
+    first = next(tk for tk, a in zip(t, alphas) if a == 0.0)
+    assert first == pytest.approx(1.3)  # 0.3 s after the novelty rose
+    assert any(h.reason.startswith("novelty") for h in arb.handovers)
+    assert arb.decide(2.0, 1.0, novelty=5.0).alpha == 1.0
+    assert arb.decide(2.01, 1.0, novelty=float("nan")).alpha == 0.0  # the filter failed: at once
+    assert arb.decide(2.02, 1.0, prediction_finite=False).alpha == 0.0
+    with pytest.raises(ValueError, match="novelty_persist_s must be finite and ≥ 0"):
+        Arbiter(strategy, novelty_persist_s=-0.1)
 
 
 def test_misuse_raises_clear_errors():

@@ -53,8 +53,9 @@ class _Bundle:
 
 def _fake_runs(figures, by_modes, calls):
     """pooled_run replaced: the parties' figures and episodes (mode 1 costs the robot most per effort), and
-    per gate candidate (its wearer modes, or (modes, robot share) where that differs) given (RMS, effort,
-    stroke correlation)."""
+    per gate candidate (its wearer modes, or (modes, timing), (modes, robot share while the wearer leads) or
+    (modes, ("robot", share while the robot leads)) where that differs) given (RMS, effort, stroke
+    correlation)."""
     mode = np.repeat([0, 1, 2], 100)
 
     def fake(bundle, demos, trials, strategy, options, duration_s, wearer, seed, mode_names=None):
@@ -62,7 +63,9 @@ def _fake_runs(figures, by_modes, calls):
         if strategy == "gate":
             modes, a_w = tuple(options["wearer_modes"]), options.get("wearer_alpha", 0.0)
             timing = "early" if options["share_on"] == rule_choice.EARLY_HANDOVER_SETTINGS["share_on"] else "prompt"
-            rms, eff, saw = by_modes.get((modes, timing), by_modes.get((modes, a_w), by_modes[modes]))
+            a_r = options["robot_alphas"][0]
+            rms, eff, saw = by_modes.get((modes, ("robot", a_r)), by_modes.get(
+                (modes, timing), by_modes.get((modes, a_w), by_modes[modes])))
             return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
                     "saw_amplitude_ratio": 0.9}, []
         rms, eff, saw = figures[strategy]
@@ -82,7 +85,7 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
     calls: list = []
     monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
-    choice = choose_rule(_Bundle(), None, [3])
+    choice = choose_rule(_Bundle(), None, [3], robot_alphas=(1.0,))
     assert choice["price_order"] == [1, 2, 0]  # mode 1: 0.0009 - 0.000025 m² saved for 0.04 rad
     # each non-empty set with the prompt and the early hand-over; the empty set (no hand-over) once
     assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1,), (1, 2), (1, 2), ()]
@@ -132,7 +135,7 @@ def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
     calls: list = []
     monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
-    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25), timings=("prompt",))
+    choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25), timings=("prompt",), robot_alphas=(1.0,))
     # each non-empty set alone and with the robot's share 0.25 while the wearer leads; the empty set once
     assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1,), (1, 2), (1, 2), ()]
     assert choice["settings"]["wearer_alpha"] == 0.0  # a tie: the wearer alone (tried first)
@@ -145,7 +148,8 @@ def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better
     assert choice["wearer_modes"] == [1] and choice["settings"]["wearer_alpha"] == 0.25
     assert check_settings(choice["settings"])["wearer_alpha"] == 0.25
     assert "| gate | [1] | prompt | 0.25 |" in rule_markdown(choice)
-    assert len(choose_rule(_Bundle(), None, [3])["candidates"]) == 5  # 2 sets x 2 timings + the empty set
+    # 2 sets x 2 timings + the empty set, each with the robot's share 1 and 0.5 while it leads
+    assert len(choose_rule(_Bundle(), None, [3])["candidates"]) == 10
 
 
 def test_the_early_hand_over_is_chosen_where_it_measures_better(monkeypatch):
@@ -158,11 +162,26 @@ def test_the_early_hand_over_is_chosen_where_it_measures_better(monkeypatch):
     by_modes[((1,), "early")] = (0.012, 0.05, None)  # 0.012 at 0.625x: line 0.73, better than 0.82
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["wearer_modes"] == [1] and choice["settings"] == {
-        "wearer_modes": [1], **rule_choice.EARLY_HANDOVER_SETTINGS, "wearer_alpha": 0.0}
+        "wearer_modes": [1], **rule_choice.EARLY_HANDOVER_SETTINGS, "wearer_alpha": 0.0, "robot_alphas": [1.0] * 3}
     assert check_settings(choice["settings"])["lead_s"] == 1.5
     assert "| gate | [1] | early | 0 |" in rule_markdown(choice)
     with pytest.raises(ValueError, match="unknown hand-over timing.*valid: prompt, early"):
         choose_rule(_Bundle(), None, [3], timings=("late",))
+
+
+def test_a_robot_share_below_one_while_the_robot_leads_is_chosen_where_it_measures_better(monkeypatch):
+    """The robot's share 0.5 while it leads (the mixture ``mix50`` in the robot's modes) wins only where its
+    closed loop is better; it is written out per mode, for the saved gate; a share below 0.5 is refused."""
+    figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
+    by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
+    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
+    assert choose_rule(_Bundle(), None, [3])["settings"]["robot_alphas"] == [1.0] * 3  # a tie: the robot's full share
+    by_modes[((), ("robot", 0.5))] = (0.0115, 0.03, None)  # 0.0115 at 0.375x: line 0.70, better than 0.82
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["wearer_modes"] == [] and choice["settings"]["robot_alphas"] == [0.5] * 3
+    assert "| gate | [] | prompt | 0 | 0.5 |" in rule_markdown(choice)
+    with pytest.raises(ValueError, match=r"robot_alphas must be shares in \[0.5, 1\]"):
+        choose_rule(_Bundle(), None, [3], robot_alphas=(0.25,))
 
 
 def test_a_bundle_without_a_mode_model_is_refused():

@@ -71,7 +71,7 @@ def test_the_wearer_pushing_against_the_robot_takes_the_lead():
 
 
 def test_overrides_dwell_and_fallback():
-    arb = Arbiter("gate", beta=0.5, min_dwell_s=1.0, handover_s=0.0, novelty_threshold=5.0,
+    arb = Arbiter("gate", beta=0.5, min_dwell_s=1.0, handover_s=0.0, novelty_threshold=5.0, novelty_persist_s=0.0,
                   mode_stats={"voluntary_share": V},
                   transmat=A, options={"lead_s": 0.0, "hold_s": 0.0})
     assert arb.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 1.0
@@ -128,3 +128,21 @@ def test_a_robot_share_while_the_wearer_leads_is_the_convex_mixture():
     for bad in (0.5, -0.1):
         with pytest.raises(ValueError, match=r"wearer_alpha must be in \[0, 0.5\)"):
             _arbiter(wearer_alpha=bad)
+
+
+def test_the_robot_share_while_it_leads_is_the_expected_share_under_the_mode_posterior():
+    """``robot_alphas`` a: a robot-led step is û = α·û_r + (1 − α)·û_v with α = π·a (smooth, the robot
+    still leads: α ≥ 0.5); a wearer mode is still handed over whole; a, not K shares in [0.5, 1], is refused."""
+    arb = _arbiter(wearer_modes=[1], robot_alphas=[0.5, 1.0, 0.75], share_on=0.5, share_off=0.3, lead_s=0.0,
+                   hold_s=0.0)
+    d = arb.decide(0.0, 0.9, mode_proba=_onehot(0))
+    assert (d.alpha, d.beta) == (0.5, 0.5) and "the robot leads" in d.reason
+    d = arb.decide(0.1, 0.9, mode_proba=np.array([0.6, 0.0, 0.4]))
+    assert (d.alpha, d.beta) == pytest.approx((0.6, 0.4))  # 0.6·0.5 + 0.4·0.75
+    assert arb.decide(0.2, 0.9, mode_proba=_onehot(1)).alpha == 0.0  # the wearer's mode, whole
+    assert [h.alpha_to for h in arb.handovers] == [0.5, 0.0]  # the start (robot), then to the wearer only
+    full = _arbiter(wearer_modes=[1], robot_alphas=[1.0, 1.0, 1.0], share_on=0.5, share_off=0.3, lead_s=0.0)
+    assert full.decide(0.0, 0.9, mode_proba=_onehot(0)).beta == 0.5  # a share of 1: the user's β
+    for bad in ([0.4, 1.0, 1.0], [1.0, 1.0], [1.0, 1.1, 1.0]):
+        with pytest.raises(ValueError, match="robot_alphas"):
+            _arbiter(robot_alphas=bad)
