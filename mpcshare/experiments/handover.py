@@ -1,7 +1,8 @@
 """The schedules of the replayed runs ``random_handover`` and ``oracle_handover`` from episodes.
 
 * ``random_handover`` (the placebo): from the gate's episode on the trial, the schedule
-  ``on[k] = α_k > 0.5``; each draw is :func:`mpcshare.experiments.schedule.random_schedule` with the
+  ``on[k] = α_k ≥ 0.5`` (the robot leads), replayed at the gate's mean α over those steps (its
+  share while it leads, ``robot_alphas``); each draw is :func:`mpcshare.experiments.schedule.random_schedule` with the
   same steps on, hand-overs and first state, and interior segments ≥ the dwell
   d = ⌈``min_dwell_s`` / Δ⌉ steps (or the gate's own shortest interior segment, if shorter:
   the gate's overrides switch without dwell), seeded by (seed, trial, draw).
@@ -74,10 +75,14 @@ def tracking_error(episode: Any) -> np.ndarray:
 
 def schedule_record(episode: Any) -> dict[str, Any]:
     """What a matched-random schedule needs of an episode (JSON-able): the
-    :class:`~mpcshare.experiments.schedule.ScheduleStats` of ``α > 0.5`` and the step times
+    :class:`~mpcshare.experiments.schedule.ScheduleStats` of ``α ≥ 0.5`` (the robot leads), ``on_alpha`` (the
+    mean α over those steps, its share while it leads) and the step times
     ``t0_s + k·dt_s``."""
     alpha = np.nan_to_num(np.asarray(episode.alpha, dtype=float), nan=0.0)
-    return {**asdict(schedule_stats(alpha > 0.5)), "t0_s": float(episode.t[0]), "dt_s": _period(episode)}
+    on = alpha >= 0.5
+    on_alpha = float(np.mean(alpha[on])) if on.any() else 1.0
+    return {**asdict(schedule_stats(on)), "on_alpha": min(max(on_alpha, 0.5), 1.0), "t0_s": float(episode.t[0]),
+            "dt_s": _period(episode)}
 
 
 def random_schedules_from(record: dict[str, Any], draws: int, seed: Sequence[int],
@@ -89,7 +94,9 @@ def random_schedules_from(record: dict[str, Any], draws: int, seed: Sequence[int
     if stats.min_interior is not None:
         d = min(d, stats.min_interior)
     times = record["t0_s"] + record["dt_s"] * np.arange(stats.steps)
-    return [StepSchedule(times, random_schedule(stats, d, [*seed, j]), cfg.handover_s / 2) for j in range(draws)]
+    on_alpha = float(record.get("on_alpha", 1.0))
+    return [StepSchedule(times, random_schedule(stats, d, [*seed, j]), cfg.handover_s / 2, on_alpha)
+            for j in range(draws)]
 
 
 def random_handover_schedules(gate_episode: Any, draws: int, seed: Sequence[int],

@@ -142,10 +142,10 @@ def oracle_schedule(err_off: np.ndarray, err_on: np.ndarray, dwell: int, switch_
 
 
 class StepSchedule:
-    """α = 1 or 0 by control step as a function of time: ``at(t)`` is ``on[k]`` for the last step
-    time ``times[k]`` ≤ t + ``lead_s`` (α = ``on[0]`` before the first step)."""
+    """α = ``on_alpha`` (the robot leads, at that share) or 0 by control step as a function of time: the
+    call at t reads ``on[k]`` for the last step time ``times[k]`` ≤ t + ``lead_s`` (``on[0]`` before the first)."""
 
-    def __init__(self, times: np.ndarray, on: np.ndarray, lead_s: float = 0.0) -> None:
+    def __init__(self, times: np.ndarray, on: np.ndarray, lead_s: float = 0.0, on_alpha: float = 1.0) -> None:
         self.times = np.asarray(times, dtype=float)
         self.on = np.asarray(on, dtype=bool)
         if self.times.shape != self.on.shape or self.times.ndim != 1 or self.times.size == 0:
@@ -154,7 +154,10 @@ class StepSchedule:
         if not (math.isfinite(lead_s) and lead_s >= 0):
             raise ValueError(f"lead_s must be finite and ≥ 0, got {lead_s!r}")
         self.lead_s = float(lead_s)
+        if not 0.5 <= on_alpha <= 1.0:
+            raise ValueError(f"on_alpha must be in [0.5, 1] (the robot leads from 0.5), got {on_alpha!r}")
+        self.on_alpha = float(on_alpha)
 
     def __call__(self, t: float) -> float:
         k = int(np.searchsorted(self.times, float(t) + self.lead_s + 1e-9, side="right")) - 1
-        return float(self.on[max(k, 0)])
+        return self.on_alpha if self.on[max(k, 0)] else 0.0

@@ -1,5 +1,7 @@
 """``schedule``: the replay of a given hand-over schedule (not a controller, not a user's choice):
-α follows ``schedule(t)`` ∈ {0, 1} along the hand-over ramp with the gate's β; no overrides
+α follows ``schedule(t)`` along the hand-over ramp: 0 below 0.5 (the wearer leads), else the schedule's
+value (the robot leads at that share; below 1 the convex mixture, β = 1 − α, as the gate's ``robot_alphas``),
+with the gate's β at 1; no overrides
 (as ``reactive``, û_r = 0 while π̂ has no finite output). It replays the placebo
 ``random_handover`` and the upper bound ``oracle_handover``."""
 
@@ -15,7 +17,7 @@ SCHEDULE = "schedule"
 
 
 class Replay:
-    """α target = 1 where ``schedule(t)`` ≥ 0.5, else 0."""
+    """α target = ``schedule(t)`` where it is ≥ 0.5 (capped at 1), else 0."""
 
     overrides = False
 
@@ -26,7 +28,9 @@ class Replay:
         """No state."""
 
     def decide(self, t: float, inputs: StepInputs, arbiter: ArbiterView) -> Target:
-        return Target(1.0 if self.schedule(t) >= 0.5 else 0.0, "given schedule", ramp=True)
+        a = self.schedule(t)
+        a = min(float(a), 1.0) if a >= 0.5 else 0.0
+        return Target(a, "given schedule", ramp=True, beta=1.0 - a if 0.5 <= a < 1.0 else None)
 
 
 def make(ctx: StrategyContext) -> Replay:

@@ -93,3 +93,21 @@ def test_compare_strategies_runs_the_line_oracle_by_name():
                               make_controller=lambda bundle, **options: IdleController(), log=None)
     m = comp.strategies["oracle_line"]
     assert m["tracking_rmse_m"] > 0 and m["line_ratio"] <= 1.0 + 1e-9
+
+
+def test_the_placebo_replays_the_gates_share_while_the_robot_leads():
+    """A gate whose robot leads at α = 0.5 (``robot_alphas``): the placebo counts those steps as the robot's
+    (α ≥ 0.5, not > 0.5) and replays them at 0.5, the convex mixture, not at 1 and not as the wearer's."""
+    from mpcshare.control.arbitration import Arbiter
+    from mpcshare.experiments.handover import random_schedules_from, schedule_record
+
+    alpha = np.r_[np.zeros(50), np.full(150, 0.5)]
+    rec = schedule_record(SimpleNamespace(t=DT * np.arange(200), alpha=alpha))
+    assert rec["on_alpha"] == 0.5 and rec["on_steps"] == 150
+    (sched,) = random_schedules_from(rec, 1, [0, 1])
+    values = {sched(t) for t in DT * np.arange(200)}
+    assert values == {0.0, 0.5} and np.mean(sched.on) == pytest.approx(0.75)
+    arb = Arbiter("schedule", beta=0.5, handover_s=0.0, schedule=lambda t: 0.5)
+    d = arb.decide(0.0, None)
+    assert (d.alpha, d.beta) == (0.5, 0.5)
+    assert Arbiter("schedule", beta=0.5, handover_s=0.0, schedule=lambda t: 1.0).decide(0.0, None).beta == 0.5
