@@ -148,8 +148,12 @@ def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better
     assert choice["wearer_modes"] == [1] and choice["settings"]["wearer_alpha"] == 0.25
     assert check_settings(choice["settings"])["wearer_alpha"] == 0.25
     assert "| gate | [1] | prompt | 0.25 |" in rule_markdown(choice)
-    # 2 sets x 2 timings + the empty set, each with the robot's share 1 and 0.5 while it leads
-    assert len(choose_rule(_Bundle(), None, [3])["candidates"]) == 10
+    # 2 sets x 2 timings + the empty set at the robot's full share while it leads; then the best two of
+    # those ([1] early and prompt: a tie, 0.82) and the empty set at the robot's share 0.5
+    rows = choose_rule(_Bundle(), None, [3])["candidates"]
+    assert [(r["wearer_modes"], r["timing"], r["robot_alpha"]) for r in rows] == [
+        ([1], "prompt", 1.0), ([1], "early", 1.0), ([1, 2], "prompt", 1.0), ([1, 2], "early", 1.0),
+        ([], "prompt", 1.0), ([1], "prompt", 0.5), ([1], "early", 0.5), ([], "prompt", 0.5)]
 
 
 def test_the_early_hand_over_is_chosen_where_it_measures_better(monkeypatch):
@@ -180,6 +184,13 @@ def test_a_robot_share_below_one_while_the_robot_leads_is_chosen_where_it_measur
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["wearer_modes"] == [] and choice["settings"]["robot_alphas"] == [0.5] * 3
     assert "| gate | [] | prompt | 0 | 0.5 |" in rule_markdown(choice)
+    # the second stage tries the share only on the first stage's best two and the empty set: [1, 2] (above the
+    # effort cap at full share) is not tried at 0.5, however well it would do there
+    del by_modes[((), ("robot", 0.5))]
+    by_modes[((1, 2), ("robot", 0.5))] = (0.009, 0.03, None)
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["wearer_modes"] == [1] and not any(r["wearer_modes"] == [1, 2] and r["robot_alpha"] == 0.5
+                                                     for r in choice["candidates"])
     with pytest.raises(ValueError, match=r"robot_alphas must be shares in \[0.5, 1\]"):
         choose_rule(_Bundle(), None, [3], robot_alphas=(0.25,))
 
