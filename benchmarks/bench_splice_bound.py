@@ -1,0 +1,137 @@
+"""What any authority schedule could reach knowing the future, per world: the splice bound (issue 28).
+
+For each world of ``bench_family.py`` (``family:<seed>`` and the data kinds ``default``, ``other_seed``,
+``other_structure``): train a bundle as ``bench_family.py --quick`` does, run the constant authorities
+``voluntary``, ``reactive``, ``mix25``, ``mix50`` and ``mix75`` (sim seed 0) on the same evaluation
+trials (the held-out trials the rule's choice does not use, the first 30 s of 2), and splice their
+per-step figures (:mod:`mpcshare.experiments.splice_bound`): the lowest line ratio, within 0.75x the
+wearer's effort, of any schedule that gives each group of control steps one of those authorities,
+
+* groups: segments of 0.1 s, 1 s and 3 s, or whole modes (the controller's own mode estimate);
+* authorities: ``binary`` (the wearer or the robot alone: hand-overs) or ``levels`` (all five);
+* ``sawing``: the groups mostly labelled ``cutting`` are the wearer's (the task: the knife saws only
+  where the wearer leads it), or ``free``.
+
+A splice pays no switch (no reaction, no pick-up), so no such schedule does better in the closed
+loop: a bound from below on the line ratio. Prints one JSON line per world and a summary object.
+
+Usage: ``python benchmarks/bench_splice_bound.py [--worlds 0 1 ...] [--kinds default ...] [--workers 2]``.
+About 2 min of one core per world.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+LEVELS = ("voluntary", "reactive", "mix25", "mix50", "mix75")
+SEGMENTS_S = (0.1, 1.0, 3.0)
+
+
+def _per_step(episodes: list[Any], n: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """(squared tracking error [m²], effort [rad]) per step of the first n[i] steps of each episode."""
+    e2 = np.concatenate([np.sum((np.asarray(ep.tip) - np.asarray(ep.tip_intent))[:k] ** 2, axis=1)
+                         for ep, k in zip(episodes, n)])
+    ef = np.concatenate([np.linalg.norm(np.asarray(ep.voluntary), axis=1)[:k] for ep, k in zip(episodes, n)])
+    return e2, ef
+
+
+def run_world(world: str) -> dict[str, Any]:
+    """The bounds of one world (module docstring)."""
+    import torch
+
+    torch.set_num_threads(1)
+    from bench_family import _data
+
+    from mpcshare.experiments.splice_bound import best_line_ratio, splice_front
+    from mpcshare.training import train_bundle
+    from mpcshare.training.config import TrainConfig
+    from mpcshare.training.rule_choice import pooled_run
+
+    t0 = time.perf_counter()
+    demos, mode_names, _ = _data(world, True)
+    bundle = train_bundle(demos, TrainConfig(max_epochs=20), progress=False)
+    held = list(bundle.heldout_trials)
+    n_choice = min(2, max(1, len(held) // 2))  # as rule_choice.choose_for_bundle: the last ones choose
+    trials = [t for t in held if t not in held[-n_choice:]][:2]
+    eps = {s: pooled_run(bundle, demos, trials, s, None, 30.0, None, 0, mode_names)[1] for s in LEVELS}
+    n = [min(len(eps[s][i].t) for s in LEVELS) for i in range(len(trials))]
+    figs = [_per_step(eps[s], n) for s in LEVELS]
+    e2, ef = np.stack([f[0] for f in figs]), np.stack([f[1] for f in figs])
+    vol = (float(ef[0].mean()), float(np.sqrt(e2[0].mean())))
+    rea = (float(ef[1].mean()), float(np.sqrt(e2[1].mean())))
+    by_id = {tr.trial_id: tr for tr in demos.trials}
+    cut_label = list(mode_names).index("cutting") if "cutting" in mode_names else None
+    labels = [by_id[int(t)].mode for t in trials]
+    cutting = (np.concatenate([np.asarray(lab)[:k] == cut_label for lab, k in zip(labels, n)])
+               if cut_label is not None and all(lab is not None for lab in labels) else None)
+    dt = float(np.median(np.diff(eps["voluntary"][0].t)))
+    step = np.concatenate([np.arange(k) for k in n])
+    trial = np.concatenate([np.full(k, i) for i, k in enumerate(n)])
+    mode = np.concatenate([np.asarray(ep.mode)[:k] for ep, k in zip(eps["reactive"], n)])
+    groupings = {f"{T:g} s": trial * 10**7 + step // max(1, round(T / dt)) for T in SEGMENTS_S}
+    groupings["modes"] = mode
+    out: dict[str, Any] = {"world": world, "trials": trials, "bounds": {},
+                           "voluntary": {"rms_mm": 1e3 * vol[1], "effort_rad": vol[0]},
+                           "reactive": {"rms_mm": 1e3 * rea[1], "effort_rad": rea[0]}}
+    for gname, groups in groupings.items():
+        names, inv = np.unique(groups, return_inverse=True)
+        for lname, runs in (("binary", 2), ("levels", len(LEVELS))):
+            for task in ("free", "sawing"):
+                allowed = np.ones((runs, names.size), dtype=bool)
+                if task == "sawing":
+                    if cutting is None:
+                        continue
+                    share = np.bincount(inv, weights=cutting.astype(float)) / np.bincount(inv)
+                    allowed[1:, share > 0.5] = False
+                front = splice_front(e2[:runs], ef[:runs], groups, allowed=allowed)
+                r, i = best_line_ratio(front, vol, rea, 0.75)
+                entry: dict[str, Any] = {"line_ratio": r, "effort_vs_voluntary": None if i is None
+                                         else float(front.effort[i] / vol[0])}
+                if gname == "modes" and i is not None:
+                    entry["authority_per_mode"] = {str(int(m)): LEVELS[j] for m, j in zip(names, front.assignment(i))}
+                out["bounds"][f"{gname}, {lname}, {task}"] = entry
+    out["seconds"] = time.perf_counter() - t0
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--worlds", type=int, nargs="*", default=list(range(10)), help="family seeds (default 0..9)")
+    p.add_argument("--kinds", nargs="*", default=["default", "other_seed", "other_structure"],
+                   choices=["default", "other_seed", "other_structure"])
+    p.add_argument("--workers", type=int, default=2)
+    a = p.parse_args(argv)
+    worlds = [f"family:{s}" for s in a.worlds] + list(a.kinds)
+    t0 = time.perf_counter()
+    results = []
+    with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=multiprocessing.get_context("spawn")) as pool:
+        for fut in as_completed([pool.submit(run_world, w) for w in worlds]):
+            results.append(fut.result())
+            print(json.dumps(results[-1], default=float), flush=True)
+    results.sort(key=lambda r: worlds.index(r["world"]))
+    keys = sorted({k for r in results for k in r["bounds"]})
+    summary = {}
+    for k in keys:
+        vals = [r["bounds"][k]["line_ratio"] for r in results if k in r["bounds"]]
+        got = [v for v in vals if v is not None]
+        summary[k] = {"worlds": len(vals), "none_within_cap": len(vals) - len(got),
+                      "median": float(np.median(got)) if got else None, "max": max(got) if got else None,
+                      "at_most_0.9": sum(v <= 0.9 for v in got), "at_most_0.8": sum(v <= 0.8 for v in got)}
+    print(json.dumps({"summary": summary, "worlds": [r["world"] for r in results],
+                      "seconds": time.perf_counter() - t0}, indent=1, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
