@@ -28,7 +28,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["cutting_modes", "mode_costs", "price_order"]
+__all__ = ["cutting_effort", "cutting_modes", "mode_costs", "price_order"]
 
 _EFFORT_FLOOR_RAD = 1e-3  # ε: a mode that costs the wearer no effort to lead has a finite price
 
@@ -94,3 +94,18 @@ def cutting_modes(episodes: Sequence[Any], true_modes: Sequence[np.ndarray], cut
         n += np.bincount(m, minlength=n_modes)
         cut += np.bincount(m, weights=(lab[ok] == cutting_label).astype(float), minlength=n_modes)
     return [int(j) for j in range(n_modes) if n[j] > 0 and cut[j] / n[j] > 0.5]
+
+
+def cutting_effort(costs: dict[str, Any], cutting: Sequence[int]) -> float | None:
+    """The least effort of leaving the ``cutting`` modes to the wearer, as a share of the wearer's effort
+    alone: Σ_j p_j·E_j / Σ_j p_j·E_j^w with E_j = E_j^w for a cutting mode and E_j^r (the robot leads)
+    for the rest, from :func:`mode_costs`. No whole-mode rule that leaves the cutting to the wearer costs
+    less, before the hand-overs' own cost. None without cutting modes or where a figure is missing."""
+    if not cutting:
+        return None
+    p, ew, er = (costs[k] for k in ("share", "effort_wearer_rad", "effort_robot_rad"))
+    if any(v is None for v in (*p, *ew, *er)):
+        return None
+    alone = sum(pj * e for pj, e in zip(p, ew))
+    led = sum(pj * (ew[j] if j in set(cutting) else er[j]) for j, pj in enumerate(p))
+    return float(led / alone) if alone > 0 else None

@@ -48,7 +48,7 @@ from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
-from mpcshare.training.mode_cost import cutting_modes, mode_costs, price_order
+from mpcshare.training.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
 from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 from sim.wearer import WearerConfig
 
@@ -227,7 +227,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
     with the second stage's (module docstring). Returns ``{"settings", "wearer_modes", "why",
     "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
-    "trials", "duration_s", "seconds"}``. Raises ValueError when the bundle has no mode model or no
+    "cutting_effort_vs_voluntary" (:func:`mpcshare.training.mode_cost.cutting_effort`), "trials", "duration_s",
+    "seconds"}``. Raises ValueError when the bundle has no mode model or no
     trial is given.
     """
     if not len(trials):
@@ -271,7 +272,14 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
         for a_r in robot_alphas[1:]:
             evaluate(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
     best, why = _criterion(rows, vol, rea, max_effort)
+    task_effort = cutting_effort(costs, cutting)
+    if task_effort is not None and task_effort > max_effort and not (saws(best) and
+                                                                     best["effort_vs_voluntary"] <= max_effort):
+        why += (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
+                f"task alone (the robot leading the rest; from the per-mode costs), so no rule both saws and stays "
+                f"within {max_effort:g}x here")
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
+            "cutting_effort_vs_voluntary": task_effort,
             "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
             "mode_costs": costs, "price_order": order, "cutting_modes": cutting,
             "trials": [int(t) for t in trials], "duration_s": duration_s,
@@ -342,5 +350,8 @@ def _costs_markdown(choice: dict[str, Any]) -> list[str]:
         rows.append(f"| {j} | {f('share', j, 2)} | {f('rms_wearer_mm', j, 1)} | {f('rms_robot_mm', j, 1)} | "
                     f"{f('effort_wearer_rad', j, 3)} | {f('effort_robot_rad', j, 3)} | "
                     f"{f('price_mm2_per_rad', j, 0)} |")
+    task = choice.get("cutting_effort_vs_voluntary")
+    task_line = "" if task is None else (f" Leading them, the robot leading the rest, costs the wearer {task:.2f}x the "
+                                         "effort of doing the task alone (before any hand-over's cost).")
     return rows + ["", f"Modes by price: {choice['price_order']}; modes that carry the cutting: "
-                   f"{choice['cutting_modes'] or 'none named'}.", ""]
+                   f"{choice['cutting_modes'] or 'none named'}.{task_line}", ""]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mpcshare.training.mode_cost import cutting_modes, mode_costs, price_order
+from mpcshare.training.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
 
 
 class _Episode:
@@ -58,3 +58,19 @@ def test_cutting_modes_by_majority_of_labels():
 def test_refuses_missing_episodes():
     with pytest.raises(ValueError, match="both parties"):
         mode_costs([], [], 3)
+
+
+def test_the_effort_of_leaving_the_cutting_to_the_wearer_against_the_splice_of_the_two_runs():
+    """cutting_effort is the mean effort of the run spliced from the wearer's steps in the cutting modes and
+    the robot's elsewhere, over the wearer's mean effort alone (both runs see the same modes here)."""
+    rng = np.random.default_rng(1)
+    mode = rng.integers(0, 3, 600)
+    eff_w, eff_r = rng.uniform(0.05, 0.2, 600), rng.uniform(0.0, 0.03, 600)
+    zero = np.zeros(600)
+    c = mode_costs([_Episode(mode, zero, eff_w)], [_Episode(mode, zero, eff_r)], 3)
+    spliced = np.where(np.isin(mode, [0, 2]), eff_w, eff_r).mean()
+    assert cutting_effort(c, [0, 2]) == pytest.approx(spliced / eff_w.mean())
+    assert cutting_effort(c, [0, 1, 2]) == pytest.approx(1.0)
+    assert cutting_effort(c, []) is None
+    unseen = mode_costs([_Episode(mode, zero, eff_w)], [_Episode(mode, zero, eff_r)], 4)  # mode 3 never seen
+    assert cutting_effort(unseen, [0]) is None

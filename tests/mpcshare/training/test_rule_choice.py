@@ -128,6 +128,25 @@ def test_where_the_wearer_saws_the_choice_saws(monkeypatch):
     assert choose_rule(_Bundle(), None, [3])["wearer_modes"] == [1]
 
 
+def test_where_sawing_and_the_effort_cap_exclude_each_other_the_choice_says_so(monkeypatch):
+    """Leading the cutting modes [1, 2] costs the wearer (0.01 + 0.05 + 0.10) / (0.05 + 0.05 + 0.10) = 0.80x
+    the effort alone (the fake per-mode efforts): no rule both saws and stays within 0.75x, and the why
+    says so; with the cutting in mode 2 alone (0.60x) it does not."""
+    figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
+    by_modes = {(1,): (0.012, 0.04, 0.65), (1, 2): (0.0125, 0.07, 0.9), (): (0.02, 0.02, 0.1),
+                (2,): (0.013, 0.07, 0.9)}
+    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
+    monkeypatch.setattr(rule_choice, "_cutting", lambda *a: [1, 2])
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["cutting_effort_vs_voluntary"] == pytest.approx(0.8)
+    assert "costs the wearer 0.80x the effort of doing the task alone" in choice["why"]
+    assert "costs the wearer 0.80x" in rule_markdown(choice)
+    monkeypatch.setattr(rule_choice, "_cutting", lambda *a: [2])
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["cutting_effort_vs_voluntary"] == pytest.approx(0.6)
+    assert "effort of doing the task alone" not in choice["why"]
+
+
 def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better(monkeypatch):
     """The mixture within the wearer's modes (wearer_alpha 0.25) wins only where its closed loop is better,
     and is then in the settings the saved gate reads."""
