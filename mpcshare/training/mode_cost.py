@@ -100,7 +100,8 @@ def cutting_effort(costs: dict[str, Any], cutting: Sequence[int]) -> float | Non
     """The least effort of leaving the ``cutting`` modes to the wearer, as a share of the wearer's effort
     alone: Σ_j p_j·E_j / Σ_j p_j·E_j^w with E_j = E_j^w for a cutting mode and E_j^r (the robot leads)
     for the rest, from :func:`mode_costs`. No whole-mode rule that leaves the cutting to the wearer costs
-    less, before the hand-overs' own cost. None without cutting modes or where a figure is missing."""
+    less, before the hand-overs' own cost (one that saws while the robot leads part of the cutting may).
+    None without cutting modes or where a figure is missing."""
     if not cutting:
         return None
     p, ew, er = (costs[k] for k in ("share", "effort_wearer_rad", "effort_robot_rad"))

@@ -276,8 +276,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     if task_effort is not None and task_effort > max_effort and not (saws(best) and
                                                                      best["effort_vs_voluntary"] <= max_effort):
         why += (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
-                f"task alone (the robot leading the rest; from the per-mode costs), so no rule both saws and stays "
-                f"within {max_effort:g}x here")
+                f"task alone (the robot leading the rest; from the per-mode costs), so no rule that leaves them to the "
+                f"wearer stays within {max_effort:g}x here")
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
             "cutting_effort_vs_voluntary": task_effort,
             "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,

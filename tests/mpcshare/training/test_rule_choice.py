@@ -130,7 +130,7 @@ def test_where_the_wearer_saws_the_choice_saws(monkeypatch):
 
 def test_where_sawing_and_the_effort_cap_exclude_each_other_the_choice_says_so(monkeypatch):
     """Leading the cutting modes [1, 2] costs the wearer (0.01 + 0.05 + 0.10) / (0.05 + 0.05 + 0.10) = 0.80x
-    the effort alone (the fake per-mode efforts): no rule both saws and stays within 0.75x, and the why
+    the effort alone (the fake per-mode efforts): no rule that leaves them to the wearer stays within 0.75x, and the why
     says so; with the cutting in mode 2 alone (0.60x) it does not."""
     figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
     by_modes = {(1,): (0.012, 0.04, 0.65), (1, 2): (0.0125, 0.07, 0.9), (): (0.02, 0.02, 0.1),
