@@ -40,8 +40,9 @@ SEGMENTS_S = (0.1, 1.0, 3.0)
 
 def _per_step(episodes: list[Any], n: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """(squared tracking error [m²], effort [rad]) per step of the first n[i] steps of each episode."""
-    e2 = np.concatenate([np.sum((np.asarray(ep.tip) - np.asarray(ep.tip_intent))[:k] ** 2, axis=1)
-                         for ep, k in zip(episodes, n)])
+    from mpcshare.experiments.handover import tracking_error
+
+    e2 = np.concatenate([tracking_error(ep)[:k] ** 2 for ep, k in zip(episodes, n)])
     ef = np.concatenate([np.linalg.norm(np.asarray(ep.voluntary), axis=1)[:k] for ep, k in zip(episodes, n)])
     return e2, ef
 
@@ -56,14 +57,13 @@ def run_world(world: str) -> dict[str, Any]:
     from mpcshare.experiments.splice_bound import best_line_ratio, splice_front
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
-    from mpcshare.training.rule_choice import pooled_run
+    from mpcshare.training.rule_choice import choice_trials, pooled_run
 
     t0 = time.perf_counter()
     demos, mode_names, _ = _data(world, True)
     bundle = train_bundle(demos, TrainConfig(max_epochs=20), progress=False)
-    held = list(bundle.heldout_trials)
-    n_choice = min(2, max(1, len(held) // 2))  # as rule_choice.choose_for_bundle: the last ones choose
-    trials = [t for t in held if t not in held[-n_choice:]][:2]
+    chooses = choice_trials(bundle.heldout_trials)  # the evaluation trials of bench_family: the others
+    trials = [int(t) for t in bundle.heldout_trials if int(t) not in chooses][:2]
     eps = {s: pooled_run(bundle, demos, trials, s, None, 30.0, None, 0, mode_names)[1] for s in LEVELS}
     n = [min(len(eps[s][i].t) for s in LEVELS) for i in range(len(trials))]
     figs = [_per_step(eps[s], n) for s in LEVELS]

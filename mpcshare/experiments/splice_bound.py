@@ -76,9 +76,9 @@ def splice_front(sq_error: np.ndarray, effort: np.ndarray, groups: np.ndarray, *
                          f"{e2.shape}, {ef.shape} and {np.size(groups)} groups")
     if not (np.all(np.isfinite(e2)) and np.all(np.isfinite(ef)) and np.all(ef >= 0)):
         raise ValueError("sq_error and effort must be finite, effort >= 0")
-    n = e2.shape[1]
-    _, g_e2 = group_sums(e2, groups)
-    _, g_ef = group_sums(ef, groups)
+    n, runs = e2.shape[1], e2.shape[0]
+    _, sums = group_sums(np.concatenate([e2, ef]), groups)
+    g_e2, g_ef = sums[:runs], sums[runs:]
     ok = np.ones_like(g_e2, dtype=bool) if allowed is None else np.asarray(allowed, dtype=bool)
     if ok.shape != g_e2.shape or not np.all(ok.any(axis=0)):
         raise ValueError(f"allowed must be (runs, groups) = {g_e2.shape} with a run allowed in every group")

@@ -54,7 +54,7 @@ from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
            "SECOND_STAGE_TOP", "candidate_sets",
-           "choose_for_bundle", "choose_rule", "line_ratio", "pooled_run", "rule_markdown", "saws"]
+           "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio", "pooled_run", "rule_markdown", "saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
              "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
@@ -286,6 +286,14 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
             "seconds": round(time.perf_counter() - t0, 1)}
 
 
+def choice_trials(heldout: Sequence[int], n_trials: int | None = None) -> list[int]:
+    """The held-out trials the choice runs on: the last ``n_trials`` (default: half of them, 1 to 2). The
+    others are left for evaluating the chosen rule."""
+    held = [int(t) for t in heldout]
+    n = n_trials or min(2, max(1, len(held) // 2))
+    return held[-n:]
+
+
 def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
                       duration_s: float | None = RULE_DURATION_S, wearer_name: str | None = None,
                       mode_names: Sequence[str] | None = None,
@@ -298,10 +306,8 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
 
     name = wearer_name or DEFAULT_WEARER_PRESET
-    held = list(bundle.heldout_trials)
-    n = n_trials or min(2, max(1, len(held) // 2))
-    choice = choose_rule(bundle, demos, held[-n:], duration_s=duration_s, log=log, wearer=wearer_preset(name),
-                         mode_names=mode_names)
+    choice = choose_rule(bundle, demos, choice_trials(bundle.heldout_trials, n_trials), duration_s=duration_s,
+                         log=log, wearer=wearer_preset(name), mode_names=mode_names)
     choice["wearer"] = name
     bundle.metrics["rule_settings"] = choice["settings"]
     bundle.metrics["rule_choice"] = choice

@@ -7,7 +7,7 @@ import pytest
 
 from mpcshare.control.strategies.gate import check_settings, wearer_indicator
 from mpcshare.training import rule_choice
-from mpcshare.training.rule_choice import candidate_sets, choose_rule, line_ratio, rule_markdown
+from mpcshare.training.rule_choice import candidate_sets, choice_trials, choose_rule, line_ratio, rule_markdown
 
 
 def test_candidates_are_price_prefixes_with_and_without_the_cutting_modes():
@@ -226,3 +226,11 @@ def test_sawing_needs_both_the_correlation_and_the_amplitude():
     assert rule_choice.saws({"saw_correlation": 0.7, "saw_amplitude_ratio": 0.6})
     assert not rule_choice.saws({"saw_correlation": 0.95, "saw_amplitude_ratio": 0.5})  # too small a stroke
     assert not rule_choice.saws({"saw_correlation": None, "saw_amplitude_ratio": None})  # no cutting seen
+
+
+def test_the_choice_runs_on_the_last_held_out_trials_and_leaves_the_rest():
+    assert choice_trials([2, 3]) == [3]  # half of them, 1 to 2
+    assert choice_trials([2, 7, 9, 11]) == [9, 11]
+    assert choice_trials([2, 7, 9, 11, 12, 13]) == [12, 13]
+    assert choice_trials([5]) == [5]
+    assert choice_trials([2, 7, 9], n_trials=1) == [9]
