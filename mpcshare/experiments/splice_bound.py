@@ -27,7 +27,7 @@ import numpy as np
 
 from mpcshare.line_ratio import line_ratio
 
-__all__ = ["SpliceFront", "best_line_ratio", "group_sums", "splice_front"]
+__all__ = ["SpliceFront", "assignments", "best_line_ratio", "effort_bins", "group_sums", "knapsack", "splice_front"]
 
 
 @dataclass(frozen=True)
@@ -47,12 +47,7 @@ class SpliceFront:
 
     def assignment(self, index: int) -> np.ndarray:
         """(G,) the run index per group (sorted labels) of the front's point ``index``."""
-        b = int(self.bins[index])
-        out = np.zeros(self.picks.shape[0], dtype=int)
-        for g in range(self.picks.shape[0] - 1, -1, -1):  # walk back through the groups
-            out[g] = run = int(self.picks[g, b])
-            b -= int(self.shift[run, g])
-        return out
+        return assignments(self.picks, self.shift, self.bins[index:index + 1])[:, 0]
 
 
 def group_sums(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -82,24 +77,49 @@ def splice_front(sq_error: np.ndarray, effort: np.ndarray, groups: np.ndarray, *
     ok = np.ones_like(g_e2, dtype=bool) if allowed is None else np.asarray(allowed, dtype=bool)
     if ok.shape != g_e2.shape or not np.all(ok.any(axis=0)):
         raise ValueError(f"allowed must be (runs, groups) = {g_e2.shape} with a run allowed in every group")
-    width = max(float(np.sum(np.max(np.where(ok, g_ef, 0.0), axis=0))), 1e-12) / bins
-    shift = np.floor(g_ef / width).astype(int)
-    size = int(np.sum(np.max(np.where(ok, shift, 0), axis=0))) + 1  # the largest reachable bin, + 1
+    width, shift, size = effort_bins(g_ef, ok, bins)
+    best, picks = knapsack(g_e2, shift, ok, size)
+    reach = np.flatnonzero(np.isfinite(best))
+    return SpliceFront(reach * width / n, best[reach] / n, reach, picks, shift)
+
+
+def effort_bins(g_effort: np.ndarray, ok: np.ndarray, bins: int) -> tuple[float, np.ndarray, int]:
+    """(bin width [rad·steps], per run and group the bins its effort takes (L, G), the number of bins) for
+    ``bins`` bins up to the largest reachable summed effort; efforts are rounded down."""
+    width = max(float(np.sum(np.max(np.where(ok, g_effort, 0.0), axis=0))), 1e-12) / bins
+    shift = np.floor(g_effort / width).astype(int)
+    return width, shift, int(np.sum(np.max(np.where(ok, shift, 0), axis=0))) + 1
+
+
+def knapsack(cost: np.ndarray, shift: np.ndarray, ok: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The multiple-choice knapsack: (per bin b < size the lowest Σ_g cost[l(g), g] over assignments with
+    Σ_g shift[l(g), g] = b (inf where none) (size,), the run taken for group g to reach each bin (G, size)).
+
+    cost, shift, ok: (L, G) per run and group the cost, the bins of effort and whether it is allowed."""
     best = np.full(size, np.inf)
     best[0] = 0.0
-    picks = np.zeros((g_e2.shape[1], size), dtype=np.int16)
-    for g in range(g_e2.shape[1]):
+    picks = np.zeros((cost.shape[1], size), dtype=np.int16)
+    for g in range(cost.shape[1]):
         new = np.full(size, np.inf)
         for run in np.flatnonzero(ok[:, g]):
             s = shift[run, g]
             cand = np.full(size, np.inf)
-            cand[s:] = best[:size - s] + g_e2[run, g]
+            cand[s:] = best[:size - s] + cost[run, g]
             better = cand < new
             new[better] = cand[better]
             picks[g, better] = run
         best = new
-    reach = np.flatnonzero(np.isfinite(best))
-    return SpliceFront(reach * width / n, best[reach] / n, reach, picks, shift)
+    return best, picks
+
+
+def assignments(picks: np.ndarray, shift: np.ndarray, bins: np.ndarray) -> np.ndarray:
+    """(G, B) the run per group of the knapsack's assignment reaching each of ``bins`` (B,)."""
+    b = np.asarray(bins, dtype=int).copy()
+    out = np.zeros((picks.shape[0], b.size), dtype=int)
+    for g in range(picks.shape[0] - 1, -1, -1):  # walk back through the groups
+        out[g] = run = picks[g, b].astype(int)
+        b -= shift[run, g]
+    return out
 
 
 def best_line_ratio(front: SpliceFront, voluntary: tuple[float, float], reactive: tuple[float, float],
