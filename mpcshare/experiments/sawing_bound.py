@@ -18,7 +18,8 @@ and for every λ ≥ 0 an assignment a in effort bin b that meets the constraint
 
 DP the multiple-choice knapsack of :func:`~mpcshare.experiments.splice_bound.knapsack` with the cost
 E − λ·w (Lagrangian relaxation). So LB[b] = min_t max_λ (DP_{t,λ}[b] + λ·c√Y·t/2)/N bounds from below
-the MSE of every assignment in bin b that saws. t runs over a geometric grid of ratio q: the nearest t
+the MSE of every assignment in bin b that saws; a bin whose bound exceeds the largest error any
+assignment has holds none that saws (it is left out). t runs over a geometric grid of ratio q: the nearest t
 meets (S/t + t)/2 ≤ κ√S, κ = (√q + 1/√q)/2, so the grid uses c/κ and the bound stays optimistic.
 Each DP's assignments are also scored exactly; those that saw (ρ ≥ c) are schedules found, an upper
 bound: the truth lies between. Checked against brute force in ``tests/mpcshare/experiments``.
@@ -136,6 +137,8 @@ def sawing_front(sq_error: np.ndarray, effort: np.ndarray, groups: np.ndarray, b
             found_effort[idx] = g_ef[a[:, better], cols].sum(0)
             found_assignment[:, idx] = a[:, better]
         bound = np.minimum(bound, lower_t)
+    worst = float(np.sum(np.max(np.where(ok, g_e2, -np.inf), axis=0)))
+    bound[bound > worst * (1 + 1e-9) + 1e-300] = np.inf  # above every assignment's error: none there saws
     reach = np.flatnonzero(np.isfinite(bound))
     return SawingFront(reach * width / n, g_e2.shape[1] * width / n, np.maximum(bound[reach], 0.0) / n,
                        found[reach] / n, found_effort[reach] / n, found_corr[reach], found_assignment[:, reach])

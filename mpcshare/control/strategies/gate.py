@@ -35,6 +35,14 @@ wearer commanding a tip speed ‖û_v‖ above ``push_mps`` against the robot (�
 ``push_s`` (a leaky integral x' = 1[push] − x/push_s reaching 1 − 1/e of its limit) takes the
 lead, and keeps it for ``hold_s`` after the evidence fades (off when ``push_mps`` is inf).
 
+**A bounded lead.** With ``wearer_max_s`` finite, the wearer leads a wearer mode for at most that long:
+then the robot takes back (at its share, below) until the score has fallen below ``share_off``, so the
+next entry into a wearer mode is handed over afresh. The splice bound under the task's own measure
+(:mod:`mpcshare.experiments.sawing_bound`) found, on some worlds, the best sawing schedules giving the
+wearer the first one or two seconds of each cutting stretch, where the robot cannot predict the intent's
+jump, and the robot the rest at a shared α; the hand-back costs little (the robot's P-gain takes up at
+once). Default: inf (the wearer keeps the mode).
+
 **Measured wearer modes.** Where ``mpcshare train`` chose the wearer's modes in the closed loop
 (:mod:`mpcshare.training.rule_choice`, by what each mode costs under each party), the setting
 ``wearer_modes`` lists them and v is their indicator (v_j = 1 for a wearer mode, else 0): s_t is
@@ -75,7 +83,8 @@ __all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast
 
 #: The rule's settings and their defaults (see the module docstring).
 DEFAULTS: dict[str, float] = {"share_on": 0.3, "share_off": 0.2, "lead_s": 0.5, "hold_s": 0.5,
-                              "push_mps": math.inf, "push_s": 0.3, "wearer_alpha": 0.0}
+                              "push_mps": math.inf, "push_s": 0.3, "wearer_alpha": 0.0,
+                              "wearer_max_s": math.inf}
 
 
 def check_settings(options: dict[str, Any]) -> dict[str, float]:
@@ -94,6 +103,8 @@ def check_settings(options: dict[str, Any]) -> dict[str, float]:
     if not 0.0 <= s["wearer_alpha"] < 0.5:
         raise ValueError(f"gate setting wearer_alpha must be in [0, 0.5) (the wearer leads below 0.5), "
                          f"got {s['wearer_alpha']!r}")
+    if not s["wearer_max_s"] > 0:
+        raise ValueError(f"gate setting wearer_max_s must be > 0 s (inf: no bound), got {s['wearer_max_s']!r}")
     if not s["push_mps"] > 0:
         raise ValueError(f"gate setting push_mps must be > 0 m/s (inf: off), got {s['push_mps']!r}")
     return s
@@ -172,6 +183,8 @@ class ModeCostGate:
     def reset(self) -> None:
         """The robot leads unless the modes say otherwise."""
         self.wearer = False
+        self._spent = False  # the bounded lead ran out in this stretch of wearer modes
+        self._wearer_since = math.inf
         self._below_since = math.inf
         self._push = 0.0
         self._last_t = -math.inf
@@ -219,11 +232,16 @@ class ModeCostGate:
         pushed = self._pushing(t, inputs)
         self._last_t = t
         dwell_ok = t - arbiter.last_switch_t >= self.min_dwell_s
-        wants = (math.isfinite(score) and score >= s["share_on"]) or pushed
-        if wants:
+        on = math.isfinite(score) and score >= s["share_on"]
+        if self._spent and not (math.isfinite(score) and score >= s["share_off"]):
+            self._spent = False  # the wearer modes ended: the next entry is handed over afresh
+        wants = (on and not self._spent) or pushed
+        if self.wearer and t - self._wearer_since >= s["wearer_max_s"] and dwell_ok and not pushed:
+            self.wearer, self._spent, self._below_since = False, True, math.inf
+        elif wants:
             self._below_since = math.inf
             if not self.wearer and dwell_ok:
-                self.wearer = True
+                self.wearer, self._wearer_since = True, t
         elif self.wearer:
             low = not (math.isfinite(score) and score >= s["share_off"])
             if low and not math.isfinite(self._below_since):
@@ -233,6 +251,8 @@ class ModeCostGate:
             elif t - self._below_since >= s["hold_s"] and dwell_ok:
                 self.wearer = False
         why = "the wearer pushes" if pushed else f"wearer-mode score {score:.2f}"
+        if self._spent and not self.wearer:
+            why += f", the wearer's {s['wearer_max_s']:g} s lead spent"
         if not self.wearer:
             a = self._robot_share(inputs.mode_proba)
             return Target(a, why + ": the robot leads", ramp=True, beta=1.0 - a if a < 1 else None)

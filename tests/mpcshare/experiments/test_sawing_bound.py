@@ -118,3 +118,14 @@ def test_bad_input_is_named():
         sawing_front(e2, effort, labels, dot, power[:, :-1], y, 0.6)
     with pytest.raises(ValueError, match="allowed"):
         sawing_front(e2, effort, labels, dot, power, y, 0.6, allowed=np.zeros((3, 6), dtype=bool))
+
+
+def test_a_correlation_no_assignment_reaches_leaves_nothing():
+    e2, effort, labels, dot, power, y = _world(1)
+    best = max(rho for _, _, rho in _brute(e2, effort, labels, dot, power, y))
+    vol = (float(effort[0].mean()), float(np.sqrt(e2[0].mean())))
+    rea = (float(effort[-1].mean()), float(np.sqrt(e2[-1].mean())))
+    front = sawing_front(e2, effort, labels, dot, power, y, min(best + 0.05, 1.0), bins=5000)
+    bound, found, _ = best_line_ratios(front, vol, rea, None)
+    assert found is None
+    assert bound is None or bound <= 1.5  # the relaxation may not prove it, but never claims an impossible error

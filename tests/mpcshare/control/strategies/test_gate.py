@@ -146,3 +146,19 @@ def test_the_robot_share_while_it_leads_is_the_expected_share_under_the_mode_pos
     for bad in ([0.4, 1.0, 1.0], [1.0, 1.0], [1.0, 1.1, 1.0]):
         with pytest.raises(ValueError, match="robot_alphas"):
             _arbiter(robot_alphas=bad)
+
+
+def test_a_bounded_lead_hands_back_after_wearer_max_s_until_the_wearer_modes_end():
+    """wearer_max_s: the wearer leads mode 1 for 1 s, the robot (at its share) the rest of that stay; the
+    next entry into mode 1 is handed over afresh."""
+    arb = _arbiter(lead_s=0.0, hold_s=0.0, wearer_max_s=1.0, robot_alphas=[0.5, 0.5, 0.5])
+    assert arb.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 0.5
+    stay = {round(0.1 * k, 1): arb.decide(0.1 * k, 0.5, mode_proba=_onehot(1)) for k in range(1, 40)}
+    assert stay[0.1].alpha == stay[1.0].alpha == 0.0  # the wearer leads the first second
+    assert stay[1.1].alpha == stay[3.9].alpha == 0.5 and "lead spent" in stay[3.9].reason
+    assert arb.decide(4.0, 0.9, mode_proba=_onehot(2)).alpha == 0.5  # mode 1 ended: the bound resets
+    assert arb.decide(4.1, 0.5, mode_proba=_onehot(1)).alpha == 0.0  # a new stay: the wearer again
+    unbounded = _arbiter(lead_s=0.0, hold_s=0.0)
+    assert all(unbounded.decide(0.1 * k, 0.5, mode_proba=_onehot(1)).alpha == 0.0 for k in range(1, 40))
+    with pytest.raises(ValueError, match="wearer_max_s"):
+        check_settings({"wearer_max_s": 0.0})
