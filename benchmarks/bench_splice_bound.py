@@ -18,10 +18,14 @@ wearer's effort, of any schedule that gives each group of control steps one of t
   weighted by its cutting time, and ask an amplitude too.
 
 A splice pays no switch (no reaction, no pick-up), so no such schedule does better in the closed
-loop: a bound from below on the line ratio. Prints one JSON line per world and a summary object.
+loop: a bound from below on the line ratio. With ``--replay`` the best 1 s and 3 s schedules that saw
+by the measure, among the levels the ``schedule`` strategy replays (``voluntary``, ``reactive``,
+``mix50``, ``mix75``), are run in the closed loop (:class:`mpcshare.experiments.schedule.LevelSchedule`,
+read half a hand-over ramp ahead): what such a schedule, knowing the future, reaches once its switches
+cost what they cost. Prints one JSON line per world and a summary object.
 
-Usage: ``python benchmarks/bench_splice_bound.py [--worlds 0 1 ...] [--kinds default ...] [--workers 2]``.
-About 2 min of one core per world.
+Usage: ``python benchmarks/bench_splice_bound.py [--worlds 0 1 ...] [--kinds default ...] [--workers 2]
+[--replay]``. About 2 min of one core per world, 4 more with ``--replay``.
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 LEVELS = ("voluntary", "reactive", "mix25", "mix50", "mix75")
 SEGMENTS_S = (0.1, 1.0, 3.0)
 MIN_CORRELATION = 0.6  # issue 28: "saws while cutting (stroke-band correlation >= 0.6)"
+REPLAYABLE = {"voluntary": 0.0, "reactive": 1.0, "mix50": 0.5, "mix75": 0.75}  # the replay's α per level
 
 
 def _per_step(episodes: list[Any], n: list[int]) -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +119,47 @@ def _by_time_in_cutting(wearer: np.ndarray, cutting: np.ndarray, since_s: np.nda
     return out
 
 
-def run_world(world: str) -> dict[str, Any]:
+def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
+    """The best schedule that saws among :data:`REPLAYABLE` levels, spliced and replayed in the closed loop."""
+    from mpcshare.control.types import ControllerConfig
+    from mpcshare.experiments.pooling import pool_metrics
+    from mpcshare.experiments.runs import simulate_episode
+    from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front
+    from mpcshare.experiments.schedule import LevelSchedule
+    from mpcshare.line_ratio import line_ratio
+    from mpcshare.run_table import StrategyRun
+
+    idx = [LEVELS.index(name) for name in REPLAYABLE]
+    st = [ctx["strokes"][i] for i in idx]
+    front = sawing_front(ctx["e2"][idx], ctx["ef"][idx], groups, np.stack([s[0] for s in st]),
+                         np.stack([s[1] for s in st]), st[0][2], MIN_CORRELATION)
+    bound, found, i = best_line_ratios(front, ctx["vol"], ctx["rea"], 0.75)
+    out: dict[str, Any] = {"splice_bound": bound, "splice_found": found}
+    if i is None:
+        return out
+    _, inv = np.unique(groups, return_inverse=True)
+    alpha = np.array(list(REPLAYABLE.values()))[front.found_assignment[inv, i]]
+    lead = ControllerConfig().handover_s / 2
+    ms, steps, secs, start = [], [], [], 0
+    for tid, k, ep0 in zip(ctx["trials"], ctx["n"], ctx["eps"]["reactive"]):
+        sched = LevelSchedule(np.asarray(ep0.t)[:k], alpha[start:start + k], lead)
+        start += k
+        ep, m = simulate_episode(ctx["bundle"], ctx["demos"], ctx["by_id"][tid], StrategyRun("replay", "schedule"),
+                                 {"schedule": sched}, beta=0.5, duration_s=30.0, seed=0, wearer=None,
+                                 mode_names=ctx["mode_names"])
+        ms.append(m)
+        steps.append(np.asarray(ep.step_time, dtype=float))
+        secs.append(float(ep.t[-1] - ep.t[0]))
+    p = pool_metrics(ms, steps, secs)
+    saw = [m["saw_correlation"] for m in ms if m.get("saw_correlation") is not None]
+    out.update(replay_line_ratio=line_ratio(p["tracking_rmse_m"], p["voluntary_effort"], ctx["vol"], ctx["rea"]),
+               replay_effort_vs_voluntary=p["voluntary_effort"] / ctx["vol"][0],
+               replay_saw_correlation=float(np.mean(saw)) if saw else None,
+               replay_limit_violations=int(p["limit_violations"]))
+    return out
+
+
+def run_world(world: str, replay: bool = False) -> dict[str, Any]:
     """The bounds of one world (module docstring)."""
     import torch
 
@@ -175,6 +220,10 @@ def run_world(world: str) -> dict[str, Any]:
             if cutting is not None and gname != "0.1 s":
                 out["bounds"][f"{gname}, {lname}, saws by measure"] = _sawing_entry(
                     e2[:runs], ef[:runs], groups, strokes, vol, rea, cutting, since_cut)
+    if replay and cutting is not None:
+        ctx = {"e2": e2, "ef": ef, "strokes": strokes, "vol": vol, "rea": rea, "trials": trials, "n": n, "eps": eps,
+               "bundle": bundle, "demos": demos, "by_id": by_id, "mode_names": mode_names}
+        out["replayed"] = {name: _replay(ctx, groupings[name]) for name in ("1 s", "3 s")}
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -185,12 +234,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--kinds", nargs="*", default=["default", "other_seed", "other_structure"],
                    choices=["default", "other_seed", "other_structure"])
     p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--replay", action="store_true",
+                   help="replay the best 1 s and 3 s schedules that saw in the closed loop (4 more min a world)")
     a = p.parse_args(argv)
     worlds = [f"family:{s}" for s in a.worlds] + list(a.kinds)
     t0 = time.perf_counter()
     results = []
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=multiprocessing.get_context("spawn")) as pool:
-        for fut in as_completed([pool.submit(run_world, w) for w in worlds]):
+        for fut in as_completed([pool.submit(run_world, w, a.replay) for w in worlds]):
             results.append(fut.result())
             print(json.dumps(results[-1], default=float), flush=True)
     results.sort(key=lambda r: worlds.index(r["world"]))

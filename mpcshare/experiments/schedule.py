@@ -27,7 +27,7 @@ from typing import Sequence
 
 import numpy as np
 
-__all__ = ["ScheduleStats", "StepSchedule", "oracle_schedule", "random_schedule", "schedule_stats"]
+__all__ = ["LevelSchedule", "ScheduleStats", "StepSchedule", "oracle_schedule", "random_schedule", "schedule_stats"]
 
 
 @dataclass(frozen=True)
@@ -161,3 +161,26 @@ class StepSchedule:
     def __call__(self, t: float) -> float:
         k = int(np.searchsorted(self.times, float(t) + self.lead_s + 1e-9, side="right")) - 1
         return self.on_alpha if self.on[max(k, 0)] else 0.0
+
+
+class LevelSchedule:
+    """α by control step as a function of time, any authority level: 0 (the wearer leads) or a share in
+    [0.5, 1] (the robot leads, the convex mixture below 1), as the ``schedule`` strategy replays it; the call
+    at t reads ``alpha[k]`` for the last step time ``times[k]`` ≤ t + ``lead_s`` (``alpha[0]`` before)."""
+
+    def __init__(self, times: np.ndarray, alpha: np.ndarray, lead_s: float = 0.0) -> None:
+        self.times, self.alpha = np.asarray(times, dtype=float), np.asarray(alpha, dtype=float)
+        if self.times.shape != self.alpha.shape or self.times.ndim != 1 or self.times.size == 0:
+            raise ValueError(f"times and alpha must be equal-length non-empty 1-D arrays, got {self.times.shape} "
+                             f"and {self.alpha.shape}")
+        bad = ~((self.alpha == 0.0) | ((self.alpha >= 0.5) & (self.alpha <= 1.0)))
+        if bad.any():
+            raise ValueError(f"alpha must be 0 (the wearer leads) or in [0.5, 1] (the robot leads), got "
+                             f"{self.alpha[bad][0]!r} at step {int(np.flatnonzero(bad)[0])}")
+        if not (math.isfinite(lead_s) and lead_s >= 0):
+            raise ValueError(f"lead_s must be finite and ≥ 0, got {lead_s!r}")
+        self.lead_s = float(lead_s)
+
+    def __call__(self, t: float) -> float:
+        k = int(np.searchsorted(self.times, float(t) + self.lead_s + 1e-9, side="right")) - 1
+        return float(self.alpha[max(k, 0)])

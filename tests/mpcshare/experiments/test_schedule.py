@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mpcshare.control.arbitration import Arbiter
-from mpcshare.experiments.schedule import StepSchedule, oracle_schedule, random_schedule, schedule_stats
+from mpcshare.experiments.schedule import LevelSchedule, StepSchedule, oracle_schedule, random_schedule, schedule_stats
 
 
 def _gate_like() -> np.ndarray:
@@ -104,3 +104,19 @@ def test_arbiter_replays_a_schedule_through_the_ramp():
         Arbiter("gate", schedule=StepSchedule(times, on))
     with pytest.raises(ValueError, match="schedule"):
         Arbiter("schedule")
+
+
+def test_a_level_schedule_is_replayed_at_its_shares():
+    """A robot share of 0.5 replays as the mixture (β = 1 − α), 0 as the wearer, 1 as the robot alone."""
+    times = np.arange(300) * 0.01
+    levels = np.repeat([1.0, 0.5, 0.0], 100)
+    sched = LevelSchedule(times, levels)
+    assert [sched(t) for t in (0.0, 0.995, 1.0, 2.5, 9.0)] == [1.0, 1.0, 0.5, 0.0, 0.0]
+    assert LevelSchedule(times, levels, lead_s=0.2)(0.85) == 0.5  # read ahead
+    arb = Arbiter("schedule", 0.3, handover_s=0.0, schedule=sched)
+    d = arb.decide(1.5, None, available=False)
+    assert d.alpha == 0.5 and d.beta == pytest.approx(0.5)
+    with pytest.raises(ValueError, match="at step 3"):
+        LevelSchedule(times[:4], np.array([0.0, 0.5, 1.0, 0.25]))
+    with pytest.raises(ValueError, match="equal-length"):
+        LevelSchedule(times, levels[:-1])
