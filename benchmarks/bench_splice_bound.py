@@ -119,15 +119,40 @@ def _by_time_in_cutting(wearer: np.ndarray, cutting: np.ndarray, since_s: np.nda
     return out
 
 
-def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
-    """The best schedule that saws among :data:`REPLAYABLE` levels, spliced and replayed in the closed loop."""
+def _replay_alpha(ctx: dict[str, Any], alpha: np.ndarray) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+    """Replay α per step (N,) in the closed loop (:class:`LevelSchedule`, read half a hand-over ramp ahead):
+    (the pooled figures, the replay's e² [m²] and θ [rad] per step (N,))."""
     from mpcshare.control.types import ControllerConfig
     from mpcshare.experiments.pooling import pool_metrics
     from mpcshare.experiments.runs import simulate_episode
-    from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front
     from mpcshare.experiments.schedule import LevelSchedule
     from mpcshare.line_ratio import line_ratio
     from mpcshare.run_table import StrategyRun
+
+    lead = ControllerConfig().handover_s / 2
+    ms, steps, secs, eps, start = [], [], [], [], 0
+    for tid, k, ep0 in zip(ctx["trials"], ctx["n"], ctx["eps"]["reactive"]):
+        sched = LevelSchedule(np.asarray(ep0.t)[:k], alpha[start:start + k], lead)
+        start += k
+        ep, m = simulate_episode(ctx["bundle"], ctx["demos"], ctx["by_id"][tid], StrategyRun("replay", "schedule"),
+                                 {"schedule": sched}, beta=0.5, duration_s=30.0, seed=0, wearer=None,
+                                 mode_names=ctx["mode_names"])
+        ms.append(m)
+        eps.append(ep)
+        steps.append(np.asarray(ep.step_time, dtype=float))
+        secs.append(float(ep.t[-1] - ep.t[0]))
+    p = pool_metrics(ms, steps, secs)
+    saw = [m["saw_correlation"] for m in ms if m.get("saw_correlation") is not None]
+    e2, ef = _per_step(eps, ctx["n"])
+    return ({"replay_line_ratio": line_ratio(p["tracking_rmse_m"], p["voluntary_effort"], ctx["vol"], ctx["rea"]),
+             "replay_effort_vs_voluntary": p["voluntary_effort"] / ctx["vol"][0],
+             "replay_saw_correlation": float(np.mean(saw)) if saw else None,
+             "replay_limit_violations": int(p["limit_violations"])}, e2, ef)
+
+
+def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
+    """The best schedule that saws among :data:`REPLAYABLE` levels, spliced and replayed in the closed loop."""
+    from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front
 
     idx = [LEVELS.index(name) for name in REPLAYABLE]
     st = [ctx["strokes"][i] for i in idx]
@@ -138,28 +163,61 @@ def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
     if i is None:
         return out
     _, inv = np.unique(groups, return_inverse=True)
-    alpha = np.array(list(REPLAYABLE.values()))[front.found_assignment[inv, i]]
-    lead = ControllerConfig().handover_s / 2
-    ms, steps, secs, start = [], [], [], 0
-    for tid, k, ep0 in zip(ctx["trials"], ctx["n"], ctx["eps"]["reactive"]):
-        sched = LevelSchedule(np.asarray(ep0.t)[:k], alpha[start:start + k], lead)
-        start += k
-        ep, m = simulate_episode(ctx["bundle"], ctx["demos"], ctx["by_id"][tid], StrategyRun("replay", "schedule"),
-                                 {"schedule": sched}, beta=0.5, duration_s=30.0, seed=0, wearer=None,
-                                 mode_names=ctx["mode_names"])
-        ms.append(m)
-        steps.append(np.asarray(ep.step_time, dtype=float))
-        secs.append(float(ep.t[-1] - ep.t[0]))
-    p = pool_metrics(ms, steps, secs)
-    saw = [m["saw_correlation"] for m in ms if m.get("saw_correlation") is not None]
-    out.update(replay_line_ratio=line_ratio(p["tracking_rmse_m"], p["voluntary_effort"], ctx["vol"], ctx["rea"]),
-               replay_effort_vs_voluntary=p["voluntary_effort"] / ctx["vol"][0],
-               replay_saw_correlation=float(np.mean(saw)) if saw else None,
-               replay_limit_violations=int(p["limit_violations"]))
+    out.update(_replay_alpha(ctx, np.array(list(REPLAYABLE.values()))[front.found_assignment[inv, i]])[0])
     return out
 
 
-def run_world(world: str, replay: bool = False) -> dict[str, Any]:
+def _priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int) -> dict[str, Any]:
+    """Switch-priced schedules (:mod:`mpcshare.experiments.switch_priced`), replayed round by round: round 0
+    pays nothing for a switch (the splice); each later round prices the switches by the excess of every
+    earlier replay over its splice and searches again. Where a replay saws below the target (the reports
+    average the trials' correlations, the search pools them, and a switch moves the stroke), the next
+    round asks the search for that much more correlation."""
+    from mpcshare.experiments.splice_bound import group_sums
+    from mpcshare.experiments.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
+
+    idx = [LEVELS.index(name) for name in REPLAYABLE]
+    e2, ef = ctx["e2"][idx], ctx["ef"][idx]
+    st = [ctx["strokes"][i] for i in idx]
+    labels, inv = np.unique(groups, return_inverse=True)
+    first = np.concatenate([[True], labels[1:] // 10**7 != labels[:-1] // 10**7])
+    alphas = np.array(list(REPLAYABLE.values()))
+    prices, samples, out, target = SwitchPrices.zero(), [], [], MIN_CORRELATION
+    for r in range(rounds):
+        found = priced_search(e2, ef, groups, first, np.stack([s[0] for s in st]), np.stack([s[1] for s in st]),
+                              st[0][2], target, prices, ctx["vol"], ctx["rea"])
+        entry: dict[str, Any] = {"round": r, "search_correlation": target,
+                                 "prices_m2_steps": dict(zip(SWITCH_CLASSES, prices.error.tolist())),
+                                 "effort_prices_rad_steps": dict(zip(SWITCH_CLASSES, prices.effort.tolist()))}
+        if found is None:
+            out.append(entry)
+            break
+        per_step = found.assignment[inv]
+        figs, rep_e2, rep_ef = _replay_alpha(ctx, alphas[per_step])
+        cols = np.arange(per_step.size)
+        x_e2 = group_sums((rep_e2 - e2[per_step, cols])[None], groups)[1][0]
+        x_ef = group_sums((rep_ef - ef[per_step, cols])[None], groups)[1][0]
+        samples.append((found.assignment, first, x_e2, x_ef, np.zeros(labels.size)))
+        entry.update(predicted_line_ratio=found.line_ratio, predicted_effort_vs_voluntary=found.effort / ctx["vol"][0],
+                     switches=found.switches, wearer_share=float(np.mean(per_step == 0)), **figs)
+        out.append(entry)
+        prices = estimate_prices(samples)
+        saw = figs["replay_saw_correlation"]
+        if saw is not None and saw < MIN_CORRELATION:
+            target = min(1.0, target + (MIN_CORRELATION - saw) + 0.02)
+    done = [e for e in out if e.get("replay_line_ratio") is not None and e["replay_effort_vs_voluntary"] <= 0.75
+            and (e["replay_saw_correlation"] or 0.0) >= MIN_CORRELATION]
+    if ctx.get("dump"):
+        st_arr = np.stack([np.stack([s[0] for s in st]), np.stack([s[1] for s in st])])
+        np.savez(ctx["dump"], e2=e2, ef=ef, stroke=st_arr, intent_power=st[0][2], groups=groups, first=first,
+                 mode=ctx["mode"], cutting=ctx["cutting"], vol=ctx["vol"], rea=ctx["rea"], dt=ctx["dt"],
+                 prices_error=prices.error, prices_effort=prices.effort, trial=ctx["trial"],
+                 schedules=np.stack([s_[0] for s_ in samples]) if samples else np.zeros((0, labels.size)))
+    return {"rounds": out, "best_replay_meeting_the_task": min((e["replay_line_ratio"] for e in done), default=None)}
+
+
+def run_world(world: str, replay: bool = False, priced: int = 0, bounds: bool = True,
+              dump: str | None = None) -> dict[str, Any]:
     """The bounds of one world (module docstring)."""
     import torch
 
@@ -200,7 +258,7 @@ def run_world(world: str, replay: bool = False) -> dict[str, Any]:
     out: dict[str, Any] = {"world": world, "trials": trials, "bounds": {},
                            "voluntary": {"rms_mm": 1e3 * vol[1], "effort_rad": vol[0]},
                            "reactive": {"rms_mm": 1e3 * rea[1], "effort_rad": rea[0]}}
-    for gname, groups in groupings.items():
+    for gname, groups in (groupings.items() if bounds else ()):
         names, inv = np.unique(groups, return_inverse=True)
         for lname, runs in (("binary", 2), ("levels", len(LEVELS))):
             for task in ("free", "sawing"):
@@ -220,10 +278,15 @@ def run_world(world: str, replay: bool = False) -> dict[str, Any]:
             if cutting is not None and gname != "0.1 s":
                 out["bounds"][f"{gname}, {lname}, saws by measure"] = _sawing_entry(
                     e2[:runs], ef[:runs], groups, strokes, vol, rea, cutting, since_cut)
-    if replay and cutting is not None:
+    if (replay or priced) and cutting is not None:
         ctx = {"e2": e2, "ef": ef, "strokes": strokes, "vol": vol, "rea": rea, "trials": trials, "n": n, "eps": eps,
-               "bundle": bundle, "demos": demos, "by_id": by_id, "mode_names": mode_names}
-        out["replayed"] = {name: _replay(ctx, groupings[name]) for name in ("1 s", "3 s")}
+               "bundle": bundle, "demos": demos, "by_id": by_id, "mode_names": mode_names, "mode": mode,
+               "cutting": cutting, "dt": dt, "trial": trial,
+               "dump": (Path(dump) / f"{world.replace(':', '_')}.npz") if dump else None}
+        if replay:
+            out["replayed"] = {name: _replay(ctx, groupings[name]) for name in ("1 s", "3 s")}
+        if priced:
+            out["switch_priced"] = _priced(ctx, groupings["1 s"], priced)
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -236,16 +299,23 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--replay", action="store_true",
                    help="replay the best 1 s and 3 s schedules that saw in the closed loop (4 more min a world)")
+    p.add_argument("--priced", type=int, default=0, metavar="ROUNDS",
+                   help="replay ROUNDS switch-priced 1 s schedules that saw, pricing the switches by the earlier "
+                        "replays (about 2 min a round and world)")
+    p.add_argument("--dump", metavar="DIR", help="with --priced: save each world's per-step figures to DIR/<world>.npz")
+    p.add_argument("--no-bounds", action="store_true", help="skip the splice and sawing bounds (with --priced)")
     a = p.parse_args(argv)
     worlds = [f"family:{s}" for s in a.worlds] + list(a.kinds)
     t0 = time.perf_counter()
     results = []
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=multiprocessing.get_context("spawn")) as pool:
-        for fut in as_completed([pool.submit(run_world, w, a.replay) for w in worlds]):
+        futures = [pool.submit(run_world, w, a.replay, a.priced, not a.no_bounds, a.dump) for w in worlds]
+        for fut in as_completed(futures):
             results.append(fut.result())
             print(json.dumps(results[-1], default=float), flush=True)
     results.sort(key=lambda r: worlds.index(r["world"]))
     keys = sorted({k for r in results for k in r["bounds"]})
+    priced = {r["world"]: r["switch_priced"]["best_replay_meeting_the_task"] for r in results if "switch_priced" in r}
     summary = {}
     for k in keys:
         vals = [r["bounds"][k]["line_ratio"] for r in results if k in r["bounds"]]
@@ -256,7 +326,7 @@ def main(argv: list[str] | None = None) -> int:
         found = [r["bounds"][k].get("found_line_ratio") for r in results if k in r["bounds"]]
         if any(f is not None for f in found):
             summary[k]["found_at_most_0.9"] = sum(f is not None and f <= 0.9 for f in found)
-    print(json.dumps({"summary": summary, "worlds": [r["world"] for r in results],
+    print(json.dumps({"summary": summary, "switch_priced_best_replay": priced, "worlds": [r["world"] for r in results],
                       "seconds": time.perf_counter() - t0}, indent=1, default=float))
     return 0
 

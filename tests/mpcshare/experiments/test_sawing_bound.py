@@ -10,21 +10,7 @@ import pytest
 from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front, stroke_terms
 from mpcshare.experiments.splice_bound import best_line_ratio, group_sums, splice_front
 from mpcshare.line_ratio import line_ratio
-
-
-def _world(seed: int, runs: int = 3, steps: int = 48, groups: int = 6):
-    """Runs whose stroke terms differ: run 0 (the wearer) saws well at high effort, the others less."""
-    rng = np.random.default_rng(seed)
-    e2 = rng.gamma(2.0, 1e-5, (runs, steps)) * rng.uniform(0.3, 3.0, (runs, 1))
-    effort = rng.gamma(2.0, 0.02, (runs, steps)) * np.linspace(2.0, 0.3, runs)[:, None]
-    labels = np.repeat(np.arange(groups), steps // groups)
-    cutting = rng.random(steps) < 0.6
-    intent = rng.normal(0, 1e-2, (steps, 2))
-    gains = np.linspace(1.0, 0.1, runs)
-    tips = [g * intent + rng.normal(0, 6e-3, (steps, 2)) for g in gains]
-    dot = np.stack([np.where(cutting, np.sum(t * intent, axis=1), 0.0) for t in tips])
-    power = np.stack([np.where(cutting, np.sum(t**2, axis=1), 0.0) for t in tips])
-    return e2, effort, labels, dot, power, float(np.sum(intent[cutting] ** 2))
+from tests.mpcshare.experiments.stroke_worlds import stroke_world as _world
 
 
 def _brute(e2, effort, labels, dot, power, y):
