@@ -207,17 +207,48 @@ def _priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int) -> dict[str, A
             target = min(1.0, target + (MIN_CORRELATION - saw) + 0.02)
     done = [e for e in out if e.get("replay_line_ratio") is not None and e["replay_effort_vs_voluntary"] <= 0.75
             and (e["replay_saw_correlation"] or 0.0) >= MIN_CORRELATION]
+    result = {"rounds": out, "tables": _table_rules(ctx, e2, ef, st, prices, target)}
     if ctx.get("dump"):
         st_arr = np.stack([np.stack([s[0] for s in st]), np.stack([s[1] for s in st])])
         np.savez(ctx["dump"], e2=e2, ef=ef, stroke=st_arr, intent_power=st[0][2], groups=groups, first=first,
                  mode=ctx["mode"], cutting=ctx["cutting"], vol=ctx["vol"], rea=ctx["rea"], dt=ctx["dt"],
                  prices_error=prices.error, prices_effort=prices.effort, trial=ctx["trial"],
                  schedules=np.stack([s_[0] for s_ in samples]) if samples else np.zeros((0, labels.size)))
-    return {"rounds": out, "best_replay_meeting_the_task": min((e["replay_line_ratio"] for e in done), default=None)}
+    result["best_replay_meeting_the_task"] = min((e["replay_line_ratio"] for e in done), default=None)
+    return result
+
+
+TIME_IN_MODE_S = (0.0, 0.5, 1.0, 2.0, 4.0)
+
+
+def _table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tuple], prices: Any,
+                 target: float) -> dict[str, Any]:
+    """Causal tables fitted in hindsight on the same steps, with the last round's switch prices
+    (:mod:`mpcshare.experiments.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
+    time in it; the same with the true task phase in place of the estimate (what a perfect mode filter adds)."""
+    from mpcshare.experiments.table_rule import fit_table, score_schedule, time_in_cell
+
+    dot, pw = np.stack([s[0] for s in st]), np.stack([s[1] for s in st])
+
+    def score(level: np.ndarray) -> Any:
+        return score_schedule(level, e2, ef, dot, pw, st[0][2], ctx["trial"], prices, ctx["vol"], ctx["rea"])
+
+    out: dict[str, Any] = {}
+    for name, cell in (("mode estimate", ctx["mode"]), ("true phase", ctx["labels"])):
+        cell = np.asarray(cell, dtype=int)
+        fit = fit_table(cell, time_in_cell(cell, ctx["trial"], ctx["dt"], TIME_IN_MODE_S), score, e2.shape[0],
+                        effort_cap=0.75 * ctx["vol"][0], min_correlation=target)
+        for key, table, sc in (("whole", fit.whole, fit.whole_score), ("x time in it", fit.table, fit.score)):
+            meets = sc.effort <= 0.75 * ctx["vol"][0] and sc.correlation >= MIN_CORRELATION
+            out[f"{name}, {key}"] = {"line_ratio": sc.line_ratio if meets else None,
+                                     "unconstrained_line_ratio": sc.line_ratio,
+                                     "effort_vs_voluntary": sc.effort / ctx["vol"][0], "correlation": sc.correlation,
+                                     "switches": sc.switches, "table": table.tolist()}
+    return out
 
 
 def run_world(world: str, replay: bool = False, priced: int = 0, bounds: bool = True,
-              dump: str | None = None) -> dict[str, Any]:
+              dump: str | None = None, trial_set: str = "evaluation") -> dict[str, Any]:
     """The bounds of one world (module docstring)."""
     import torch
 
@@ -233,7 +264,8 @@ def run_world(world: str, replay: bool = False, priced: int = 0, bounds: bool = 
     demos, mode_names, _ = _data(world, True)
     bundle = train_bundle(demos, TrainConfig(max_epochs=20), progress=False)
     chooses = choice_trials(bundle.heldout_trials)  # the evaluation trials of bench_family: the others
-    trials = [int(t) for t in bundle.heldout_trials if int(t) not in chooses][:2]
+    trials = ([int(t) for t in chooses][:2] if trial_set == "choice"
+              else [int(t) for t in bundle.heldout_trials if int(t) not in chooses][:2])
     eps = {s: pooled_run(bundle, demos, trials, s, None, 30.0, None, 0, mode_names)[1] for s in LEVELS}
     n = [min(len(eps[s][i].t) for s in LEVELS) for i in range(len(trials))]
     figs = [_per_step(eps[s], n) for s in LEVELS]
@@ -282,6 +314,7 @@ def run_world(world: str, replay: bool = False, priced: int = 0, bounds: bool = 
         ctx = {"e2": e2, "ef": ef, "strokes": strokes, "vol": vol, "rea": rea, "trials": trials, "n": n, "eps": eps,
                "bundle": bundle, "demos": demos, "by_id": by_id, "mode_names": mode_names, "mode": mode,
                "cutting": cutting, "dt": dt, "trial": trial,
+               "labels": np.concatenate([np.asarray(lab)[:k] for lab, k in zip(labels, n)]),
                "dump": (Path(dump) / f"{world.replace(':', '_')}.npz") if dump else None}
         if replay:
             out["replayed"] = {name: _replay(ctx, groupings[name]) for name in ("1 s", "3 s")}
@@ -303,19 +336,23 @@ def main(argv: list[str] | None = None) -> int:
                    help="replay ROUNDS switch-priced 1 s schedules that saw, pricing the switches by the earlier "
                         "replays (about 2 min a round and world)")
     p.add_argument("--dump", metavar="DIR", help="with --priced: save each world's per-step figures to DIR/<world>.npz")
+    p.add_argument("--trial-set", choices=["evaluation", "choice"], default="evaluation",
+                   help="which 2 held-out trials: those bench_family evaluates on, or the rule choice's (another draw)")
     p.add_argument("--no-bounds", action="store_true", help="skip the splice and sawing bounds (with --priced)")
     a = p.parse_args(argv)
     worlds = [f"family:{s}" for s in a.worlds] + list(a.kinds)
     t0 = time.perf_counter()
     results = []
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(run_world, w, a.replay, a.priced, not a.no_bounds, a.dump) for w in worlds]
+        futures = [pool.submit(run_world, w, a.replay, a.priced, not a.no_bounds, a.dump, a.trial_set) for w in worlds]
         for fut in as_completed(futures):
             results.append(fut.result())
             print(json.dumps(results[-1], default=float), flush=True)
     results.sort(key=lambda r: worlds.index(r["world"]))
     keys = sorted({k for r in results for k in r["bounds"]})
-    priced = {r["world"]: r["switch_priced"]["best_replay_meeting_the_task"] for r in results if "switch_priced" in r}
+    priced = {r["world"]: {"best replay": r["switch_priced"]["best_replay_meeting_the_task"],
+                           **{k: v["line_ratio"] for k, v in r["switch_priced"]["tables"].items()}}
+              for r in results if "switch_priced" in r}
     summary = {}
     for k in keys:
         vals = [r["bounds"][k]["line_ratio"] for r in results if k in r["bounds"]]
