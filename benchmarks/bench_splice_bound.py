@@ -22,10 +22,17 @@ loop: a bound from below on the line ratio. With ``--replay`` the best 1 s and 3
 by the measure, among the levels the ``schedule`` strategy replays (``voluntary``, ``reactive``,
 ``mix50``, ``mix75``), are run in the closed loop (:class:`mpcshare.experiments.schedule.LevelSchedule`,
 read half a hand-over ramp ahead): what such a schedule, knowing the future, reaches once its switches
-cost what they cost. Prints one JSON line per world and a summary object.
+cost what they cost. With ``--priced ROUNDS`` the 1 s schedules that saw are searched with a price on each
+switch (:mod:`mpcshare.experiments.switch_priced`), the prices measured from the earlier rounds' replays,
+and replayed round by round; ``--polish REPLAYS`` then searches around the best one in the closed loop, every
+candidate replayed; and causal tables (a level per mode estimate, or true phase, and the time in it) are
+fitted in hindsight on the same steps (:mod:`mpcshare.experiments.table_rule`): what a rule that sees only
+those could reach at best (``priced_schedules.py``). ``--trial-set choice`` takes the rule choice's two
+trials instead, another draw. Prints one JSON line per world and a summary object.
 
 Usage: ``python benchmarks/bench_splice_bound.py [--worlds 0 1 ...] [--kinds default ...] [--workers 2]
-[--replay]``. About 2 min of one core per world, 4 more with ``--replay``.
+[--replay] [--priced ROUNDS [--polish REPLAYS] [--no-bounds] [--dump DIR]] [--trial-set choice]``. About 2 min
+of one core per world, 4 more with ``--replay``, about 10 s a replay with ``--priced`` and ``--polish``.
 """
 
 from __future__ import annotations
@@ -43,19 +50,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from priced_schedules import MIN_CORRELATION, REPLAYABLE, per_step, priced, replay_alpha  # noqa: E402
+
 LEVELS = ("voluntary", "reactive", "mix25", "mix50", "mix75")
 SEGMENTS_S = (0.1, 1.0, 3.0)
-MIN_CORRELATION = 0.6  # issue 28: "saws while cutting (stroke-band correlation >= 0.6)"
-REPLAYABLE = {"voluntary": 0.0, "reactive": 1.0, "mix50": 0.5, "mix75": 0.75}  # the replay's α per level
-
-
-def _per_step(episodes: list[Any], n: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """(squared tracking error [m²], effort [rad]) per step of the first n[i] steps of each episode."""
-    from mpcshare.experiments.handover import tracking_error
-
-    e2 = np.concatenate([tracking_error(ep)[:k] ** 2 for ep, k in zip(episodes, n)])
-    ef = np.concatenate([np.linalg.norm(np.asarray(ep.voluntary), axis=1)[:k] for ep, k in zip(episodes, n)])
-    return e2, ef
 
 
 def _stroke(episodes: list[Any], n: list[int], cutting: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray,
@@ -119,37 +117,6 @@ def _by_time_in_cutting(wearer: np.ndarray, cutting: np.ndarray, since_s: np.nda
     return out
 
 
-def _replay_alpha(ctx: dict[str, Any], alpha: np.ndarray) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
-    """Replay α per step (N,) in the closed loop (:class:`LevelSchedule`, read half a hand-over ramp ahead):
-    (the pooled figures, the replay's e² [m²] and θ [rad] per step (N,))."""
-    from mpcshare.control.types import ControllerConfig
-    from mpcshare.experiments.pooling import pool_metrics
-    from mpcshare.experiments.runs import simulate_episode
-    from mpcshare.experiments.schedule import LevelSchedule
-    from mpcshare.line_ratio import line_ratio
-    from mpcshare.run_table import StrategyRun
-
-    lead = ControllerConfig().handover_s / 2
-    ms, steps, secs, eps, start = [], [], [], [], 0
-    for tid, k, ep0 in zip(ctx["trials"], ctx["n"], ctx["eps"]["reactive"]):
-        sched = LevelSchedule(np.asarray(ep0.t)[:k], alpha[start:start + k], lead)
-        start += k
-        ep, m = simulate_episode(ctx["bundle"], ctx["demos"], ctx["by_id"][tid], StrategyRun("replay", "schedule"),
-                                 {"schedule": sched}, beta=0.5, duration_s=30.0, seed=0, wearer=None,
-                                 mode_names=ctx["mode_names"])
-        ms.append(m)
-        eps.append(ep)
-        steps.append(np.asarray(ep.step_time, dtype=float))
-        secs.append(float(ep.t[-1] - ep.t[0]))
-    p = pool_metrics(ms, steps, secs)
-    saw = [m["saw_correlation"] for m in ms if m.get("saw_correlation") is not None]
-    e2, ef = _per_step(eps, ctx["n"])
-    return ({"replay_line_ratio": line_ratio(p["tracking_rmse_m"], p["voluntary_effort"], ctx["vol"], ctx["rea"]),
-             "replay_effort_vs_voluntary": p["voluntary_effort"] / ctx["vol"][0],
-             "replay_saw_correlation": float(np.mean(saw)) if saw else None,
-             "replay_limit_violations": int(p["limit_violations"])}, e2, ef)
-
-
 def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
     """The best schedule that saws among :data:`REPLAYABLE` levels, spliced and replayed in the closed loop."""
     from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front
@@ -163,92 +130,12 @@ def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
     if i is None:
         return out
     _, inv = np.unique(groups, return_inverse=True)
-    out.update(_replay_alpha(ctx, np.array(list(REPLAYABLE.values()))[front.found_assignment[inv, i]])[0])
+    out.update(replay_alpha(ctx, np.array(list(REPLAYABLE.values()))[front.found_assignment[inv, i]])[0])
     return out
 
 
-def _priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int) -> dict[str, Any]:
-    """Switch-priced schedules (:mod:`mpcshare.experiments.switch_priced`), replayed round by round: round 0
-    pays nothing for a switch (the splice); each later round prices the switches by the excess of every
-    earlier replay over its splice and searches again. Where a replay saws below the target (the reports
-    average the trials' correlations, the search pools them, and a switch moves the stroke), the next
-    round asks the search for that much more correlation."""
-    from mpcshare.experiments.splice_bound import group_sums
-    from mpcshare.experiments.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
-
-    idx = [LEVELS.index(name) for name in REPLAYABLE]
-    e2, ef = ctx["e2"][idx], ctx["ef"][idx]
-    st = [ctx["strokes"][i] for i in idx]
-    labels, inv = np.unique(groups, return_inverse=True)
-    first = np.concatenate([[True], labels[1:] // 10**7 != labels[:-1] // 10**7])
-    alphas = np.array(list(REPLAYABLE.values()))
-    prices, samples, out, target = SwitchPrices.zero(), [], [], MIN_CORRELATION
-    for r in range(rounds):
-        found = priced_search(e2, ef, groups, first, np.stack([s[0] for s in st]), np.stack([s[1] for s in st]),
-                              st[0][2], target, prices, ctx["vol"], ctx["rea"])
-        entry: dict[str, Any] = {"round": r, "search_correlation": target,
-                                 "prices_m2_steps": dict(zip(SWITCH_CLASSES, prices.error.tolist())),
-                                 "effort_prices_rad_steps": dict(zip(SWITCH_CLASSES, prices.effort.tolist()))}
-        if found is None:
-            out.append(entry)
-            break
-        per_step = found.assignment[inv]
-        figs, rep_e2, rep_ef = _replay_alpha(ctx, alphas[per_step])
-        cols = np.arange(per_step.size)
-        x_e2 = group_sums((rep_e2 - e2[per_step, cols])[None], groups)[1][0]
-        x_ef = group_sums((rep_ef - ef[per_step, cols])[None], groups)[1][0]
-        samples.append((found.assignment, first, x_e2, x_ef, np.zeros(labels.size)))
-        entry.update(predicted_line_ratio=found.line_ratio, predicted_effort_vs_voluntary=found.effort / ctx["vol"][0],
-                     switches=found.switches, wearer_share=float(np.mean(per_step == 0)), **figs)
-        out.append(entry)
-        prices = estimate_prices(samples)
-        saw = figs["replay_saw_correlation"]
-        if saw is not None and saw < MIN_CORRELATION:
-            target = min(1.0, target + (MIN_CORRELATION - saw) + 0.02)
-    done = [e for e in out if e.get("replay_line_ratio") is not None and e["replay_effort_vs_voluntary"] <= 0.75
-            and (e["replay_saw_correlation"] or 0.0) >= MIN_CORRELATION]
-    result = {"rounds": out, "tables": _table_rules(ctx, e2, ef, st, prices, target)}
-    if ctx.get("dump"):
-        st_arr = np.stack([np.stack([s[0] for s in st]), np.stack([s[1] for s in st])])
-        np.savez(ctx["dump"], e2=e2, ef=ef, stroke=st_arr, intent_power=st[0][2], groups=groups, first=first,
-                 mode=ctx["mode"], cutting=ctx["cutting"], vol=ctx["vol"], rea=ctx["rea"], dt=ctx["dt"],
-                 prices_error=prices.error, prices_effort=prices.effort, trial=ctx["trial"],
-                 schedules=np.stack([s_[0] for s_ in samples]) if samples else np.zeros((0, labels.size)))
-    result["best_replay_meeting_the_task"] = min((e["replay_line_ratio"] for e in done), default=None)
-    return result
-
-
-TIME_IN_MODE_S = (0.0, 0.5, 1.0, 2.0, 4.0)
-
-
-def _table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tuple], prices: Any,
-                 target: float) -> dict[str, Any]:
-    """Causal tables fitted in hindsight on the same steps, with the last round's switch prices
-    (:mod:`mpcshare.experiments.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
-    time in it; the same with the true task phase in place of the estimate (what a perfect mode filter adds)."""
-    from mpcshare.experiments.table_rule import fit_table, score_schedule, time_in_cell
-
-    dot, pw = np.stack([s[0] for s in st]), np.stack([s[1] for s in st])
-
-    def score(level: np.ndarray) -> Any:
-        return score_schedule(level, e2, ef, dot, pw, st[0][2], ctx["trial"], prices, ctx["vol"], ctx["rea"])
-
-    out: dict[str, Any] = {}
-    for name, cell in (("mode estimate", ctx["mode"]), ("true phase", ctx["labels"])):
-        cell = np.asarray(cell, dtype=int)
-        fit = fit_table(cell, time_in_cell(cell, ctx["trial"], ctx["dt"], TIME_IN_MODE_S), score, e2.shape[0],
-                        effort_cap=0.75 * ctx["vol"][0], min_correlation=target)
-        for key, table, sc in (("whole", fit.whole, fit.whole_score), ("x time in it", fit.table, fit.score)):
-            meets = sc.effort <= 0.75 * ctx["vol"][0] and sc.correlation >= MIN_CORRELATION
-            out[f"{name}, {key}"] = {"line_ratio": sc.line_ratio if meets else None,
-                                     "unconstrained_line_ratio": sc.line_ratio,
-                                     "effort_vs_voluntary": sc.effort / ctx["vol"][0], "correlation": sc.correlation,
-                                     "switches": sc.switches, "table": table.tolist()}
-    return out
-
-
-def run_world(world: str, replay: bool = False, priced: int = 0, bounds: bool = True,
-              dump: str | None = None, trial_set: str = "evaluation") -> dict[str, Any]:
+def run_world(world: str, replay: bool = False, n_rounds: int = 0, bounds: bool = True,
+              dump: str | None = None, trial_set: str = "evaluation", polish_budget: int = 0) -> dict[str, Any]:
     """The bounds of one world (module docstring)."""
     import torch
 
@@ -268,7 +155,7 @@ def run_world(world: str, replay: bool = False, priced: int = 0, bounds: bool = 
               else [int(t) for t in bundle.heldout_trials if int(t) not in chooses][:2])
     eps = {s: pooled_run(bundle, demos, trials, s, None, 30.0, None, 0, mode_names)[1] for s in LEVELS}
     n = [min(len(eps[s][i].t) for s in LEVELS) for i in range(len(trials))]
-    figs = [_per_step(eps[s], n) for s in LEVELS]
+    figs = [per_step(eps[s], n) for s in LEVELS]
     e2, ef = np.stack([f[0] for f in figs]), np.stack([f[1] for f in figs])
     vol = (float(ef[0].mean()), float(np.sqrt(e2[0].mean())))
     rea = (float(ef[1].mean()), float(np.sqrt(e2[1].mean())))
@@ -310,16 +197,16 @@ def run_world(world: str, replay: bool = False, priced: int = 0, bounds: bool = 
             if cutting is not None and gname != "0.1 s":
                 out["bounds"][f"{gname}, {lname}, saws by measure"] = _sawing_entry(
                     e2[:runs], ef[:runs], groups, strokes, vol, rea, cutting, since_cut)
-    if (replay or priced) and cutting is not None:
+    if (replay or n_rounds) and cutting is not None:
         ctx = {"e2": e2, "ef": ef, "strokes": strokes, "vol": vol, "rea": rea, "trials": trials, "n": n, "eps": eps,
                "bundle": bundle, "demos": demos, "by_id": by_id, "mode_names": mode_names, "mode": mode,
-               "cutting": cutting, "dt": dt, "trial": trial,
+               "levels": LEVELS, "cutting": cutting, "dt": dt, "trial": trial,
                "labels": np.concatenate([np.asarray(lab)[:k] for lab, k in zip(labels, n)]),
                "dump": (Path(dump) / f"{world.replace(':', '_')}.npz") if dump else None}
         if replay:
             out["replayed"] = {name: _replay(ctx, groupings[name]) for name in ("1 s", "3 s")}
-        if priced:
-            out["switch_priced"] = _priced(ctx, groupings["1 s"], priced)
+        if n_rounds:
+            out["switch_priced"] = priced(ctx, groupings["1 s"], n_rounds, polish_budget)
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -335,6 +222,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--priced", type=int, default=0, metavar="ROUNDS",
                    help="replay ROUNDS switch-priced 1 s schedules that saw, pricing the switches by the earlier "
                         "replays (about 2 min a round and world)")
+    p.add_argument("--polish", type=int, default=0, metavar="REPLAYS",
+                   help="with --priced: a local search in the closed loop around the best schedule, REPLAYS replays")
     p.add_argument("--dump", metavar="DIR", help="with --priced: save each world's per-step figures to DIR/<world>.npz")
     p.add_argument("--trial-set", choices=["evaluation", "choice"], default="evaluation",
                    help="which 2 held-out trials: those bench_family evaluates on, or the rule choice's (another draw)")
@@ -344,15 +233,17 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     results = []
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(run_world, w, a.replay, a.priced, not a.no_bounds, a.dump, a.trial_set) for w in worlds]
+        futures = [pool.submit(run_world, w, a.replay, a.priced, not a.no_bounds, a.dump, a.trial_set,
+                               a.polish) for w in worlds]
         for fut in as_completed(futures):
             results.append(fut.result())
             print(json.dumps(results[-1], default=float), flush=True)
     results.sort(key=lambda r: worlds.index(r["world"]))
     keys = sorted({k for r in results for k in r["bounds"]})
-    priced = {r["world"]: {"best replay": r["switch_priced"]["best_replay_meeting_the_task"],
-                           **{k: v["line_ratio"] for k, v in r["switch_priced"]["tables"].items()}}
-              for r in results if "switch_priced" in r}
+    by_world = {r["world"]: {"best replay": r["switch_priced"]["best_replay_meeting_the_task"],
+                             "polished": r["switch_priced"].get("polished", {}).get("replay_line_ratio"),
+                             **{k: v["line_ratio"] for k, v in r["switch_priced"]["tables"].items()}}
+                for r in results if "switch_priced" in r}
     summary = {}
     for k in keys:
         vals = [r["bounds"][k]["line_ratio"] for r in results if k in r["bounds"]]
@@ -363,7 +254,7 @@ def main(argv: list[str] | None = None) -> int:
         found = [r["bounds"][k].get("found_line_ratio") for r in results if k in r["bounds"]]
         if any(f is not None for f in found):
             summary[k]["found_at_most_0.9"] = sum(f is not None and f <= 0.9 for f in found)
-    print(json.dumps({"summary": summary, "switch_priced_best_replay": priced, "worlds": [r["world"] for r in results],
+    print(json.dumps({"summary": summary, "switch_priced": by_world, "worlds": [r["world"] for r in results],
                       "seconds": time.perf_counter() - t0}, indent=1, default=float))
     return 0
 
