@@ -103,9 +103,9 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
     result = {"rounds": out, "tables": table_rules(ctx, e2, ef, st, prices, target)}
     if ctx.get("dump"):
         st_arr = np.stack([np.stack([s[0] for s in st]), np.stack([s[1] for s in st])])
-        np.savez(ctx["dump"], e2=e2, ef=ef, stroke=st_arr, intent_power=st[0][2], groups=groups, first=first,
-                 mode=ctx["mode"], cutting=ctx["cutting"], vol=ctx["vol"], rea=ctx["rea"], dt=ctx["dt"],
-                 prices_error=prices.error, prices_effort=prices.effort, trial=ctx["trial"],
+        np.savez(ctx["dump"], labels=ctx["labels"], e2=e2, ef=ef, stroke=st_arr, intent_power=st[0][2],
+                 groups=groups, first=first, mode=ctx["mode"], cutting=ctx["cutting"], vol=ctx["vol"],
+                 rea=ctx["rea"], dt=ctx["dt"], prices_error=prices.error, prices_effort=prices.effort, trial=ctx["trial"],
                  schedules=np.stack([s_[0] for s_ in samples]) if samples else np.zeros((0, labels.size)))
     result["best_replay_meeting_the_task"] = min((e["replay_line_ratio"] for e in done), default=None)
     replayed = [(objective(e), e["round"]) for e in out if e.get("replay_line_ratio") is not None]
@@ -171,13 +171,15 @@ def polish(ctx: dict[str, Any], groups: np.ndarray, start: np.ndarray, budget: i
 
 
 TIME_IN_MODE_S = (0.0, 0.5, 1.0, 2.0, 4.0)  # the bins of the time in a mode [s]
+ANTICIPATION_S = 0.5  # issue 28's anticipating hand-over: the wearer leads from 0.5 s before the stroke mode
 
 
 def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tuple], prices: Any,
                  target: float) -> dict[str, Any]:
     """Causal tables fitted in hindsight on the same steps, with the last round's switch prices
     (:mod:`mpcshare.experiments.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
-    time in it; the same with the true task phase in place of the estimate (what a perfect mode filter adds)."""
+    time in it; the same with the true task phase in place of the estimate (what a perfect mode filter adds), and
+    with the true phase :data:`ANTICIPATION_S` ahead (what a filter that foresaw each phase change could add)."""
     from mpcshare.experiments.table_rule import fit_table, score_schedule, time_in_cell
 
     dot, pw = np.stack([s[0] for s in st]), np.stack([s[1] for s in st])
@@ -185,8 +187,12 @@ def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tu
     def score(level: np.ndarray) -> Any:
         return score_schedule(level, e2, ef, dot, pw, st[0][2], ctx["trial"], prices, ctx["vol"], ctx["rea"])
 
+    labels, trial = np.asarray(ctx["labels"]), np.asarray(ctx["trial"])
+    last = np.array([np.flatnonzero(trial == t).max() for t in trial])  # per step the last step of its trial
+    ahead = labels[np.minimum(np.arange(labels.size) + max(1, round(ANTICIPATION_S / ctx["dt"])), last)]
     out: dict[str, Any] = {}
-    for name, cell in (("mode estimate", ctx["mode"]), ("true phase", ctx["labels"])):
+    for name, cell in (("mode estimate", ctx["mode"]), ("true phase", labels),
+                       (f"true phase {ANTICIPATION_S:g} s ahead", ahead)):
         cell = np.asarray(cell, dtype=int)
         fit = fit_table(cell, time_in_cell(cell, ctx["trial"], ctx["dt"], TIME_IN_MODE_S), score, e2.shape[0],
                         effort_cap=0.75 * ctx["vol"][0], min_correlation=target)
