@@ -105,7 +105,8 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
         st_arr = np.stack([np.stack([s[0] for s in st]), np.stack([s[1] for s in st])])
         np.savez(ctx["dump"], labels=ctx["labels"], e2=e2, ef=ef, stroke=st_arr, intent_power=st[0][2],
                  groups=groups, first=first, mode=ctx["mode"], cutting=ctx["cutting"], vol=ctx["vol"],
-                 rea=ctx["rea"], dt=ctx["dt"], prices_error=prices.error, prices_effort=prices.effort, trial=ctx["trial"],
+                 rea=ctx["rea"], dt=ctx["dt"], prices_error=prices.error, prices_effort=prices.effort,
+                 trial=ctx["trial"],
                  schedules=np.stack([s_[0] for s_ in samples]) if samples else np.zeros((0, labels.size)))
     result["best_replay_meeting_the_task"] = min((e["replay_line_ratio"] for e in done), default=None)
     replayed = [(objective(e), e["round"]) for e in out if e.get("replay_line_ratio") is not None]
