@@ -64,7 +64,8 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
     pays nothing for a switch (the splice); each later round prices the switches by the excess of every
     earlier replay over its splice and searches again. Where a replay saws below the target (the reports
     average the trials' correlations, the search pools them, and a switch moves the stroke), the next
-    round asks the search for that much more correlation. With ``polish_budget`` > 0, :func:`polish` then
+    round asks the search for that much more correlation; where it costs more than the effort cap, for that
+    much less effort. With ``polish_budget`` > 0, :func:`polish` then
     searches around the best schedule replayed."""
     from mpcshare.experiments.splice_bound import group_sums
     from mpcshare.experiments.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
@@ -75,11 +76,11 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
     labels, inv = np.unique(groups, return_inverse=True)
     first = np.concatenate([[True], labels[1:] // 10**7 != labels[:-1] // 10**7])
     alphas = np.array(list(REPLAYABLE.values()))
-    prices, samples, out, target = SwitchPrices.zero(), [], [], MIN_CORRELATION
+    prices, samples, out, target, cap = SwitchPrices.zero(), [], [], MIN_CORRELATION, EFFORT_CAP
     for r in range(rounds):
         found = priced_search(e2, ef, groups, first, np.stack([s[0] for s in st]), np.stack([s[1] for s in st]),
-                              st[0][2], target, prices, ctx["vol"], ctx["rea"])
-        entry: dict[str, Any] = {"round": r, "search_correlation": target,
+                              st[0][2], target, prices, ctx["vol"], ctx["rea"], max_effort=cap)
+        entry: dict[str, Any] = {"round": r, "search_correlation": target, "search_effort_cap": cap,
                                  "prices_m2_steps": dict(zip(SWITCH_CLASSES, prices.error.tolist())),
                                  "effort_prices_rad_steps": dict(zip(SWITCH_CLASSES, prices.effort.tolist()))}
         if found is None:
@@ -98,6 +99,8 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
         saw = figs["replay_saw_correlation"]
         if saw is not None and saw < MIN_CORRELATION:
             target = min(1.0, target + (MIN_CORRELATION - saw) + 0.02)
+        if figs["replay_effort_vs_voluntary"] > EFFORT_CAP:
+            cap = max(0.05, cap - (figs["replay_effort_vs_voluntary"] - EFFORT_CAP) - 0.01)
     done = [e for e in out if e.get("replay_line_ratio") is not None and e["replay_effort_vs_voluntary"] <= 0.75
             and (e["replay_saw_correlation"] or 0.0) >= MIN_CORRELATION]
     result = {"rounds": out, "tables": table_rules(ctx, e2, ef, st, prices, target)}
