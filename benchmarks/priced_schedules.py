@@ -179,11 +179,13 @@ ANTICIPATION_S = 0.5  # issue 28's anticipating hand-over: the wearer leads from
 
 
 def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tuple], prices: Any,
-                 target: float) -> dict[str, Any]:
+                 target: float, replay_tables: bool = True) -> dict[str, Any]:
     """Causal tables fitted in hindsight on the same steps, with the last round's switch prices
     (:mod:`mpcshare.experiments.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
     time in it; the same with the true task phase in place of the estimate (what a perfect mode filter adds), and
-    with the true phase :data:`ANTICIPATION_S` ahead (what a filter that foresaw each phase change could add)."""
+    with the true phase :data:`ANTICIPATION_S` ahead (what a filter that foresaw each phase change could add).
+    Each fitted table's schedule is then replayed in the closed loop (the priced splice only estimates what its
+    switches cost)."""
     from mpcshare.experiments.table_rule import fit_table, score_schedule, time_in_cell
 
     dot, pw = np.stack([s[0] for s in st]), np.stack([s[1] for s in st])
@@ -198,7 +200,8 @@ def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tu
     for name, cell in (("mode estimate", ctx["mode"]), ("true phase", labels),
                        (f"true phase {ANTICIPATION_S:g} s ahead", ahead)):
         cell = np.asarray(cell, dtype=int)
-        fit = fit_table(cell, time_in_cell(cell, ctx["trial"], ctx["dt"], TIME_IN_MODE_S), score, e2.shape[0],
+        bins = time_in_cell(cell, ctx["trial"], ctx["dt"], TIME_IN_MODE_S)
+        fit = fit_table(cell, bins, score, e2.shape[0],
                         effort_cap=0.75 * ctx["vol"][0], min_correlation=target)
         for key, table, sc in (("whole", fit.whole, fit.whole_score), ("x time in it", fit.table, fit.score)):
             meets = sc.effort <= 0.75 * ctx["vol"][0] and sc.correlation >= MIN_CORRELATION
@@ -206,6 +209,9 @@ def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tu
                                      "unconstrained_line_ratio": sc.line_ratio,
                                      "effort_vs_voluntary": sc.effort / ctx["vol"][0], "correlation": sc.correlation,
                                      "switches": sc.switches, "table": table.tolist()}
+            if replay_tables:  # the table's schedule on these steps, run: its figures with the switches' true cost
+                figs = replay_alpha(ctx, np.array(list(REPLAYABLE.values()))[table[cell, bins]])[0]
+                out[f"{name}, {key}"].update(figs, replay_meets_the_task=objective(figs) < 10.0)
     return out
 
 
