@@ -135,7 +135,8 @@ def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
 
 
 def run_world(world: str, replay: bool = False, n_rounds: int = 0, bounds: bool = True,
-              dump: str | None = None, trial_set: str = "evaluation", polish_budget: int = 0) -> dict[str, Any]:
+              dump: str | None = None, trial_set: str = "evaluation", polish_budget: int = 0,
+              polish_tables: int = 0) -> dict[str, Any]:
     """The bounds of one world (module docstring)."""
     import torch
 
@@ -200,7 +201,8 @@ def run_world(world: str, replay: bool = False, n_rounds: int = 0, bounds: bool 
     if (replay or n_rounds) and cutting is not None:
         ctx = {"e2": e2, "ef": ef, "strokes": strokes, "vol": vol, "rea": rea, "trials": trials, "n": n, "eps": eps,
                "bundle": bundle, "demos": demos, "by_id": by_id, "mode_names": mode_names, "mode": mode,
-               "levels": LEVELS, "cutting": cutting, "dt": dt, "trial": trial,
+               "levels": LEVELS, "cutting": cutting, "polish_tables": polish_tables, "dt": dt,
+               "trial": trial,
                "labels": np.concatenate([np.asarray(lab)[:k] for lab, k in zip(labels, n)]),
                "dump": (Path(dump) / f"{world.replace(':', '_')}.npz") if dump else None}
         if replay:
@@ -224,6 +226,8 @@ def main(argv: list[str] | None = None) -> int:
                         "replays (about 2 min a round and world)")
     p.add_argument("--polish", type=int, default=0, metavar="REPLAYS",
                    help="with --priced: a local search in the closed loop around the best schedule, REPLAYS replays")
+    p.add_argument("--polish-tables", type=int, default=0, metavar="REPLAYS",
+                   help="with --priced: improve the mode estimate x time table in the closed loop, REPLAYS replays")
     p.add_argument("--dump", metavar="DIR", help="with --priced: save each world's per-step figures to DIR/<world>.npz")
     p.add_argument("--trial-set", choices=["evaluation", "choice"], default="evaluation",
                    help="which 2 held-out trials: those bench_family evaluates on, or the rule choice's (another draw)")
@@ -234,7 +238,7 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=multiprocessing.get_context("spawn")) as pool:
         futures = [pool.submit(run_world, w, a.replay, a.priced, not a.no_bounds, a.dump, a.trial_set,
-                               a.polish) for w in worlds]
+                               a.polish, a.polish_tables) for w in worlds]
         for fut in as_completed(futures):
             results.append(fut.result())
             print(json.dumps(results[-1], default=float), flush=True)
@@ -242,7 +246,8 @@ def main(argv: list[str] | None = None) -> int:
     keys = sorted({k for r in results for k in r["bounds"]})
     by_world = {r["world"]: {"best replay": r["switch_priced"]["best_replay_meeting_the_task"],
                              "polished": r["switch_priced"].get("polished", {}).get("replay_line_ratio"),
-                             **{k: v["line_ratio"] for k, v in r["switch_priced"]["tables"].items()}}
+                             **{k: v.get("line_ratio", v.get("replay_line_ratio"))
+                                for k, v in r["switch_priced"]["tables"].items()}}
                 for r in results if "switch_priced" in r}
     summary = {}
     for k in keys:
