@@ -50,7 +50,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from priced_schedules import MIN_CORRELATION, REPLAYABLE, per_step, priced, replay_alpha  # noqa: E402
+from priced_schedules import ALPHAS, MIN_CORRELATION, REPLAYABLE, per_step, priced, replay_alpha  # noqa: E402
 
 LEVELS = ("voluntary", "reactive", "mix25", "mix50", "mix75")
 SEGMENTS_S = (0.1, 1.0, 3.0)
@@ -130,7 +130,7 @@ def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
     if i is None:
         return out
     _, inv = np.unique(groups, return_inverse=True)
-    out.update(replay_alpha(ctx, np.array(list(REPLAYABLE.values()))[front.found_assignment[inv, i]])[0])
+    out.update(replay_alpha(ctx, ALPHAS[front.found_assignment[inv, i]])[0])
     return out
 
 

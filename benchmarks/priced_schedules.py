@@ -10,13 +10,14 @@ loop itself, each candidate replayed; :func:`table_rules` fits causal tables in 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 MIN_CORRELATION = 0.6  # issue 28: "saws while cutting (stroke-band correlation >= 0.6)"
 REPLAYABLE = {"voluntary": 0.0, "reactive": 1.0, "mix50": 0.5, "mix75": 0.75}  # the replay's α per level
 EFFORT_CAP = 0.75  # issue 28: the wearer's effort at most 0.75x doing it alone
+ALPHAS = np.array(list(REPLAYABLE.values()))  # α per replayable level, in REPLAYABLE's order
 
 
 def per_step(episodes: list[Any], n: list[int]) -> tuple[np.ndarray, np.ndarray]:
@@ -74,8 +75,7 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
     e2, ef = ctx["e2"][idx], ctx["ef"][idx]
     st = [ctx["strokes"][i] for i in idx]
     labels, inv = np.unique(groups, return_inverse=True)
-    first = np.concatenate([[True], labels[1:] // 10**7 != labels[:-1] // 10**7])
-    alphas = np.array(list(REPLAYABLE.values()))
+    first = _trial_starts(labels)
     prices, samples, out, target, cap = SwitchPrices.zero(), [], [], MIN_CORRELATION, EFFORT_CAP
     for r in range(rounds):
         found = priced_search(e2, ef, groups, first, np.stack([s[0] for s in st]), np.stack([s[1] for s in st]),
@@ -87,11 +87,11 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
             out.append(entry)
             break
         per_step = found.assignment[inv]
-        figs, rep_e2, rep_ef = replay_alpha(ctx, alphas[per_step])
+        figs, rep_e2, rep_ef = replay_alpha(ctx, ALPHAS[per_step])
         cols = np.arange(per_step.size)
         x_e2 = group_sums((rep_e2 - e2[per_step, cols])[None], groups)[1][0]
         x_ef = group_sums((rep_ef - ef[per_step, cols])[None], groups)[1][0]
-        samples.append((found.assignment, first, x_e2, x_ef, np.zeros(labels.size)))
+        samples.append((found.assignment, first, x_e2, x_ef))
         entry.update(predicted_line_ratio=found.line_ratio, predicted_effort_vs_voluntary=found.effort / ctx["vol"][0],
                      switches=found.switches, wearer_share=float(np.mean(per_step == 0)), **figs)
         out.append(entry)
@@ -147,31 +147,47 @@ def _moves(level: np.ndarray, first: np.ndarray, rng: np.random.Generator) -> li
     return merges + shifts
 
 
-def polish(ctx: dict[str, Any], groups: np.ndarray, start: np.ndarray, budget: int) -> dict[str, Any]:
-    """A local search in the closed loop around the level per group ``start``: the first move of
-    :func:`_moves` whose replay lowers :func:`objective` is taken, until no move does or ``budget`` replays
-    are spent. What it returns was replayed: a schedule that reaches it exists (knowing the future)."""
-    labels, inv = np.unique(groups, return_inverse=True)
-    first = np.concatenate([[True], labels[1:] // 10**7 != labels[:-1] // 10**7])
-    alphas = np.array(list(REPLAYABLE.values()))
-    rng = np.random.default_rng(0)
-    level = np.asarray(start, dtype=int).copy()
-    figs = replay_alpha(ctx, alphas[level[inv]])[0]
+def _trial_starts(labels: np.ndarray) -> np.ndarray:
+    """(G,) whether each sorted 1 s group label (trial·10⁷ + segment, as ``bench_splice_bound`` makes them)
+    begins a trial."""
+    return np.concatenate([[True], labels[1:] // 10**7 != labels[:-1] // 10**7])
+
+
+def _descend(ctx: dict[str, Any], start: np.ndarray, neighbours: Callable[[np.ndarray], list[np.ndarray]],
+             alpha: Callable[[np.ndarray], np.ndarray], budget: int) -> tuple[np.ndarray, dict[str, Any], int, int]:
+    """First-improvement local search in the closed loop: from ``start``, replay the candidates of
+    ``neighbours`` (α per step by ``alpha``) in their order and take the first whose replay lowers
+    :func:`objective`, until none does or ``budget`` replays are spent. (the point, its replay's figures,
+    replays used, moves taken)."""
+    point = np.asarray(start, dtype=int).copy()
+    figs = replay_alpha(ctx, alpha(point))[0]
     best, used, taken = objective(figs), 1, 0
     while used < budget:
-        for cand in _moves(level, first, rng):
+        for cand in neighbours(point):
             if used >= budget:
                 break
-            cand_figs = replay_alpha(ctx, alphas[cand[inv]])[0]
+            cand_figs = replay_alpha(ctx, alpha(cand))[0]
             used += 1
             if objective(cand_figs) < best - 1e-4:
-                level, figs, best, taken = cand, cand_figs, objective(cand_figs), taken + 1
+                point, figs, best, taken = cand, cand_figs, objective(cand_figs), taken + 1
                 break
         else:
             break
+    return point, figs, used, taken
+
+
+def polish(ctx: dict[str, Any], groups: np.ndarray, start: np.ndarray, budget: int) -> dict[str, Any]:
+    """A local search in the closed loop around the level per group ``start`` over the moves of
+    :func:`_moves` (:func:`_descend`). What it returns was replayed: a schedule that reaches it exists
+    (knowing the future)."""
+    labels, inv = np.unique(groups, return_inverse=True)
+    first = _trial_starts(labels)
+    rng = np.random.default_rng(0)
+    level, figs, used, taken = _descend(ctx, start, lambda lv: _moves(lv, first, rng), lambda lv: ALPHAS[lv[inv]],
+                                        budget)
     switches = int(np.sum((level[1:] != level[:-1]) & ~first[1:]))
     return {"replays": used, "moves_taken": taken, "switches": switches, **figs,
-            "meets_the_task": best < 10.0}
+            "meets_the_task": objective(figs) < 10.0}
 
 
 TIME_IN_MODE_S = (0.0, 0.5, 1.0, 2.0, 4.0)  # the bins of the time in a mode [s]
@@ -194,23 +210,24 @@ def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tu
         return score_schedule(level, e2, ef, dot, pw, st[0][2], ctx["trial"], prices, ctx["vol"], ctx["rea"])
 
     labels, trial = np.asarray(ctx["labels"]), np.asarray(ctx["trial"])
-    last = np.array([np.flatnonzero(trial == t).max() for t in trial])  # per step the last step of its trial
+    ends = {t: np.flatnonzero(trial == t).max() for t in np.unique(trial)}
+    last = np.array([ends[t] for t in trial])  # per step the last step of its trial
     ahead = labels[np.minimum(np.arange(labels.size) + max(1, round(ANTICIPATION_S / ctx["dt"])), last)]
     out: dict[str, Any] = {}
     for name, cell in (("mode estimate", ctx["mode"]), ("true phase", labels),
                        (f"true phase {ANTICIPATION_S:g} s ahead", ahead)):
         cell = np.asarray(cell, dtype=int)
         bins = time_in_cell(cell, ctx["trial"], ctx["dt"], TIME_IN_MODE_S)
-        fit = fit_table(cell, bins, score, e2.shape[0],
-                        effort_cap=0.75 * ctx["vol"][0], min_correlation=target)
+        fit = fit_table(cell, bins, score, e2.shape[0], effort_cap=EFFORT_CAP * ctx["vol"][0],
+                        min_correlation=target)
         for key, table, sc in (("whole", fit.whole, fit.whole_score), ("x time in it", fit.table, fit.score)):
-            meets = sc.effort <= 0.75 * ctx["vol"][0] and sc.correlation >= MIN_CORRELATION
+            meets = sc.effort <= EFFORT_CAP * ctx["vol"][0] and sc.correlation >= MIN_CORRELATION
             out[f"{name}, {key}"] = {"line_ratio": sc.line_ratio if meets else None,
                                      "unconstrained_line_ratio": sc.line_ratio,
                                      "effort_vs_voluntary": sc.effort / ctx["vol"][0], "correlation": sc.correlation,
                                      "switches": sc.switches, "table": table.tolist()}
             if replay_tables:  # the table's schedule on these steps, run: its figures with the switches' true cost
-                figs = replay_alpha(ctx, np.array(list(REPLAYABLE.values()))[table[cell, bins]])[0]
+                figs = replay_alpha(ctx, ALPHAS[table[cell, bins]])[0]
                 out[f"{name}, {key}"].update(figs, replay_meets_the_task=objective(figs) < 10.0)
         if name == "mode estimate" and ctx.get("polish_tables", 0) > 0:
             out["mode estimate, x time in it, polished"] = polish_table(ctx, cell, bins, fit.table,
@@ -218,32 +235,24 @@ def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tu
     return out
 
 
-
-
 def polish_table(ctx: dict[str, Any], cell: np.ndarray, bins: np.ndarray, table: np.ndarray,
                  budget: int) -> dict[str, Any]:
-    """A causal table improved in the closed loop: single-cell changes in random order, each replayed, the first
-    that lowers :func:`objective` taken, until none does or ``budget`` replays are spent. Still fitted on the
-    steps it is scored on: what the best such table could reach here, not what one would reach elsewhere."""
-    alphas = np.array(list(REPLAYABLE.values()))
+    """A causal table improved in the closed loop: single-cell changes in random order (:func:`_descend`). Still
+    fitted on the steps it is scored on: what the best such table could reach here, not what one would reach
+    elsewhere."""
     rng = np.random.default_rng(0)
-    table = np.asarray(table, dtype=int).copy()
-    figs = replay_alpha(ctx, alphas[table[cell, bins]])[0]
-    best, used, taken = objective(figs), 1, 0
     cells = sorted({(int(a), int(b)) for a, b in zip(cell, bins)})
-    while used < budget:
-        moves = [(a, b, lv) for a, b in cells for lv in range(alphas.size) if lv != table[a, b]]
+
+    def changes(t: np.ndarray) -> list[np.ndarray]:
+        moves = [(a, b, lv) for a, b in cells for lv in range(ALPHAS.size) if lv != t[a, b]]
         rng.shuffle(moves)
+        out = []
         for a, b, lv in moves:
-            if used >= budget:
-                break
-            cand = table.copy()
+            cand = t.copy()
             cand[a, b] = lv
-            cand_figs = replay_alpha(ctx, alphas[cand[cell, bins]])[0]
-            used += 1
-            if objective(cand_figs) < best - 1e-4:
-                table, figs, best, taken = cand, cand_figs, objective(cand_figs), taken + 1
-                break
-        else:
-            break
-    return {"replays": used, "moves_taken": taken, "table": table.tolist(), **figs, "meets_the_task": best < 10.0}
+            out.append(cand)
+        return out
+
+    table, figs, used, taken = _descend(ctx, table, changes, lambda t: ALPHAS[t[cell, bins]], budget)
+    return {"replays": used, "moves_taken": taken, "table": table.tolist(), **figs,
+            "meets_the_task": objective(figs) < 10.0}

@@ -66,18 +66,18 @@ class SwitchPrices:
         return p_e, p_t
 
 
-def estimate_prices(samples: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+def estimate_prices(samples: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
                     wearer: int = 0) -> SwitchPrices:
     """Switch prices from replays of level schedules.
 
     samples: per replay (level (G,) per group in time order, first (G,) whether the group begins a trial,
     excess_e2 (G,) the replay's summed squared error over each group minus the constant-level run's at
-    that level [m²·steps], excess_effort (G,) likewise [rad·steps], unused (G,) ignored). A switch at the
+    that level [m²·steps], excess_effort (G,) likewise [rad·steps]). A switch at the
     start of group g is charged the excess of g and, where g+1 holds no switch, of g+1 (the pick-up lasts
     about a second); each class's price is the mean over its switches, and a class never seen takes the
     mean over all switches (0 where there were none). An effort price below 0 is taken as 0."""
     per_class: list[list[tuple[float, float]]] = [[], [], []]
-    for level, first, x_e2, x_ef, _ in samples:
+    for level, first, x_e2, x_ef in samples:
         level, first = np.asarray(level, dtype=int), np.asarray(first, dtype=bool)
         x_e2, x_ef = np.asarray(x_e2, dtype=float), np.asarray(x_ef, dtype=float)
         if not (level.shape == first.shape == x_e2.shape == x_ef.shape) or level.ndim != 1:

@@ -117,16 +117,15 @@ def test_prices_are_estimated_from_the_excess_around_each_switch():
             x_e2[g] += 0.6 * truth[c]
             x_e2[g + 1] += 0.4 * truth[c]
             x_ef[g] += 0.1 * (c + 1)
-    p = estimate_prices([(level, first, x_e2, x_ef, np.zeros(10))])
+    p = estimate_prices([(level, first, x_e2, x_ef)])
     assert list(p.counts) == [1, 1, 1]  # 1→0 at 2; 0→2 at 5; 2→1 at 7 (robot levels); 1→0 at 8 begins a trial
     # each takes its own group and the next, except 2→1 at 7: group 8 begins a trial, so 7 alone
     assert p.error == pytest.approx([5.0, 3.0, 0.6 * 1.0])
     assert p.effort == pytest.approx([0.1, 0.2, 0.3])
-    none = estimate_prices([(np.zeros(4, int), np.array([True, False, False, False]), np.ones(4), np.ones(4),
-                             np.zeros(4))])
+    none = estimate_prices([(np.zeros(4, int), np.array([True, False, False, False]), np.ones(4), np.ones(4))])
     assert list(none.error) == [0.0, 0.0, 0.0]
     with pytest.raises(ValueError, match="equal-length"):
-        estimate_prices([(level, first[:3], x_e2, x_ef, x_e2)])
+        estimate_prices([(level, first[:3], x_e2, x_ef)])
 
 
 def test_bad_input_is_named():
