@@ -60,10 +60,11 @@ TUNABLE: tuple[str, ...] = tuple(n for n, s in REGISTRY.items() if s.tunable and
 #: The realisable strategies (a user's choices): the Pareto set is drawn from them.
 REALISABLE: tuple[str, ...] = user_strategies()
 #: Plot colour per run name (strategies: the registry's; the extra runs: their own).
+#: One colour per run, no near-twins among :data:`RUN_NAMES` (tests check their distance in CIELAB).
 RUN_COLORS: dict[str, str] = {**{n: s.color for n, s in REGISTRY.items()},
-                              f"{DEFAULT_STRATEGY}_mpc": REGISTRY[DEFAULT_STRATEGY].color, "oracle_preview": "C4",
-                              "random_handover": REGISTRY["schedule"].color, "oracle_handover": "C5",
-                              "oracle_line": "C9"}
+                              f"{DEFAULT_STRATEGY}_mpc": "#0a2a6b", "oracle_preview": "#9467bd",
+                              "random_handover": REGISTRY["schedule"].color, "oracle_handover": "#000000",
+                              "oracle_line": "#e7298a"}
 
 
 def strategy_code(name: str) -> int:

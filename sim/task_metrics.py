@@ -29,9 +29,9 @@ from typing import Any
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-__all__ = ["PICKUP_WINDOW_S", "SAWING_MIN_AMPLITUDE", "SAWING_MIN_CORRELATION", "STROKE_BAND_HZ", "TASK_KEYS",
-           "SawingFidelity", "bandpass", "episode_task_metrics", "pickup_error", "rms_by_mode",
-           "sawing_fidelity", "time_lag", "wearer_share_by_mode"]
+__all__ = ["PICKUP_WINDOW_S", "SAWING_CRITERION", "SAWING_MIN_AMPLITUDE", "SAWING_MIN_CORRELATION", "STROKE_BAND_HZ",
+           "TASK_KEYS", "SawingFidelity", "bandpass", "episode_task_metrics", "pickup_error", "rms_by_mode",
+           "sawing_fidelity", "saws", "time_lag", "wearer_share_by_mode"]
 
 STROKE_BAND_HZ = (0.8, 3.0)  # [Hz] the band of the sawing strokes (2 Hz strokes in the demonstrations)
 
@@ -148,11 +148,24 @@ def rms_by_mode(tip: np.ndarray, intent: np.ndarray, modes: np.ndarray,
     return out
 
 
-#: keys of :func:`episode_task_metrics` (``comparison.json`` per strategy)
 #: the stroke counts as sawing when, while cutting, its band correlates with the intended stroke at least
-#: this much and reaches at least this share of its amplitude (docs/design.md, "the task")
+#: this much and reaches at least this share of its amplitude (docs/design.md, "the task"): :func:`saws`
 SAWING_MIN_CORRELATION = 0.7
 SAWING_MIN_AMPLITUDE = 0.6
+#: the sawing criterion in words, for every report and document that states it
+SAWING_CRITERION = (f"a stroke correlation of at least {SAWING_MIN_CORRELATION:g} with the intended stroke and at "
+                    f"least {SAWING_MIN_AMPLITUDE:g} of its amplitude, while cutting")
+
+
+def saws(correlation: float | None, amplitude_ratio: float | None) -> bool:
+    """The task's one sawing criterion (:data:`SAWING_CRITERION`): correlation ≥ :data:`SAWING_MIN_CORRELATION`
+    and amplitude ratio ≥ :data:`SAWING_MIN_AMPLITUDE`; False when either is None (no cutting)."""
+    if correlation is None or amplitude_ratio is None:
+        return False
+    return correlation >= SAWING_MIN_CORRELATION and amplitude_ratio >= SAWING_MIN_AMPLITUDE
+
+
+#: keys of :func:`episode_task_metrics` (``comparison.json`` per strategy)
 TASK_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "strokes_intended",
              "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps",
              "pickups", "pickup_rms_m", "pickup_s", "pickup_error_share")

@@ -16,10 +16,11 @@ from matplotlib.figure import Figure
 
 from learning.atomic import atomic_open, write_json
 from mpcshare.experiments import Comparison
-from mpcshare.reports.headline import SAWING_TARGET, headline_lines, line_ratio
+from mpcshare.reports.headline import headline_lines, lag_words, trials_words
 from mpcshare.reports.style import strategy_colour, strategy_ticks
+from sim.task_metrics import SAWING_CRITERION, saws
 
-__all__ = ["SAWING_TARGET", "comparison_findings", "comparison_markdown", "line_sentence", "plot_effort_error",
+__all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "plot_effort_error",
            "write_comparison"]
 
 _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
@@ -122,22 +123,21 @@ def line_sentence(strategies: dict[str, dict[str, Any]]) -> str | None:
     return (f"Line: tracking RMS over the straight line from `reactive` to `voluntary` at the same effort (below 1: "
             f"better than mixing the two parties): {parts}; "
             + (f"below the line: {', '.join(f'`{k}`' for k in better)}." if better else
-               "NONE is below the line: no run beats mixing the wearer and the robot.") + alone)
+               "NONE is below the straight line between the wearer and the robot.") + alone)
 
 
 def task_sentence(name: str, m: dict[str, Any]) -> str:
     """Did the knife do the task under ``name``: its lag, and whether it sawed while cutting."""
     amp, corr = m.get("saw_amplitude_ratio"), m.get("saw_correlation")
     lag = m.get("lag_s")
-    lag_text = "" if lag is None else f"the knife follows the wearer's intent {lag * 1e3:.0f} ms late; "
+    lag_text = "" if lag is None else f"the knife's timing against the wearer's intent: {lag_words(lag)}; "
     if amp is None or corr is None:
         return f"Task under `{name}`: {lag_text}no cutting in these trials."
-    cut = amp >= SAWING_TARGET[0] and corr >= SAWING_TARGET[1]
     share = m.get("stroke_share")
     strokes = "" if share is None else f", {share:.0%} of the intended strokes executed"
     return (f"Task under `{name}`: {lag_text}while cutting, the stroke's amplitude is {amp:.2f} of the intended "
             f"and its correlation with it {corr:.2f}{strokes}: the knife "
-            f"{'CUT' if cut else 'did NOT saw'} (sawing needs ≥ {SAWING_TARGET[0]:g} and ≥ {SAWING_TARGET[1]:g}).")
+            f"{'SAWED' if saws(corr, amp) else 'did NOT saw'} (sawing needs {SAWING_CRITERION}).")
 
 
 def _table(strategies: dict[str, dict[str, Any]], columns: tuple) -> list[str]:
@@ -175,7 +175,8 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
     span = "whole trials" if comp.duration_s is None else f"the first {comp.duration_s:g} s of each"
     who = (comp.wearer or {}).get("preset") or ("custom settings" if comp.wearer else None)
     wearer = f" Simulated wearer: {who}." if who else ""
-    lines = [*[f"- {h}" for h in headline_lines(comp.strategies)], ""]
+    lines = [*[f"- {h}" for h in headline_lines(comp.strategies, trials=trials_words(comp.trials, comp.duration_s))],
+             ""]
     if effort_plot:
         lines += [f"![effort against error, with the line from the wearer alone to the robot alone]({effort_plot})",
                   ""]
@@ -226,8 +227,9 @@ def _plot(comp: Comparison, path: Path) -> None:
 
 def plot_effort_error(strategies: dict[str, dict[str, Any]], path: str | Path) -> Path:
     """Each run at (effort, tracking RMS), with the straight line from the wearer alone to the robot alone:
-    a run below the line beats mixing the two at its effort (its line ratio, in its label, is below 1)."""
-    fig = Figure(figsize=(7.5, 4.6), constrained_layout=True)
+    a run beats another when it lies lower and to the left of it. Sized to sit under the report's
+    headline lines within one laptop screen (990 × 385 px at 110 dpi), the legend beside the axes."""
+    fig = Figure(figsize=(9.0, 3.5), constrained_layout=True)
     ax = fig.subplots()
     pts = {n: (m["voluntary_effort"], m["tracking_rmse_m"] * 1e3) for n, m in strategies.items()
            if m.get("voluntary_effort") is not None and m.get("tracking_rmse_m") is not None
@@ -235,15 +237,15 @@ def plot_effort_error(strategies: dict[str, dict[str, Any]], path: str | Path) -
     if "voluntary" in pts and "reactive" in pts:
         (x0, y0), (x1, y1) = pts["reactive"], pts["voluntary"]
         ax.plot([x0, x1], [y0, y1], "--", color="0.5", lw=1.2, zorder=1,
-                label="mixing the two: robot alone → wearer alone")
+                label="robot alone → wearer alone")
     for n, (x, y) in pts.items():
-        ratio = line_ratio(strategies, n) if n not in ("voluntary", "reactive") else None
         ax.scatter([x], [y], s=46, color=strategy_colour(n), edgecolor="k", linewidth=0.6, zorder=3,
-                   label=n.replace("_", " ") + ("" if ratio is None else f" (line ratio {ratio:.2f})"))
+                   label=n.replace("_", " "))
     ax.set_xlabel("the wearer's effort: mean ‖θ‖ [rad]")
     ax.set_ylabel("tracking RMS [mm]")
     ax.set_title("effort against error: lower left is better", fontsize=9)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False,
+              ncols=2 if len(pts) > 9 else 1)
     path = Path(path)
     fig.savefig(path, dpi=110)
     return path

@@ -18,7 +18,7 @@ from typing import Any
 from learning.atomic import atomic_open, write_json
 from mpcshare.reports.claims import claim_sentences, mixture_advice
 from mpcshare.reports.comparison import comparison_findings
-from mpcshare.reports.headline import headline_lines
+from mpcshare.reports.headline import headline_lines, trials_words
 from mpcshare.reports.html import write_html_report
 from mpcshare.reports.mode_sources import mode_source_sentence
 from mpcshare.reports.training import skill_lines
@@ -96,10 +96,13 @@ def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison:
     return out
 
 
-def demo_headline(comparison: dict[str, Any] | None, out: Path) -> list[str]:
-    """The report's first lines: the four answers (:mod:`mpcshare.reports.headline`), then the plot with the line."""
+def demo_headline(comparison: dict[str, Any] | None, out: Path, rule_choice: dict[str, Any] | None = None) -> list[str]:
+    """The report's first lines: the four answers (:mod:`mpcshare.reports.headline`; ``rule_choice``: the
+    bundle's closed-loop choice of its hand-over rule, for the task line), then the effort–error plot."""
     lines = ["## What the robot did", ""]
-    answers = headline_lines(comparison["strategies"]) if comparison else []
+    answers = headline_lines(comparison["strategies"], rule_choice=rule_choice,
+                             trials=trials_words(comparison["trials"], comparison.get("duration_s"))) \
+        if comparison else []
     if not answers:
         return lines + ["The closed loop was not run, so there is nothing to say yet about the task, sharing, "
                         "effort or keep-out.", ""]
@@ -123,7 +126,7 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
     """Write ``report.md``, ``report.html`` and ``report.json`` into ``out``; returns links not inlined in the HTML."""
     out = Path(out)
     parts = ["# mpcshare demo: from demonstrations to a shared controller", "",
-             *demo_headline(comparison, out),
+             *demo_headline(comparison, out, training.get("rule_choice")),
              "## Statistics", "", *[f"- {s}" for s in demo_summary(analysis, training, comparison, mode_sources)], "",
              "Stages and their own files: `demos.npz` and `data_summary.*` (data), `analysis/` "
              "(predictability analysis), `model/` (the trained bundle), `sweep/` (the K trade-off), "

@@ -1,11 +1,15 @@
 """The four answers a person wants first, one line each with its figure and a word of verdict.
 
-1. **The task** — did the knife saw while cutting (stroke correlation and amplitude against
-   the intended stroke, :data:`SAWING_TARGET`)?
+1. **The task** — did the knife saw while cutting (the task's one criterion,
+   :data:`sim.task_metrics.SAWING_CRITERION`)? Where the bundle's hand-over rule was chosen
+   in the closed loop (``rule_choice``) and the choice's sawing verdict differs from this one,
+   the line says why (the choice's trials and span against the evaluation's).
 2. **Sharing** — did the shared strategy track the wearer's intent better than the wearer
-   alone (``voluntary``), the robot alone (``reactive``) and mixing the two (the *line ratio*:
-   tracking RMS over the straight ``reactive``–``voluntary`` line at the same effort, below 1
-   beats mixing)?
+   alone (``voluntary``), the robot alone (``reactive``) and mixing the two? Mixing is judged
+   against the constant mixtures that were run (``mix25``, ``mix50``, ``mix75``, ...): it beats
+   mixing only when no mixture tracks better at equal or lower effort, and a mixture that does is
+   named. Without mixture runs, the *line ratio* stands in (tracking RMS over the straight
+   ``reactive``–``voluntary`` line at the same effort, below 1 beats it).
 3. **Effort** — how much of the wearer's effort did it save (against ``voluntary``)?
 4. **Keep-out** — did the knife stay out of the wearer's body zones?
 
@@ -22,17 +26,19 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from mpcshare.control.strategies.mix import SPECS as _MIXES
 from mpcshare.line_ratio import add_line_ratios
-from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
+from sim.task_metrics import SAWING_CRITERION, saws
 
-__all__ = ["SAWING_TARGET", "SHARED_STRATEGIES", "Headline", "headline_lines", "headlines", "line_ratio",
-           "shared_strategy"]
+__all__ = ["MIX_RUNS", "SHARED_STRATEGIES", "Headline", "better_mixes", "choice_note",
+           "headline_lines", "headlines", "lag_words", "line_ratio", "shared_strategy", "trials_words"]
 
-SAWING_TARGET = (SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION)  # amplitude ratio and correlation that count as sawing
 EFFORT_TARGET = 0.75  # the shared strategy's effort, at most this share of the wearer's alone (docs/design.md)
 #: which run is "sharing" in the headline: the first of these present
 SHARED_STRATEGIES = ("gate", "paper_gate", "blend")
-_TIE = 0.02  # relative difference in tracking RMS read as a tie
+_TIE = 0.02  # relative difference in tracking RMS (and effort) read as a tie
+#: the constant mixtures of the two parties (``mpcshare.control.strategies.mix``): what "mixing" is measured by
+MIX_RUNS: tuple[str, ...] = tuple(spec.name for spec in _MIXES)
 
 
 @dataclass(frozen=True)
@@ -76,16 +82,50 @@ def line_ratio(strategies: dict[str, dict[str, Any]], name: str) -> float | None
     return ratios[name]["line_ratio"]
 
 
-def _task(name: str, m: dict[str, Any]) -> Headline:
+def lag_words(lag_s: float) -> str:
+    """A lag in words: ``"60 ms late"`` (positive: the knife follows the intent), ``"20 ms ahead"``, ``"on time"``."""
+    ms = round(lag_s * 1e3)
+    return "on time" if ms == 0 else f"{abs(ms)} ms {'late' if ms > 0 else 'ahead'}"
+
+
+def _task(name: str, m: dict[str, Any], rule_choice: dict[str, Any] | None, trials: str) -> Headline:
     amp, corr, lag = m.get("saw_amplitude_ratio"), m.get("saw_correlation"), m.get("lag_s")
-    lag_text = f" The knife follows the wearer's intent {lag * 1e3:.0f} ms late." if _finite(lag) else ""
+    lag_text = f" The knife's timing against the wearer's intent: {lag_words(lag)}." if _finite(lag) else ""
     if not (_finite(amp) and _finite(corr)):
         return Headline("The task", "not shown", f"no cutting in these trials, so no sawing to judge.{lag_text}")
-    cut = amp >= SAWING_TARGET[0] and corr >= SAWING_TARGET[1]
-    return Headline("The task", "yes, it cut" if cut else "NO, it did not saw",
-                    f"while cutting, the knife's stroke under `{name}` correlates {corr:.2f} with the intended "
-                    f"stroke at {amp:.2f} of its amplitude (sawing needs a correlation of at least "
-                    f"{SAWING_TARGET[1]:g} and an amplitude of at least {SAWING_TARGET[0]:g}).{lag_text}")
+    cut = saws(corr, amp)
+    note = choice_note(rule_choice, cut, trials)
+    return Headline("The task", "yes, it sawed" if cut else "NO, it did not saw",
+                    f"under `{name}` the stroke correlates {corr:.2f} with the intended one at {amp:.2f} of its "
+                    f"amplitude (sawing needs {SAWING_CRITERION}).{lag_text}"
+                    + (f" {note}" if note else ""))
+
+
+def chosen_row(rule_choice: dict[str, Any]) -> dict[str, Any] | None:
+    """The candidate ``rule_choice`` (``bundle.metrics["rule_choice"]``) chose: the one with its settings."""
+    return next((r for r in rule_choice.get("candidates", ()) if r.get("settings") == rule_choice.get("settings")),
+                None)
+
+
+def choice_note(rule_choice: dict[str, Any] | None, sawed: bool, trials: str) -> str:
+    """Why the hand-over rule's choice and this evaluation disagree on sawing ("" when they agree or
+    the choice is not recorded): the choice's figures on its trials and span against ``trials``
+    (the evaluation's, in words)."""
+    if not rule_choice:
+        return ""
+    row = chosen_row(rule_choice)
+    if row is None or row.get("saw_correlation") is None:
+        return ""
+    chose_sawing = saws(row.get("saw_correlation"), row.get("saw_amplitude_ratio"))
+    if chose_sawing == sawed:
+        return ""
+    span = "whole trials" if rule_choice.get("duration_s") is None else f"first {rule_choice['duration_s']:g} s"
+    there = (f"on trial(s) {', '.join(str(t) for t in rule_choice.get('trials', []))} ({span}) its stroke "
+             f"correlated {row['saw_correlation']:.2f} at {row['saw_amplitude_ratio']:.2f} of the amplitude")
+    return (f"Training chose this hand-over rule as one that saws because {there}; this evaluation runs {trials}, "
+            "and there it did not: the same rule, other stretches of the task." if chose_sawing else
+            f"Training chose this hand-over rule although it did not saw {there}; this evaluation runs {trials}, "
+            "where it did.")
 
 
 def _compare(mine: float, other: float) -> str:
@@ -93,17 +133,52 @@ def _compare(mine: float, other: float) -> str:
     return "tie" if abs(rel - 1) <= _TIE else ("beat" if rel < 1 else "lost")
 
 
+def better_mixes(strategies: dict[str, dict[str, Any]], name: str) -> tuple[list[str], list[str]]:
+    """The constant mixtures (:data:`MIX_RUNS`) run beside ``name`` with equal or lower effort (within the
+    tie, :data:`_TIE`) that track better than it (beyond the tie), and those that tie with it."""
+    mine = strategies[name]
+    better, tied = [], []
+    for mix in MIX_RUNS:
+        m = strategies.get(mix)
+        if not m or not (_finite(m.get("tracking_rmse_m")) and _finite(m.get("voluntary_effort"))
+                         and _finite(mine.get("voluntary_effort"))):
+            continue
+        if m["voluntary_effort"] > mine["voluntary_effort"] * (1 + _TIE):
+            continue
+        outcome = _compare(m["tracking_rmse_m"], mine["tracking_rmse_m"])
+        (better if outcome == "beat" else tied if outcome == "tie" else []).append(mix)
+    return better, tied
+
+
+def _mixing(name: str, s: dict[str, dict[str, Any]]) -> tuple[str | None, str, str]:
+    """(outcome, the party's label, a sentence): against the constant mixtures run, else the line ratio."""
+    if any(mix in s for mix in MIX_RUNS):
+        better, tied = better_mixes(s, name)
+        if better:
+            mm = [f"`{k}` {s[k]['tracking_rmse_m'] * 1e3:.1f} mm at effort {s[k]['voluntary_effort']:.3f}"
+                  for k in better]
+            return "lost", "mixing them (" + ", ".join(f"`{k}`" for k in better) + ")", (
+                f" A constant mix tracks better at equal or lower effort: {'; '.join(mm)}.")
+        if tied:
+            return "tie", "mixing them (" + ", ".join(f"`{k}`" for k in tied) + ")", ""
+        return "beat", "mixing them", " No constant mix tracks better at equal or lower effort."
+    ratio = line_ratio(s, name)
+    if ratio is None:
+        return None, "", ""
+    outcome = "tie" if abs(ratio - 1) <= _TIE else ("beat" if ratio < 1 else "lost")
+    return outcome, "mixing them (the line)", (f" Line ratio {ratio:.2f} (tracking RMS over the straight line "
+                                               "between the two at the same effort; below 1 beats it).")
+
+
 def _sharing(name: str, s: dict[str, dict[str, Any]]) -> Headline:
     mine = s[name]["tracking_rmse_m"]
     parties = [(label, key) for label, key in (("the wearer alone", "voluntary"), ("the robot alone", "reactive"))
                if key in s and _finite(s[key].get("tracking_rmse_m"))]
     outcome = {label: _compare(mine, s[key]["tracking_rmse_m"]) for label, key in parties}
-    ratio = line_ratio(s, name)
-    if ratio is not None:
-        outcome["mixing them"] = "tie" if abs(ratio - 1) <= _TIE else ("beat" if ratio < 1 else "lost")
+    mixing, label, line = _mixing(name, s)
+    if mixing is not None:
+        outcome[label] = mixing
     figures = "; ".join(f"{label} {s[key]['tracking_rmse_m'] * 1e3:.1f} mm" for label, key in parties)
-    line = "" if ratio is None else (f" Line ratio {ratio:.2f} (tracking RMS over mixing the two at the same "
-                                     "effort; below 1 beats mixing).")
     lost = [k for k, v in outcome.items() if v == "lost"]
     beat = [k for k, v in outcome.items() if v == "beat"]
     if not outcome:
@@ -147,12 +222,16 @@ def _keepout(s: dict[str, dict[str, Any]]) -> Headline:
     return Headline("Keep-out", "NO", f"the knife was driven into a body zone in {n} control step(s).{closest}")
 
 
-def headlines(strategies: dict[str, dict[str, Any]]) -> list[Headline]:
-    """The four answers (module docstring) for the runs present; [] when no shared strategy was run."""
+def headlines(strategies: dict[str, dict[str, Any]], rule_choice: dict[str, Any] | None = None,
+              trials: str = "its trials") -> list[Headline]:
+    """The four answers (module docstring) for the runs present; [] when no shared strategy was run.
+
+    ``rule_choice``: the bundle's closed-loop choice of its hand-over rule (``bundle.metrics["rule_choice"]``),
+    ``trials``: the evaluation's trials and span in words (both for :func:`choice_note`)."""
     name = shared_strategy(strategies)
     if name is None:
         return []
-    out = [_task(name, strategies[name]), _sharing(name, strategies)]
+    out = [_task(name, strategies[name], rule_choice, trials), _sharing(name, strategies)]
     effort = _effort(name, strategies)
     if effort is not None:
         out.append(effort)
@@ -160,6 +239,13 @@ def headlines(strategies: dict[str, dict[str, Any]]) -> list[Headline]:
     return out
 
 
-def headline_lines(strategies: dict[str, dict[str, Any]], markdown: bool = True) -> list[str]:
+def headline_lines(strategies: dict[str, dict[str, Any]], markdown: bool = True,
+                   rule_choice: dict[str, Any] | None = None, trials: str = "its trials") -> list[str]:
     """:func:`headlines` as Markdown (bold topic and verdict) or plain text lines."""
-    return [h.markdown() if markdown else h.plain() for h in headlines(strategies)]
+    return [h.markdown() if markdown else h.plain() for h in headlines(strategies, rule_choice, trials)]
+
+
+def trials_words(trials: list[int], duration_s: float | None) -> str:
+    """``"trial(s) 2 (first 10 s)"``: an evaluation's trials and span, for :func:`choice_note`."""
+    span = "whole trials" if duration_s is None else f"first {duration_s:g} s"
+    return f"trial(s) {', '.join(str(t) for t in trials)} ({span})"

@@ -22,8 +22,12 @@ _MIME = {".png": "image/png", ".gif": "image/gif", ".jpg": "image/jpeg", ".jpeg"
          ".svg": "image/svg+xml", ".mp4": "video/mp4", ".webm": "video/webm"}
 _IMG = re.compile(r'<img alt="([^"]*)" src="([^"]+)"\s*/?>')
 _STYLE = """
-body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em;
-       color: #222; line-height: 1.45; }
+body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 0.8em auto; padding: 0 1em;
+       color: #222; line-height: 1.4; font-size: 15px; }
+h1 { font-size: 1.45em; margin: 0.2em 0 0.3em; }
+h2 { font-size: 1.2em; margin: 0.8em 0 0.3em; }
+ul { margin: 0.3em 0; padding-left: 1.4em; }
+p { margin: 0.5em 0; }
 table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; max-width: 100%; }
 th, td { border: 1px solid #ccc; padding: 0.25em 0.5em; text-align: right; }
 div.table { max-width: 100%; overflow-x: auto; }

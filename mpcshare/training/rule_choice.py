@@ -49,7 +49,7 @@ from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
 from mpcshare.training.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
-from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
+from sim.task_metrics import saws as task_saws
 from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
@@ -142,10 +142,8 @@ def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strate
 
 
 def saws(row: dict[str, Any]) -> bool:
-    """Whether the knife sawed while cutting: the stroke's correlation and amplitude ratio reach the task's
-    thresholds (:data:`sim.task_metrics.SAWING_MIN_CORRELATION`, ``SAWING_MIN_AMPLITUDE``)."""
-    return ((row.get("saw_correlation") or 0.0) >= SAWING_MIN_CORRELATION
-            and (row.get("saw_amplitude_ratio") or 0.0) >= SAWING_MIN_AMPLITUDE)
+    """Whether the knife sawed while cutting in ``row``: the task's criterion (:func:`sim.task_metrics.saws`)."""
+    return task_saws(row.get("saw_correlation"), row.get("saw_amplitude_ratio"))
 
 
 def _n_modes(bundle: Any) -> int:

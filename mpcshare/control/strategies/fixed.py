@@ -32,8 +32,8 @@ class Fixed:
         return Target(self.alpha, self.reason, beta=self.beta)
 
 
-VOLUNTARY = StrategySpec("voluntary", "The wearer alone: alpha = 0, beta = 1.", tunable=False, color="C3",
+VOLUNTARY = StrategySpec("voluntary", "The wearer alone: alpha = 0, beta = 1.", tunable=False, color="#d62728",
                          factory=lambda ctx: Fixed(0.0, 1.0, "voluntary baseline"), order=0)
-REACTIVE = StrategySpec("reactive", "The robot alone: alpha = 1, beta = 0.", tunable=False, color="C2",
+REACTIVE = StrategySpec("reactive", "The robot alone: alpha = 1, beta = 0.", tunable=False, color="#2ca02c",
                         factory=lambda ctx: Fixed(1.0, 0.0, "reactive baseline"), order=1)
 SPECS = (VOLUNTARY, REACTIVE)

@@ -281,5 +281,5 @@ def make(ctx: StrategyContext) -> ModeCostGate | PaperGate:
 
 
 SPECS = (StrategySpec("gate", "The default shared strategy: whole modes the robot cannot predict go to the wearer, "
-                      "handed over before they begin and held after they end.", tunable=True, color="C0",
+                      "handed over before they begin and held after they end.", tunable=True, color="#1f77b4",
                       factory=make, order=4),)

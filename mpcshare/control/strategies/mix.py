@@ -20,4 +20,4 @@ def mixture(alpha: float, order: float, color: str) -> StrategySpec:
                         order=order)
 
 
-SPECS = (mixture(0.25, 2.25, "#d9a3a3"), mixture(0.5, 2.5, "#b07c7c"), mixture(0.75, 2.75, "#8a5a5a"))
+SPECS = (mixture(0.25, 2.25, "#f7a6c9"), mixture(0.5, 2.5, "#bcbd22"), mixture(0.75, 2.75, "#8c564b"))

@@ -44,5 +44,5 @@ def make(ctx: StrategyContext) -> PaperGate:
 
 
 SPECS = (StrategySpec("paper_gate", "The paper's gate: the robot leads where the gate of the current mode says "
-                      "predictable (with hysteresis, dwell and a ramp).", tunable=True, color="C9",
+                      "predictable (with hysteresis, dwell and a ramp).", tunable=True, color="#17becf",
                       factory=make, order=5),)

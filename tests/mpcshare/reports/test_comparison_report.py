@@ -2,8 +2,15 @@
 
 from __future__ import annotations
 
+import itertools
+
+import numpy as np
+from matplotlib.colors import to_rgb
+
 from mpcshare.experiments import Comparison
 from mpcshare.reports.comparison import comparison_findings, comparison_markdown, task_sentence
+from mpcshare.reports.style import strategy_colour
+from mpcshare.run_table import RUN_NAMES
 
 
 def _metrics(rms_mm: float, **extra) -> dict:
@@ -17,7 +24,10 @@ def _metrics(rms_mm: float, **extra) -> dict:
 def test_task_sentence_says_whether_the_knife_cut():
     cut = task_sentence("gate", {"lag_s": 0.11, "saw_amplitude_ratio": 0.89, "saw_correlation": 0.82,
                                  "stroke_share": 0.87})
-    assert "110 ms late" in cut and "the knife CUT" in cut and "87%" in cut
+    assert "110 ms late" in cut and "the knife SAWED" in cut and "87%" in cut
+    assert "at least 0.7" in cut and "at least 0.6" in cut  # the task's criterion, in its words
+    ahead = task_sentence("gate", {"lag_s": -0.02, "saw_amplitude_ratio": 0.89, "saw_correlation": 0.82})
+    assert "20 ms ahead" in ahead and "-20" not in ahead
     no = task_sentence("gate", {"lag_s": 0.4, "saw_amplitude_ratio": 0.27, "saw_correlation": 0.02})
     assert "did NOT saw" in no
     assert "no cutting" in task_sentence("gate", {"lag_s": 0.1})
@@ -50,4 +60,32 @@ def test_findings_state_the_line_ratio_and_when_the_wearer_alone_is_better():
     text = " ".join(comparison_findings(s))
     assert "`gate` 1.07" in text and "below the line: `blend`" in text and "wearer alone tracks better" in text
     s["blend"]["line_ratio"] = 1.01
-    assert "NONE is below the line" in " ".join(comparison_findings(s))
+    assert "NONE is below the straight line" in " ".join(comparison_findings(s))
+
+
+def test_the_effort_error_plot_fits_under_the_headline_on_a_laptop_screen(tmp_path):
+    """990 × 385 px: with the four headline lines it stays above the fold at 1280 × 800."""
+    from PIL import Image
+
+    from mpcshare.reports.comparison import plot_effort_error
+
+    s = {n: _metrics(10.0 + i, voluntary_effort=0.01 * (i + 1)) for i, n in enumerate(RUN_NAMES)}
+    with Image.open(plot_effort_error(s, tmp_path / "e.png")) as im:
+        assert im.size[0] <= 1000 and im.size[1] <= 400
+
+
+def _lab(colour: str) -> np.ndarray:
+    """CIELAB (D65) of a matplotlib colour."""
+    rgb = np.array(to_rgb(colour))
+    lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    xyz = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]) @ lin
+    xyz = xyz / np.array([0.95047, 1.0, 1.08883])
+    f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.array([116 * f[1] - 16, 500 * (f[0] - f[1]), 200 * (f[1] - f[2])])
+
+
+def test_every_run_shown_has_its_own_colour_and_no_near_twin():
+    """ΔE*ab ≥ 25 between any two of the runs the comparison shows (about 2.3 is a just-noticeable difference)."""
+    lab = {n: _lab(strategy_colour(n)) for n in RUN_NAMES}
+    closest = min((float(np.linalg.norm(lab[a] - lab[b])), a, b) for a, b in itertools.combinations(RUN_NAMES, 2))
+    assert closest[0] >= 25, closest

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from mpcshare.reports.headline import headline_lines, headlines, line_ratio
+from mpcshare.reports.headline import MIX_RUNS, headline_lines, headlines, lag_words, line_ratio
+from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 
 
 def _m(rms_mm: float, effort: float, **extra) -> dict:
@@ -30,13 +31,13 @@ def test_sharing_says_when_it_loses_to_the_wearer_alone():
     assert h["Sharing"].verdict.startswith("NO, it loses to the wearer alone")
     assert "15.7 mm" in h["Sharing"].text and "6.7 mm" in h["Sharing"].text and "18.4 mm" in h["Sharing"].text
     good = {x.topic: x for x in headlines(_runs(5.0))}
-    assert good["Sharing"].verdict == "yes, it beats the wearer alone, the robot alone, mixing them"
+    assert good["Sharing"].verdict == "yes, it beats the wearer alone, the robot alone, mixing them (the line)"
 
 
 def test_effort_task_and_keepout_each_have_a_figure_and_a_verdict():
     h = {x.topic: x for x in headlines(_runs(5.0, gate_effort=0.012))}
     assert h["Effort"].verdict == "80% saved" and "20%" in h["Effort"].text
-    assert h["The task"].verdict == "yes, it cut" and "0.85" in h["The task"].text
+    assert h["The task"].verdict == "yes, it sawed" and "0.85" in h["The task"].text
     assert h["Keep-out"].verdict == "not measured"  # no clearance figures in these runs
     weak = {x.topic: x for x in headlines(_runs(5.0, gate_effort=0.05, saw_correlation=0.2))}
     assert weak["Effort"].verdict == "only 17% saved" and weak["The task"].verdict.startswith("NO")
@@ -50,3 +51,65 @@ def test_the_four_lines_come_in_order_and_nothing_without_a_shared_run():
     lines = headline_lines(_runs(15.7), markdown=False)
     assert [ln.split(":")[0] for ln in lines] == ["The task", "Sharing", "Effort", "Keep-out"]
     assert headline_lines({"voluntary": _m(6.7, 0.06)}) == []
+
+
+def _mixes(**mixes: tuple[float, float]) -> dict:
+    """voluntary, reactive and gate (9.0 mm at effort 0.037) beside the given mixes (name: (mm, effort))."""
+    s = {"voluntary": _m(13.2, 0.080), "reactive": _m(10.5, 0.015), "gate": _m(9.0, 0.037)}
+    return {**s, **{k: _m(mm, e) for k, (mm, e) in mixes.items()}}
+
+
+def test_sharing_beats_mixing_only_when_no_constant_mix_tracks_better_at_equal_or_lower_effort():
+    assert MIX_RUNS == ("mix25", "mix50", "mix75")
+    # the report a user misread: mix25 tracks worse at twice the effort, mix50 and mix75 worse at less
+    h = {x.topic: x for x in headlines(_mixes(mix25=(9.3, 0.076), mix50=(10.5, 0.014), mix75=(10.4, 0.014)))}
+    assert h["Sharing"].verdict == "yes, it beats the wearer alone, the robot alone, mixing them"
+    assert "No constant mix tracks better at equal or lower effort" in h["Sharing"].text
+    # mix75 tracks better at less effort: the gate loses to it, and the line names it with its figures
+    h = {x.topic: x for x in headlines(_mixes(mix25=(9.3, 0.076), mix75=(8.1, 0.030)))}
+    assert h["Sharing"].verdict == "NO, it loses to mixing them (`mix75`)"
+    assert "`mix75` 8.1 mm at effort 0.030" in h["Sharing"].text and "mix25" not in h["Sharing"].text
+    # better tracking at MORE effort is no win for the mix
+    h = {x.topic: x for x in headlines(_mixes(mix25=(8.0, 0.060)))}
+    assert h["Sharing"].verdict.startswith("yes") and "mix25" not in h["Sharing"].verdict
+    # a mix within the tie at lower effort: a tie, named
+    h = {x.topic: x for x in headlines(_mixes(mix50=(9.05, 0.020)))}
+    assert h["Sharing"].verdict == "partly: it ties with mixing them (`mix50`)"
+
+
+def test_without_mixes_the_line_ratio_stands_in_for_mixing():
+    h = {x.topic: x for x in headlines(_runs(5.0))}
+    assert "Line ratio" in h["Sharing"].text and "mixing them (the line)" in h["Sharing"].verdict
+
+
+def test_a_negative_lag_reads_ahead_never_minus_late():
+    assert lag_words(-0.02) == "20 ms ahead" and lag_words(0.11) == "110 ms late" and lag_words(0.0002) == "on time"
+    text = headlines(_runs(5.0, lag_s=-0.06))[0].text
+    assert "60 ms ahead" in text and "-60" not in text and "ms late" not in text
+
+
+def test_the_sawing_criterion_is_the_tasks_and_is_stated_once():
+    at = {x.topic: x for x in headlines(_runs(5.0, saw_correlation=SAWING_MIN_CORRELATION,
+                                               saw_amplitude_ratio=SAWING_MIN_AMPLITUDE))}
+    assert at["The task"].verdict == "yes, it sawed"
+    below = {x.topic: x for x in headlines(_runs(5.0, saw_correlation=0.69, saw_amplitude_ratio=0.9))}
+    assert below["The task"].verdict == "NO, it did not saw"
+    assert at["The task"].text.count(f"at least {SAWING_MIN_CORRELATION:g}") == 1
+
+
+def _choice(corr: float, amp: float) -> dict:
+    settings = {"wearer_modes": [0]}
+    return {"settings": settings, "trials": [3], "duration_s": 20.0,
+            "candidates": [{"settings": {"wearer_modes": []}, "saw_correlation": 0.1, "saw_amplitude_ratio": 0.1},
+                           {"settings": settings, "saw_correlation": corr, "saw_amplitude_ratio": amp}]}
+
+
+def test_the_task_line_says_why_training_and_the_evaluation_disagree_on_sawing():
+    not_here = headlines(_runs(5.0, saw_correlation=0.3), rule_choice=_choice(0.91, 0.8),
+                         trials="trial(s) 2 (first 10 s)")[0]
+    assert not_here.verdict == "NO, it did not saw"
+    assert "Training chose this hand-over rule as one that saws" in not_here.text
+    assert "trial(s) 3 (first 20 s)" in not_here.text and "correlated 0.91" in not_here.text
+    assert "trial(s) 2 (first 10 s)" in not_here.text
+    agree = headlines(_runs(5.0), rule_choice=_choice(0.91, 0.8))[0]
+    assert "Training" not in agree.text  # both saw: nothing to explain
