@@ -24,6 +24,7 @@ from mpcshare.commands.base import (
     positive_float,
     positive_int,
     prepare_output_folder,
+    remove_empty_output_folders,
 )
 from mpcshare.commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from mpcshare.commands.demo import DEMO_COMMAND
@@ -94,11 +95,16 @@ def main(argv: Sequence[str] | None = None, commands: Sequence[Command] = ()) ->
     if unknown:  # the subcommand's usage, not the top level's (exit status 2)
         args._parser.error(f"unrecognized arguments: {' '.join(unknown)}")
     prefer_offscreen_gl()
+    remove_empty_output_folders(keep=True)  # forget any earlier command's folders (main called in-process)
+    status = 1
     try:
-        return int(args._run(args))
+        status = int(args._run(args))
     except CommandError as exc:
         print(f"mpcshare {args.command}: {exc}", file=sys.stderr)
-        return 1
+        status = 1
     except KeyboardInterrupt:
         print(f"mpcshare {args.command}: interrupted", file=sys.stderr)
-        return 130
+        status = 130
+    finally:  # a failed command leaves no empty output folder behind
+        remove_empty_output_folders(keep=status == 0)
+    return status

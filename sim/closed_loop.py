@@ -313,9 +313,9 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
 
         renderer = VideoRecorder(loop.world.model, render, fps=25, control_rate_hz=1.0 / sc.control_period)
     if progress:
-        from tqdm.auto import tqdm
+        from learning.progress import progress_bar
 
-        bar = tqdm(total=n_ctrl, desc=f"trial {trial.trial_id}", unit="step", leave=False)
+        bar = progress_bar(total=n_ctrl, desc=f"trial {trial.trial_id}", unit="step", leave=False)
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
     for k in range(n_ctrl):

@@ -20,15 +20,20 @@ CONTROL_KEYS = ("t", "alpha", "beta", "mode", "tip", "tip_reference", "tip_inten
 #: control-rate arrays of the keep-out (issue 30), absent from older run files
 OPTIONAL_KEYS = ("fork_pose", "knife_heel")
 
-#: the run file's size per physics step (10 float64, barely compressible) and per control step [bytes],
-#: measured on the default scene
-_NPZ_BYTES_PER_PHYSICS_STEP = 80
-_NPZ_BYTES_PER_CONTROL_STEP = 65
+#: the run file's size [bytes], measured on the project's runs (savez_compressed barely compresses float64
+#: trajectories): per physics step, the time and per joint its q, v and τ; per control step, every
+#: control-rate array (fork pose and knife heel included); per file, the archive's headers and ``info``
+_NPZ_BYTES_PER_PHYSICS_STEP = 4.3
+_NPZ_BYTES_PER_JOINT_STEP = 22.5
+_NPZ_BYTES_PER_CONTROL_STEP = 209.0
+_NPZ_BYTES_PER_FILE = 4500.0
 
 
-def run_file_bytes_estimate(seconds: float, physics_hz: float, control_hz: float) -> float:
-    """About how many bytes :meth:`Episode.save` writes for ``seconds`` of a run (±20 % on the project's runs)."""
-    return seconds * (physics_hz * _NPZ_BYTES_PER_PHYSICS_STEP + control_hz * _NPZ_BYTES_PER_CONTROL_STEP)
+def run_file_bytes_estimate(seconds: float, physics_hz: float, control_hz: float, n_joints: int = 3) -> float:
+    """About how many bytes :meth:`Episode.save` writes for ``seconds`` of a run of an arm with ``n_joints``
+    joints (within 10 % on the project's runs of 2 s and more)."""
+    physics = physics_hz * (_NPZ_BYTES_PER_PHYSICS_STEP + n_joints * _NPZ_BYTES_PER_JOINT_STEP)
+    return _NPZ_BYTES_PER_FILE + seconds * (physics + control_hz * _NPZ_BYTES_PER_CONTROL_STEP)
 
 
 @dataclass

@@ -85,8 +85,8 @@ class _Steps:
     def __init__(self, total: int, enabled: bool, start: float | None = None) -> None:
         self.bar = None
         if enabled:
-            from tqdm.auto import tqdm
-            self.bar = tqdm(total=total, desc="analysis", unit="step")
+            from learning.progress import progress_bar
+            self.bar = progress_bar(total=total, desc="analysis", unit="step")
         self.timings: dict[str, float] = {}
         self._t = time.perf_counter() if start is None else start
 

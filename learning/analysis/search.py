@@ -49,12 +49,12 @@ def search_labelings(window_labels: dict[int, np.ndarray], config: AnalysisConfi
 
 def _progress_bar(config: AnalysisConfig, todo: list[int], known: dict, known_ref: dict, passes: dict) -> Any:
     """One step per HMM fit, per shared pass and per call within a grouping (those known skipped)."""
-    from tqdm.auto import tqdm
+    from learning.progress import progress_bar
 
     n_known = sum(((float(w), int(n)) in known) + ((float(w), int(n)) in known_ref)
                   for w in config.search_windows for n in config.search_modes)
     n_known += sum(float(w) in passes for w in config.search_windows)
-    return tqdm(total=len(todo) + len(config.search_windows) * (1 + 2 * len(config.search_modes)) - n_known,
+    return progress_bar(total=len(todo) + len(config.search_windows) * (1 + 2 * len(config.search_modes)) - n_known,
                 desc="search", unit="step", leave=False)
 
 

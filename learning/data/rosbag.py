@@ -263,11 +263,11 @@ def read_bag(path: PathLike, mapping: BagMapping, *, progress: bool = True) -> t
                 readers[conn.id] = tr
             conns = [c for c in reader.connections if c.id in readers]
             total = sum(c.msgcount for c in conns)
-            from tqdm.auto import tqdm
+            from learning.progress import progress_bar
 
             count = 0
-            with tqdm(total=total, desc=bag_name(p), unit="msg", unit_scale=True, disable=not progress,
-                      leave=False) as bar:
+            with progress_bar(total=total, enabled=progress, desc=bag_name(p), unit="msg", unit_scale=True,
+                              leave=False) as bar:
                 deserialize = reader.deserialize
                 for conn, ns, raw in reader.messages(connections=conns):
                     readers[conn.id].add(deserialize(raw, conn.msgtype), ns)

@@ -289,8 +289,8 @@ def pointwise_quotients_multi(X, Y, labelings, *, return_partner: bool = False, 
                        full_screen=True, unit_roundoff=F32_UNIT_ROUNDOFF)
     bar = None
     if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=n_pairs, unit="pair", unit_scale=True, desc="Lipschitz quotients",
+        from learning.progress import progress_bar
+        bar = progress_bar(total=n_pairs, unit="pair", unit_scale=True, desc="Lipschitz quotients",
                    leave=False)
     pool = ThreadPoolExecutor(max_workers=n_jobs) if n_jobs > 1 else None
     try:

@@ -296,8 +296,8 @@ def pointwise_quotients(X, Y, groups=None, *, return_partner: bool = False, bloc
 
     bar = None
     if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=n_pairs, unit="pair", unit_scale=True, desc="Lipschitz quotients",
+        from learning.progress import progress_bar
+        bar = progress_bar(total=n_pairs, unit="pair", unit_scale=True, desc="Lipschitz quotients",
                    leave=False)
     pool = ThreadPoolExecutor(max_workers=n_jobs) if n_jobs > 1 else None
     limit = _blas_single_thread() if backend == "numpy" else nullcontext()

@@ -116,8 +116,8 @@ def select_n_modes(X: np.ndarray, lengths: Sequence[int] | None = None,
         results = Parallel(n_jobs=n_jobs, return_as="generator")(
             delayed(job)(k, f) for k, f in tasks)
     if progress:
-        from tqdm.auto import tqdm
-        results = tqdm(results, total=len(tasks), desc="select_n_modes", unit="fit")
+        from learning.progress import progress_bar
+        results = progress_bar(results, total=len(tasks), desc="select_n_modes", unit="fit")
     out = dict(zip(tasks, results))
 
     F = len(folds)

@@ -49,11 +49,11 @@ import torch
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 from torch import nn
-from tqdm.auto import tqdm
 
 from learning.predictor import defaults as D
 from learning.predictor.sequences import check_sequence_set, chunk_sequences, pad_sequences, shifted_targets
 from learning.predictor.stream import PredictorStream
+from learning.progress import progress_bar
 from learning.torch_threads import torch_threads
 
 __all__ = ["DEVICES", "ReactivePredictor"]
@@ -252,8 +252,8 @@ class ReactivePredictor(BaseEstimator):
         gen = torch.Generator().manual_seed(int(self.seed))
         history: dict[str, list[float]] = {"train_loss": [], "val_loss": []}
         best, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
-        bar = tqdm(range(1, int(self.max_epochs) + 1), desc="predictor", unit="epoch", disable=not progress,
-                   leave=False)
+        bar = progress_bar(range(1, int(self.max_epochs) + 1), enabled=progress, desc="predictor", unit="epoch",
+                           leave=False)
         for epoch in bar:
             net.train()
             order = torch.randperm(X.shape[0], generator=gen).to(dev)

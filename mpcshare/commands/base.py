@@ -22,7 +22,7 @@ from learning.data import DataFormatError, Demonstrations, load
 from mpcshare.errors import MpcshareError
 
 __all__ = ["Command", "CommandError", "positive_int", "positive_float", "nonnegative_float", "percentile",
-           "prepare_output_folder", "load_or_fail"]
+           "prepare_output_folder", "load_or_fail", "human_bytes", "remove_empty_output_folders"]
 
 
 class CommandError(MpcshareError, RuntimeError):
@@ -78,22 +78,59 @@ def percentile(text: str) -> float:
     return float(_number(text, float, lambda v: 0 <= v <= 100, "a number from 0 to 100"))
 
 
+#: the folders :func:`prepare_output_folder` created during the present command, in creation order
+_CREATED: list[Path] = []
+
+
 def prepare_output_folder(path: str | Path) -> Path:
     """Create the output folder (and parents) or raise :class:`CommandError` saying why.
 
     Checked before any long work starts, so that a typo in ``--out`` does not
-    cost a whole analysis.
+    cost a whole analysis. The folders it creates are remembered: a command that fails
+    leaves none of them behind empty (:func:`remove_empty_output_folders`, called by the CLI).
     """
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise CommandError(f"--out {out}: exists and is not a folder")
+    new = [p for p in (out, *out.parents) if not p.exists()][::-1]  # outermost first
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise CommandError(f"--out {out}: cannot create the folder ({exc.strerror or exc})") from exc
+    _CREATED.extend(new)
     if not os.access(out, os.W_OK | os.X_OK):
         raise CommandError(f"--out {out}: folder is not writable")
     return out
+
+
+def remove_empty_output_folders(keep: bool = False) -> list[Path]:
+    """After a command: unless ``keep``, remove the folders :func:`prepare_output_folder` created that hold
+    no file (their empty sub-folders too, deepest first); forget them either way. Returns those removed."""
+    created, removed = list(_CREATED), []
+    _CREATED.clear()
+    if keep:
+        return removed
+    for top in reversed(created):
+        if not top.is_dir():
+            continue
+        for sub in sorted((p for p in top.rglob("*") if p.is_dir()), key=lambda p: len(p.parts), reverse=True):
+            if not any(sub.iterdir()):
+                sub.rmdir()
+                removed.append(sub)
+        if not any(top.iterdir()):
+            top.rmdir()
+            removed.append(top)
+    return removed
+
+
+def human_bytes(n: float) -> str:
+    """A size for a person: ``"830 kB"``, ``"14 MB"``, ``"1.2 GB"`` (decimal units, two significant digits
+    or more)."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            v = n / scale
+            return f"{v:.1f} {unit}" if v < 10 else f"{v:.0f} {unit}"
+    return f"{n:.0f} bytes"
 
 
 def load_or_fail(path: str) -> Demonstrations:

@@ -9,8 +9,8 @@ import json
 import time
 from typing import Sequence
 
-from learning.data import Demonstrations, save
-from mpcshare.commands.base import Command, CommandError, load_or_fail, positive_float, positive_int
+from learning.data import Demonstrations, save, saved_bytes_estimate
+from mpcshare.commands.base import Command, CommandError, human_bytes, load_or_fail, positive_float, positive_int
 from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 from sim.world_family import world_demonstrations
 
@@ -93,6 +93,8 @@ def _generate(args: argparse.Namespace) -> int:
     else:
         config = GeneratorConfig(rate_hz=args.rate, single_regime=args.single_regime)
         demos = generate_demonstrations(args.subjects, args.minutes, seed=args.seed, config=config)
+    print(f"writing about {human_bytes(saved_bytes_estimate(demos, args.out))} into {args.out} (fewer with "
+          f"{'--trials or --trial-seconds' if args.world is not None else '--subjects or --minutes'})", flush=True)
     try:
         save(demos, args.out)
     except OSError as exc:  # e.g. --out names a folder that holds other files

@@ -25,6 +25,7 @@ from mpcshare.commands.analysis import add_analysis_arguments, print_headline, r
 from mpcshare.commands.base import (
     Command,
     CommandError,
+    human_bytes,
     percentile,
     positive_float,
     positive_int,
@@ -146,7 +147,7 @@ def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, o
               f"x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")
     npz_bytes, _ = output_size(DEFAULT_RUNS, demos, ids, args.sim_duration)
-    print(f"writing about {npz_bytes / 1e6:.0f} MB of run files into {sim_out / 'runs'} "
+    print(f"writing about {human_bytes(npz_bytes)} of run files into {sim_out / 'runs'} "
           "(fewer with --sim-trials or --sim-duration)", flush=True)
     wearer = wearer_preset(args.wearer)
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
@@ -209,10 +210,12 @@ def _demo(args: argparse.Namespace) -> int:
                                 data_summary=summary, sweep=sweep, mode_sources=mode_sources)
     if missing:
         print(f"report.html: could not embed {missing}")
-    from mpcshare.reports.headline import headline_lines
+    from mpcshare.reports.headline import headline_lines, trials_words
 
     print("\nWhat the robot did:")
-    for line in headline_lines(comparison["strategies"], markdown=False) or ["the closed loop was not run"]:
+    heads = headline_lines(comparison["strategies"], markdown=False, rule_choice=bundle.metrics.get("rule_choice"),
+                           trials=trials_words(comparison["trials"], comparison["duration_s"]))
+    for line in heads or ["the closed loop was not run"]:
         print(f"  {line}")
     print(f"done in {timings['total']:.0f} s; the figures behind these lines: {out / 'report.html'} (or report.md)")
     return 0

@@ -23,6 +23,7 @@ from learning.data import Demonstrations
 from mpcshare.commands.base import (
     Command,
     CommandError,
+    human_bytes,
     load_or_fail,
     positive_float,
     positive_int,
@@ -129,15 +130,17 @@ def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str
 
 
 def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list[int], args: argparse.Namespace,
-                         out: Path) -> None:
-    """Say how much the run files will take, before they are written, and how to make them smaller."""
+                         out: Path, scene: Any = None) -> None:
+    """Say how much the run files will take (``scene``: the arm's world, None: the SuperLimb's), after the
+    options are checked and before anything is written, and how to make them smaller."""
     from mpcshare.experiments import output_size
 
     mcap = getattr(args, "mcap", False)
-    npz, mcap_bytes = output_size(runs, demos, trial_ids, args.duration, mcap, getattr(args, "mcap_rate", None))
-    what = f"about {npz / 1e6:.0f} MB of run files (NPZ)"
+    npz, mcap_bytes = output_size(runs, demos, trial_ids, args.duration, mcap, getattr(args, "mcap_rate", None),
+                                  scene=scene)
+    what = f"about {human_bytes(npz)} of run files (NPZ)"
     if mcap:
-        what += f" and {mcap_bytes / 1e6:.0f} MB of MCAP"
+        what += f" and {human_bytes(mcap_bytes)} of MCAP"
     thin = "--trials, --duration or --runs" + (", --mcap-rate HZ" if mcap else "")
     print(f"writing {what} into {out / 'runs'} (fewer with {thin})", flush=True)
 
@@ -161,7 +164,6 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     if abs(demos.rate_hz - bundle.rate_hz) > 1e-9 * bundle.rate_hz:
         raise CommandError(f"the data is at {demos.rate_hz:g} Hz, the bundle was trained at {bundle.rate_hz:g} Hz")
     runs = [r for r in DEFAULT_RUNS if r.name in args.runs]
-    announce_output_size(runs, demos, trial_ids, args, out)
     wearer_name = getattr(args, "wearer", DEFAULT_WEARER_PRESET)
     wearer = wearer_preset(wearer_name)
     scene = scene_from_args(args)
@@ -180,6 +182,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     if scenario is not None or options is not None:
         guard = "off" if getattr(args, "no_keepout", False) else "on" if options is None else "on, MPC without zones"
         print(f"scenario: {scenario_name or 'none'}; keep-out {guard}")
+    announce_output_size(runs, demos, trial_ids, args, out, scene)
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
                               mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene,
@@ -224,9 +227,12 @@ def _run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     obj = run_comparison(bundle, demos, out, args, trial_ids)
     from mpcshare.reports.comparison import comparison_findings
-    from mpcshare.reports.headline import headline_lines
+    from mpcshare.reports.headline import headline_lines, trials_words
 
-    for line in headline_lines(obj["strategies"], markdown=False) + comparison_findings(obj["strategies"]):
+    choice = (getattr(bundle, "metrics", None) or {}).get("rule_choice")
+    heads = headline_lines(obj["strategies"], markdown=False, rule_choice=choice,
+                           trials=trials_words(obj["trials"], obj["duration_s"]))
+    for line in heads + comparison_findings(obj["strategies"]):
         print(line)
     print(f"done in {time.perf_counter() - t0:.0f} s; open {out / 'comparison.md'}")
     return 0

@@ -128,6 +128,7 @@ def _run(args: argparse.Namespace) -> int:
         out = prepare_output_folder(args.out)
     else:
         try:
+            prepare_output_folder(Path(args.out).absolute().parent)  # created here: removed if the command fails
             out = check_bundle_target(args.out)
         except BundleError as exc:
             raise CommandError(f"--out {exc}") from None

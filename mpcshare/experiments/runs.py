@@ -263,9 +263,11 @@ class _Runner:
         simulated seconds) per episode kept."""
         draws = _draw_options(run, tid, self.seed, self.source)
         done = []
+        best_only = run.schedule in ("oracle", "oracle_line")  # one kept replay: only it gets a run file
         for j, options in enumerate(draws):
             episode, m = self.simulate(run, tid, options)
-            self.save(run, tid, j, len(draws), episode)
+            if not best_only:
+                self.save(run, tid, j, len(draws), episode)
             done.append((episode, m))
         if run.schedule == "oracle":  # the best replay, the pure runs' own episodes included
             done.append(min(done + [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle"]],
@@ -274,6 +276,8 @@ class _Runner:
         elif run.schedule == "oracle_line":  # the lowest line ratio within the effort cap, the pure runs included
             pure = [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle_line"]]
             done = [best_on_line(done + pure, pure[0][1], pure[1][1])]
+        if best_only:
+            self.save(run, tid, 0, 1, done[0][0])
         steps = [np.asarray(e.step_time, dtype=float) for e, _ in done]
         seconds = [float(e.t[-1] - e.t[0]) + float(np.median(np.diff(e.t))) for e, _ in done]
         return [m for _, m in done], steps, seconds
@@ -307,19 +311,20 @@ def _joint_stride(episode: Any, rate_hz: float | None) -> int:
 
 def output_size(runs: Sequence[StrategyRun], demos: Demonstrations, trial_ids: Sequence[int],
                 duration_s: float | None, mcap: bool = False,
-                mcap_rate_hz: float | None = None) -> tuple[float, float]:
+                mcap_rate_hz: float | None = None, scene: SceneConfig | None = None) -> tuple[float, float]:
     """(run files, MCAP files) [bytes] that :func:`compare_strategies` will write, about (measured sizes of
-    :func:`sim.episode.run_file_bytes_estimate` and :func:`sim.run_mcap.mcap_bytes_estimate`); MCAP 0 without it."""
+    :func:`sim.episode.run_file_bytes_estimate` and :func:`sim.run_mcap.mcap_bytes_estimate`); MCAP 0 without it.
+    ``scene``: the arm's world (its joints and rates; default the SuperLimb's)."""
     from sim.episode import run_file_bytes_estimate
     from sim.run_mcap import mcap_bytes_estimate
-    from sim.scene import SceneConfig
 
-    sc = SceneConfig()
+    sc = scene or SceneConfig()
     physics_hz, control_hz = 1.0 / sc.timestep, 1.0 / sc.control_period
+    n_joints = int(sc.robot.n)
     by_id = {tr.trial_id: tr for tr in demos.trials}
     seconds = sum(min(float(by_id[int(t)].t[-1] - by_id[int(t)].t[0]), duration_s or math.inf) for t in trial_ids)
     episodes = sum(r.draws for r in runs)
-    npz = episodes * run_file_bytes_estimate(seconds, physics_hz, control_hz)
+    npz = episodes * run_file_bytes_estimate(seconds, physics_hz, control_hz, n_joints)
     joint_hz = physics_hz if mcap_rate_hz is None else physics_hz / max(1, round(physics_hz / mcap_rate_hz))
     return npz, (episodes * mcap_bytes_estimate(seconds, control_hz, joint_hz) if mcap else 0.0)
 

@@ -13,8 +13,8 @@ class Stages:
     def __init__(self, names: list[str], enabled: bool, desc: str = "train") -> None:
         self.bar = None
         if enabled:
-            from tqdm.auto import tqdm
-            self.bar = tqdm(total=len(names), desc=desc, unit="stage")
+            from learning.progress import progress_bar
+            self.bar = progress_bar(total=len(names), desc=desc, unit="stage")
             self.bar.set_postfix_str(names[0])
         self.names = names
         self.timings: dict[str, float] = {}

@@ -154,3 +154,11 @@ def test_select_modes_on_one_trial_is_one_message(tmp_path, capsys):
     assert main(["analyze", str(one), "--out", str(tmp_path / "r"), "--no-search", "--select-modes"]) == 1
     err = capsys.readouterr().err
     assert "needs at least 2 trials" in err and "Traceback" not in err
+
+
+def test_train_output_captured_to_a_pipe_holds_lines_not_progress_bars(data_file, tmp_path, capsys):
+    """Progress bars draw on a terminal only (learning.progress): a redirected log gets no carriage return."""
+    assert main(["train", str(data_file), "--out", str(tmp_path / "model"), "--epochs", "2",
+                 "--no-rule-choice"]) == 0
+    said = capsys.readouterr()
+    assert said.out.strip() and "\r" not in said.out + said.err and "\x1b" not in said.out + said.err

@@ -73,3 +73,37 @@ def test_sim_help_names_the_runs_it_runs_by_default():
     names = [r.name for r in DEFAULT_RUNS]
     assert f"default: all {len(names)}: {', '.join(names)}" in text
     assert p.parse_args(["--model", "m", "--out", "o"]).runs == names
+
+
+@pytest.mark.parametrize("argv", [
+    ["analyze", "{missing}", "--out", "{out}"],
+    ["train", "{missing}", "--out", "{out}"],
+    ["train", "{missing}", "--sweep", "--out", "{out}"],
+    ["sim", "--model", "{missing}", "--out", "{out}"],
+    ["tune", "{missing}", "--out", "{out}"],
+    ["import", "{missing}", "--mapping", "{missing}", "--out", "{out}/data.npz"],
+    ["generate", "--single-regime", "--world", "3", "--out", "{out}/data.npz"],
+], ids=lambda argv: " ".join(argv[:3]))
+def test_a_failed_command_leaves_no_empty_output_folder(tmp_path, capsys, argv):
+    out = tmp_path / "new" / "out"
+    args = [a.format(missing=tmp_path / "nonexistent", out=out) for a in argv]
+    assert main(args) == 1
+    assert capsys.readouterr().err.startswith(f"mpcshare {argv[0]}: ")
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_failed_demo_leaves_no_empty_output_folder_but_keeps_a_users_folder(tmp_path, capsys, monkeypatch):
+    import mpcshare.commands.demo as demo
+    from mpcshare.commands.base import CommandError
+
+    def fail(*args, **kwargs):
+        raise CommandError("cannot generate (a stand-in failure)")
+
+    monkeypatch.setattr(demo, "generate_demonstrations", fail)
+    out = tmp_path / "new" / "demo"
+    assert main(["demo", "--out", str(out)]) == 1
+    assert not (tmp_path / "new").exists()
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    assert main(["demo", "--out", str(mine)]) == 1
+    assert mine.is_dir()  # a folder the user made is never removed

@@ -78,7 +78,7 @@ def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tm
     assert main(["sim", "--model", "stand-in", "--out", str(out), "--duration", "3", "--runs", "voluntary",
                  "--mcap", "--mcap-rate", "200"]) == 0
     said = capsys.readouterr().out
-    assert "MB of run files (NPZ) and" in said and "MB of MCAP" in said and "--mcap-rate HZ" in said
+    assert " of run files (NPZ) and " in said and " of MCAP" in said and "--mcap-rate HZ" in said
     npz, mcap = output_size(DEFAULT_RUNS[:1], demos, [0], 3.0, True, 200.0)
     written = {p.suffix: p.stat().st_size for p in (out / "runs").iterdir()}
     assert 0.6 < written[".npz"] / npz < 1.6 and 0.5 < written[".mcap"] / mcap < 2.0

@@ -160,8 +160,8 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     n_total = len(tasks) + draws * sum(t.strategy in strategies for t in tasks)  # phase 2: draws per setting episode
     bar = None
     if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=int(n_total), desc="tune", unit="episode", initial=len(store.rows))
+        from learning.progress import progress_bar
+        bar = progress_bar(total=int(n_total), desc="tune", unit="episode", initial=len(store.rows))
 
     runner = open_backend(backend, workers, address)
 
