@@ -168,3 +168,19 @@ def test_sim_on_another_arm_from_its_file(trained, tmp_path, capsys):
     fast = arm[:-4] + ["--acceleration-limit", "80"]
     assert main(["sim", "--model", str(model), "--out", str(tmp_path / "f"), "--runs", "reactive", *fast]) == 1
     assert "braking" in capsys.readouterr().err
+
+
+def test_the_announced_size_is_within_ten_percent_of_the_run_files_written(trained, tmp_path, capsys):
+    import re
+
+    data, model = trained
+    out = tmp_path / "sized"
+    assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "3",
+                 "--runs", "voluntary", "reactive", "gate", "oracle_handover"]) == 0
+    said = capsys.readouterr().out
+    number, unit = re.search(r"writing about ([\d.]+) (kB|MB) of run files", said).groups()
+    announced = float(number) * {"kB": 1e3, "MB": 1e6}[unit]
+    written = sum(p.stat().st_size for p in (out / "runs").iterdir())
+    assert abs(announced / written - 1) < 0.10, (announced, written)
+    assert said.index("writing about") < said.index("voluntary")  # said before the first run
+    assert len(list((out / "runs").iterdir())) == 4  # the oracle keeps one run file per trial: its best
