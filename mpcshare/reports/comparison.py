@@ -238,9 +238,10 @@ def plot_effort_error(strategies: dict[str, dict[str, Any]], path: str | Path) -
         (x0, y0), (x1, y1) = pts["reactive"], pts["voluntary"]
         ax.plot([x0, x1], [y0, y1], "--", color="0.5", lw=1.2, zorder=1,
                 label="robot alone → wearer alone")
-    for n, (x, y) in pts.items():
-        ax.scatter([x], [y], s=46, color=strategy_colour(n), edgecolor="k", linewidth=0.6, zorder=3,
-                   label=n.replace("_", " "))
+    for n, (x, y) in pts.items():  # the upper bounds (oracle_*): small diamonds on top, a run beneath still shows
+        bound = n.startswith("oracle")
+        ax.scatter([x], [y], s=26 if bound else 46, marker="D" if bound else "o", color=strategy_colour(n),
+                   edgecolor="k", linewidth=0.6, zorder=4 if bound else 3, label=n.replace("_", " "))
     ax.set_xlabel("the wearer's effort: mean ‖θ‖ [rad]")
     ax.set_ylabel("tracking RMS [mm]")
     ax.set_title("effort against error: lower left is better", fontsize=9)
