@@ -201,11 +201,16 @@ def test_torch_backend_cpu_matches():
     assert np.array_equal(p, pn)
 
 
-def test_progress_bar_runs(capsys):
+def test_progress_bar_runs_on_a_terminal_only(capsys, monkeypatch):
+    import sys
+
     X, Y = smooth_windows(700, 3)
     q = pointwise_quotients(X, Y, progress=True, backend="numpy")
-    assert "Lipschitz" in capsys.readouterr().err
+    assert capsys.readouterr().err == ""  # captured, as a pipe: no bar (learning.progress)
     assert_exact(q, brute_force(X, Y))
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    pointwise_quotients(X, Y, progress=True, backend="numpy")
+    assert "Lipschitz" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("X,Y,match", [
