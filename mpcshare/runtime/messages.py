@@ -4,12 +4,11 @@ ROS 2 (rmw) maps a message ``pkg/msg/Name`` to the DDS type ``pkg::msg::dds_::Na
 ``/name`` to the DDS topic ``rt/name``; the payload is XCDR1 (plain CDR, little endian), the bytes an
 unmodified ROS 2 node sends. Each class below declares the fields of the ROS 2 (Humble onwards)
 definition in order, so its ``serialize()`` equals ROS 2's bytes (tested against ``rosbags``).
+No ``from __future__ import annotations`` here: Cyclone DDS reads the field annotations as types.
 
 :data:`MESSAGE_TYPES` maps the ROS names (``sensor_msgs/msg/JointState``) to the classes;
 :func:`dds_topic` and :func:`dds_type_name` give the DDS names of a ROS topic and message type.
 """
-
-from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field

@@ -80,8 +80,7 @@ class Watchdog:
             for n in stale:
                 d = self.deadlines[n]
                 if not d.optional and ages[n] > d.stop_after_s:
-                    never = n not in self._seen
-                    self._stop = (f"{n}: no message {'since the start' if never else 'for'} {ages[n]:.3f} s "
-                                  f"(stop after {d.stop_after_s:g} s)")
+                    never = " (none yet)" if n not in self._seen else ""
+                    self._stop = f"{n}: no message for {ages[n]:.3f} s{never}, stop after {d.stop_after_s:g} s"
                     break
         return WatchState(stale, self._stop, ages)
