@@ -14,11 +14,11 @@ Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz):
 
 **Protective stop** (a required input older than its ``stop_after_s``, a non-finite command, or the end
 of the run): the controller is no longer called; every tick publishes the stop command (hold the last
-measured joint positions: positions q_stop, zero velocities and accelerations; a Float64MultiArray of
-q_stop, zeros for velocity, zeros for effort) and the status ``protective_stop``; latched until the
-process restarts. Before the arm's first joint state no command can be formed: only the status is
-published (``waiting``). :meth:`RunLoop.shutdown` publishes the stop command once more and waits
-(≤ 0.2 s) for reliable readers to acknowledge it.
+measured joint positions q_stop, fixed at the first stop command: a trajectory point at q_stop with zero
+velocities and accelerations; a Float64MultiArray of q_stop, zero velocities or zero efforts) and the
+status ``protective_stop``; latched until the process restarts. Before the arm's first joint state no
+command can be formed: only the status is published (``waiting``). :meth:`RunLoop.shutdown` publishes
+the stop command once more and waits (≤ 0.2 s) for reliable readers to acknowledge it.
 """
 
 from __future__ import annotations
@@ -89,6 +89,7 @@ class RunLoop:
         self.watchdog = Watchdog([Deadline(n, s.deadline_s, s.stop_after_s, s.optional)
                                   for n, s in config.inputs.items()], self.start)
         self._q_last: np.ndarray | None = None  # last finite measured joint positions
+        self._q_stop: np.ndarray | None = None  # the positions the stop holds, latched at the stop
         self._stop_reason: str | None = None
         self.summary = RunSummary()
 
@@ -122,7 +123,9 @@ class RunLoop:
         if self._q_last is None and not (self.config.command.type.endswith("Float64MultiArray")
                                          and self.config.command.interface != "position"):
             return None
-        q = self._q_last if self._q_last is not None else zeros
+        if self._q_stop is None and self._q_last is not None:
+            self._q_stop = self._q_last.copy()
+        q = self._q_stop if self._q_stop is not None else zeros
         return command_message(self.config.command.type, self.config.command.interface, self.joints,
                                ros_time(self.wall()), self.config.period_s, q, zeros, zeros, zeros)
 
