@@ -40,17 +40,14 @@ from __future__ import annotations
 
 import math
 import sys
-import typing
-from dataclasses import dataclass, field, fields, is_dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
-from cyclonedds.idl.types import array, sequence
-
 from learning.data.mapping import FieldPath, parse_field_path
-from mpcshare.errors import MpcshareError
-from mpcshare.runtime.messages import MESSAGE_TYPES, Quaternion, dds_topic
-from mpcshare.runtime.transport import RELIABILITIES, NetworkSettings, QosSettings
+from mpcshare.runtime.config_reader import RunConfigError, TableReader, check_field_path
+from mpcshare.runtime.messages import MESSAGE_TYPES
+from mpcshare.runtime.transport import NetworkSettings, QosSettings
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -74,10 +71,6 @@ _TOP = ("name", "rate_hz", "network", "robot", "controller", "inputs", "obs", "v
 _INPUT_KEYS = ("topic", "type", "optional", "deadline_s", "stop_after_s", "frame", "reliability", "depth",
                "joints")
 _ERD = "example-robot-data:"
-
-
-class RunConfigError(MpcshareError, ValueError):
-    """A configuration ``mpcshare run`` cannot use; the message names the file, the table and the key."""
 
 
 @dataclass(frozen=True)
@@ -169,132 +162,7 @@ class RunConfig:
         return [c.name for c in self.channels if c.kind == kind]
 
 
-class _Doc:
-    """Typed reads from the TOML document, raising :class:`RunConfigError` with the file, table and key."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def fail(self, where: str, message: str) -> RunConfigError:
-        return RunConfigError(f"{self.source}, {where}: {message}")
-
-    def table(self, doc: dict, key: str, where: str, required: bool = False) -> dict:
-        value = doc.get(key)
-        if value is None:
-            if required:
-                raise self.fail(where, "missing (a required table)")
-            return {}
-        if not isinstance(value, dict):
-            raise self.fail(where, f"must be a table, got {value!r}")
-        return value
-
-    def keys(self, table: dict, allowed: Sequence[str], where: str) -> None:
-        unknown = [k for k in table if k not in allowed]
-        if unknown:
-            raise self.fail(f"{where} {unknown[0]}", f"unknown key (allowed: {', '.join(allowed)})")
-
-    def number(self, table: dict, key: str, where: str, default: float | None = None, *, low: float = 0.0,
-               high: float = math.inf, required: bool = False) -> float | None:
-        if key not in table:
-            if required:
-                raise self.fail(f"{where} {key}", "missing")
-            return default
-        v = table[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and low < v <= high):
-            bound = f"in ({low:g}, {high:g}]" if math.isfinite(high) else f"> {low:g}"
-            raise self.fail(f"{where} {key}", f"must be a number {bound}, got {v!r}")
-        return float(v)
-
-    def text(self, table: dict, key: str, where: str, default: str | None = None,
-             choices: Sequence[str] | None = None) -> str:
-        if key not in table:
-            if default is None:
-                raise self.fail(f"{where} {key}", "missing")
-            return default
-        v = table[key]
-        if not isinstance(v, str):
-            raise self.fail(f"{where} {key}", f"must be a string, got {v!r}")
-        if choices is not None and v not in choices:
-            raise self.fail(f"{where} {key}", f"{v!r} is not one of {', '.join(choices)}")
-        return v
-
-    def flag(self, table: dict, key: str, where: str, default: bool) -> bool:
-        v = table.get(key, default)
-        if not isinstance(v, bool):
-            raise self.fail(f"{where} {key}", f"must be true or false, got {v!r}")
-        return v
-
-    def strings(self, table: dict, key: str, where: str, default: Sequence[str] = ()) -> tuple[str, ...]:
-        v = table.get(key, list(default))
-        if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
-            raise self.fail(f"{where} {key}", f"must be a list of non-empty strings, got {v!r}")
-        return tuple(v)
-
-    def triple(self, table: dict, key: str, where: str) -> tuple[float, float, float] | None:
-        if key not in table:
-            return None
-        v = table[key]
-        if not (isinstance(v, list) and len(v) == 3 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                                                           and math.isfinite(x) for x in v)):
-            raise self.fail(f"{where} {key}", f"must be three numbers [x, y, z], got {v!r}")
-        return (float(v[0]), float(v[1]), float(v[2]))
-
-    def topic(self, table: dict, where: str) -> str:
-        t = self.text(table, "topic", where)
-        try:
-            dds_topic(t)
-        except ValueError as exc:
-            raise self.fail(f"{where} topic", str(exc)) from None
-        return t
-
-    def qos(self, table: dict, where: str, default: QosSettings) -> QosSettings:
-        rel = self.text(table, "reliability", where, default.reliability, RELIABILITIES)
-        depth = table.get("depth", default.depth)
-        if isinstance(depth, bool) or not isinstance(depth, int) or not 1 <= depth <= 1000:
-            raise self.fail(f"{where} depth", f"must be an integer in [1, 1000], got {depth!r}")
-        return QosSettings(rel, depth)
-
-
-def _kind(tp: Any) -> tuple[str, Any]:
-    """("struct", class), ("seq", element type), ("num", None) or ("str", None) of a field's annotation."""
-    if isinstance(tp, type) and is_dataclass(tp):
-        return "struct", tp
-    if typing.get_origin(tp) is typing.Annotated:
-        base, *meta = typing.get_args(tp)
-        for m in meta:
-            if isinstance(m, (sequence, array)):
-                return "seq", m.subtype
-        return _kind(base)
-    if tp in (int, float):
-        return "num", None
-    return "str", None
-
-
-def check_field_path(message: type, path: FieldPath) -> None:
-    """ValueError unless ``path`` leads from ``message`` to a number (or to a quaternion with an angle)."""
-    kind, tp = "struct", message
-    for step in path.steps:
-        if isinstance(step, str):
-            if kind != "struct":
-                raise ValueError(f"field path {path.text!r}: {step!r} follows a value that has no fields")
-            names = [f.name for f in fields(tp)]
-            if step not in names:
-                raise ValueError(f"field path {path.text!r}: {tp.__name__} has no field {step!r} "
-                                 f"(fields: {', '.join(names)})")
-            kind, tp = _kind(typing.get_type_hints(tp, include_extras=True)[step])
-        else:
-            if kind != "seq":
-                raise ValueError(f"field path {path.text!r}: [{step}] indexes a value that is not an array")
-            kind, tp = _kind(tp)
-    if path.angle is not None:
-        if tp is not Quaternion:
-            raise ValueError(f"field path {path.text!r}: @{path.angle} needs a quaternion (e.g. pose.orientation)")
-    elif kind != "num":
-        raise ValueError(f"field path {path.text!r} ends at a {'message' if kind == 'struct' else kind}, "
-                         "not a number")
-
-
-def _inputs(d: _Doc, doc: dict, period_s: float) -> dict[str, InputSpec]:
+def _inputs(d: TableReader, doc: dict, period_s: float) -> dict[str, InputSpec]:
     table = d.table(doc, "inputs", "[inputs]", required=True)
     if "arm" not in table:
         raise d.fail("[inputs.arm]", "missing: the arm's sensor_msgs/msg/JointState input is required")
@@ -333,7 +201,7 @@ def _inputs(d: _Doc, doc: dict, period_s: float) -> dict[str, InputSpec]:
     return out
 
 
-def _channels(d: _Doc, doc: dict, inputs: dict[str, InputSpec]) -> tuple[ChannelSpec, ...]:
+def _channels(d: TableReader, doc: dict, inputs: dict[str, InputSpec]) -> tuple[ChannelSpec, ...]:
     out: list[ChannelSpec] = []
     for kind in ("obs", "voluntary"):
         table = d.table(doc, kind, f"[{kind}]", required=True)
@@ -354,7 +222,7 @@ def _channels(d: _Doc, doc: dict, inputs: dict[str, InputSpec]) -> tuple[Channel
     return tuple(out)
 
 
-def _robot(d: _Doc, doc: dict, folder: Path) -> RobotSpec:
+def _robot(d: TableReader, doc: dict, folder: Path) -> RobotSpec:
     t = d.table(doc, "robot", "[robot]")
     if not t:
         return RobotSpec()
@@ -371,7 +239,7 @@ def _robot(d: _Doc, doc: dict, folder: Path) -> RobotSpec:
                      d.number(t, "velocity_limit", "[robot]"), d.number(t, "acceleration_limit", "[robot]", 10.0))
 
 
-def _network(d: _Doc, doc: dict) -> NetworkSettings:
+def _network(d: TableReader, doc: dict) -> NetworkSettings:
     t = d.table(doc, "network", "[network]")
     d.keys(t, ("interface", "peers", "multicast", "domain_id"), "[network]")
     dom = t.get("domain_id", 0)
@@ -384,7 +252,7 @@ def _network(d: _Doc, doc: dict) -> NetworkSettings:
 
 def parse_run_config(doc: dict[str, Any], source: str, folder: Path | None = None) -> RunConfig:
     """Check a configuration already read from TOML (module docstring); ``folder``: where relative files are."""
-    d = _Doc(source)
+    d = TableReader(source)
     d.keys(doc, _TOP, "top level")
     rate = d.number(doc, "rate_hz", "top level", 100.0, high=1000.0)
     inputs = _inputs(d, doc, 1.0 / rate)
@@ -439,7 +307,7 @@ def check_against_model(config: RunConfig, *, obs_names: Sequence[str], vol_name
                         rate_hz: float, joint_names: Sequence[str]) -> None:
     """:class:`RunConfigError` unless ``config`` maps every channel of the model (and no other), names the
     arm's joints in the model's order, and runs at the model's rate."""
-    d = _Doc(config.source)
+    d = TableReader(config.source)
     for kind, wanted in (("obs", list(obs_names)), ("voluntary", list(vol_names))):
         have = config.names(kind)
         missing = [n for n in wanted if n not in have]
