@@ -4,7 +4,7 @@ Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz):
 
 1. take every new message of every input (arrival times feed the :class:`~mpcshare.runtime.watchdog.Watchdog`;
    a message whose header frame_id differs from the input's ``frame`` is dropped and counted);
-2. the watchdog's verdict at t_k: a stale input's values are withheld (NaN: the arm → the controller's
+2. the watchdog's verdict now: a stale input's values are withheld (NaN: the arm → the controller's
    ``invalid_joint_state`` hold; a fork or wrench channel → the Kalman prediction and then
    ``stale_fork_sensor``; the shoulder → ``invalid_shoulder``; the torso → ``invalid_base_pose``, last
    pose kept); the status names the stale inputs;
@@ -140,7 +140,7 @@ class RunLoop:
         """Control tick k (module docstring, 1–3); returns the published status."""
         t_k = k * self.config.period_s
         self.poll()
-        watch = self.watchdog.check(self.start + t_k)
+        watch = self.watchdog.check(self.clock())
         values: dict[str, object] = {"tick": k, "t": t_k}
         values.update({f"age_{n}": a for n, a in watch.ages.items()})
         values["stale_inputs"] = ",".join(watch.stale)
