@@ -13,11 +13,13 @@
   (the strategy registry's and the extra ones) every command and report reads; :mod:`mpcshare.line_ratio`
   — the tracking RMS over the straight voluntary–reactive line; :mod:`mpcshare.conflicts` — the conflict
   scenarios of ``sim --scenario`` (a command into the hand, a hand sweep, …);
+- :mod:`mpcshare.runtime` — ``run``: the shared controller on a real arm over ROS 2 topics (DDS),
+  its configuration and watchdogs;
 - :mod:`mpcshare.errors` — :class:`~mpcshare.errors.MpcshareError` and ``PROJECT_ERRORS``, the
   roots of every error the project raises;
 - :mod:`mpcshare.cli` and :mod:`mpcshare.commands` — the ``mpcshare`` command line (registry
   :data:`mpcshare.cli.COMMANDS`; subcommands ``generate``, ``inspect``, ``analyze``, ``train``,
-  ``sim``, ``tune``, ``demo``, ``import``).
+  ``sim``, ``tune``, ``demo``, ``import``, ``run``).
 
 The MPC is the robot's (:mod:`robot.mpc`), the learning is :mod:`learning`'s and the world is
 :mod:`sim`'s. ``python -m mpcshare`` runs the command line. Design: ``docs/design.md``.

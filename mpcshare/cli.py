@@ -29,6 +29,7 @@ from mpcshare.commands.base import (
 from mpcshare.commands.data import GENERATE_COMMAND, INSPECT_COMMAND
 from mpcshare.commands.demo import DEMO_COMMAND
 from mpcshare.commands.ros_import import IMPORT_COMMAND
+from mpcshare.commands.run import RUN_COMMAND
 from mpcshare.commands.sim import SIM_COMMAND
 from mpcshare.commands.train import TRAIN_COMMAND
 from mpcshare.commands.tune import TUNE_COMMAND
@@ -46,6 +47,7 @@ COMMANDS: tuple[Command, ...] = (
     SIM_COMMAND,
     TUNE_COMMAND,
     DEMO_COMMAND,
+    RUN_COMMAND,
 )
 
 

@@ -1,0 +1,242 @@
+"""The loop of ``mpcshare run``: the shared controller at the control rate over ROS 2 topics.
+
+Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz):
+
+1. take every new message of every input (arrival times feed the :class:`~mpcshare.runtime.watchdog.Watchdog`;
+   a message whose header frame_id differs from the input's ``frame`` is dropped and counted);
+2. the watchdog's verdict now: a stale input's values are withheld (NaN: the arm → the controller's
+   ``invalid_joint_state`` hold; a fork or wrench channel → the Kalman prediction and then
+   ``stale_fork_sensor``; the shoulder → ``invalid_shoulder``; the torso → ``invalid_base_pose``, last
+   pose kept); the status names the stale inputs;
+3. ``SharedController.step(t_k, obs, voluntary, q, v, base_pose)``, then the command (stamped with the
+   wall clock, ROS time) and the status are published;
+4. sleep until t_{k+1}; a tick that is already past is skipped (counted as ``late_ticks``).
+
+**Protective stop** (a required input older than its ``stop_after_s``, a non-finite command, or the end
+of the run): the controller is no longer called; every tick publishes the stop command (hold the last
+measured joint positions q_stop, fixed at the first stop command: a trajectory point at q_stop with zero
+velocities and accelerations; a Float64MultiArray of q_stop, zero velocities or zero efforts) and the
+status ``protective_stop``; latched until the process restarts. Before the arm's first joint state no
+command can be formed: only the status is published (``waiting``). :meth:`RunLoop.shutdown` publishes
+the stop command once more and waits (≤ 0.2 s) for reliable readers to acknowledge it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from mpcshare.runtime.config import RunConfig
+from mpcshare.runtime.convert import (
+    ERROR,
+    OK,
+    STALE,
+    WARN,
+    command_message,
+    joint_state,
+    pose_matrix,
+    read_path,
+    status_message,
+)
+from mpcshare.runtime.messages import MESSAGE_TYPES, DiagnosticArray, ros_time
+from mpcshare.runtime.transport import Transport
+from mpcshare.runtime.watchdog import Deadline, Watchdog
+
+__all__ = ["WARN_STATUSES", "RunLoop", "RunSummary"]
+
+#: Controller statuses reported as WARN (the step still tracks); any other non-ok status is ERROR.
+WARN_STATUSES: frozenset[str] = frozenset({"reference_unreachable", "invalid_base_pose", "keepout_stale_zone",
+                                           "missing_observation", "invalid_observation_shape", "mpc_failed",
+                                           "mpc_timeout", "keepout_person"})
+
+
+@dataclass
+class RunSummary:
+    """What a run did: ticks, commands and stops published, late ticks, step times [s], the stop's reason."""
+
+    ticks: int = 0
+    commands: int = 0
+    stops: int = 0
+    late_ticks: int = 0
+    step_times: list[float] = field(default_factory=list)
+    stop_reason: str | None = None
+    statuses: dict[str, int] = field(default_factory=dict)
+
+
+class RunLoop:
+    """The loop (module docstring) of ``controller`` (``SharedController.step``'s interface) over ``transport``;
+    ``obs_names``, ``vol_names``: the controller's channel order; ``clock`` monotonic [s], ``wall`` ROS time [s]."""
+
+    def __init__(self, config: RunConfig, controller: Any, transport: Transport, *, obs_names: list[str],
+                 vol_names: list[str], clock: Callable[[], float] = time.monotonic,
+                 wall: Callable[[], float] = time.time) -> None:
+        self.config, self.controller, self.clock, self.wall = config, controller, clock, wall
+        self.joints = list(config.arm.joints)
+        self.readers = {n: transport.reader(s.topic, MESSAGE_TYPES[s.type], s.qos) for n, s in config.inputs.items()}
+        self.command_writer = transport.writer(config.command.topic, MESSAGE_TYPES[config.command.type],
+                                               config.command.qos)
+        self.status_writer = transport.writer(config.status_topic, DiagnosticArray, config.status_qos)
+        by_name = {(c.kind, c.name): c for c in config.channels}
+        self._obs = [by_name[("obs", n)] for n in obs_names]
+        self._vol = [by_name[("voluntary", n)] for n in vol_names]
+        self.latest: dict[str, Any] = {}
+        self.wrong_frame: dict[str, int] = {n: 0 for n in config.inputs}
+        self.start = clock()
+        self.watchdog = Watchdog([Deadline(n, s.deadline_s, s.stop_after_s, s.optional)
+                                  for n, s in config.inputs.items()], self.start)
+        self._q_last: np.ndarray | None = None  # last finite measured joint positions
+        self._q_stop: np.ndarray | None = None  # the positions the stop holds, latched at the stop
+        self._stop_reason: str | None = None
+        self.summary = RunSummary()
+
+    # ------------------------------------------------------------------ inputs
+    def poll(self) -> None:
+        """Take every new message of every input (module docstring, 1)."""
+        now = self.clock()
+        for name, reader in self.readers.items():
+            frame = self.config.inputs[name].frame
+            for msg in reader.take():
+                if frame and msg.header.frame_id != frame:
+                    self.wrong_frame[name] += 1
+                    continue
+                self.latest[name] = msg
+                self.watchdog.seen(name, now)
+        if "arm" in self.latest:
+            q, _ = joint_state(self.latest["arm"], self.joints)
+            if np.isfinite(q).all():
+                self._q_last = q
+
+    def _values(self, channels, stale: tuple[str, ...]) -> np.ndarray:
+        return np.array([read_path(self.latest[c.input], c.path) if c.input in self.latest and c.input not in stale
+                         else math.nan for c in channels])
+
+    # ------------------------------------------------------------------ one tick
+    def stop_command(self) -> Any | None:
+        """The stop command (module docstring); None when no joint position was ever measured and the
+        command carries positions."""
+        n = len(self.joints)
+        zeros = np.zeros(n)
+        if self._q_last is None and not (self.config.command.type.endswith("Float64MultiArray")
+                                         and self.config.command.interface != "position"):
+            return None
+        if self._q_stop is None and self._q_last is not None:
+            self._q_stop = self._q_last.copy()
+        q = self._q_stop if self._q_stop is not None else zeros
+        return command_message(self.config.command.type, self.config.command.interface, self.joints,
+                               ros_time(self.wall()), self.config.period_s, q, zeros, zeros, zeros)
+
+    def _publish_stop(self) -> bool:
+        msg = self.stop_command()
+        if msg is not None:
+            self.command_writer.write(msg)
+            self.summary.stops += 1
+        return msg is not None
+
+    def tick(self, k: int) -> str:
+        """Control tick k (module docstring, 1–3); returns the published status."""
+        t_k = k * self.config.period_s
+        self.poll()
+        watch = self.watchdog.check(self.clock())
+        values: dict[str, object] = {"tick": k, "t": t_k}
+        values.update({f"age_{n}": a for n, a in watch.ages.items()})
+        values["stale_inputs"] = ",".join(watch.stale)
+        values.update({f"wrong_frame_{n}": c for n, c in self.wrong_frame.items() if c})
+        if watch.stopped and self._stop_reason is None:
+            self._stop_reason = watch.stop_reason
+        if self._stop_reason is not None:
+            sent = self._publish_stop()
+            stamp = ros_time(self.wall())
+            values.update(protective_stop=self._stop_reason, stop_command=int(sent))
+            return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
+        if "arm" not in self.latest:
+            stamp = ros_time(self.wall())
+            return self._status(stamp, STALE, "waiting", f"waiting for the arm's joint states on "
+                                                         f"{self.config.arm.topic}", values)
+        q, v = joint_state(self.latest["arm"], self.joints)
+        if "arm" in watch.stale:
+            q, v = np.full_like(q, np.nan), np.full_like(v, np.nan)
+        base = None
+        if "torso" in self.config.inputs and "torso" in self.latest:
+            base = pose_matrix(self.latest["torso"].pose) if "torso" not in watch.stale else np.full((4, 4), np.nan)
+        t0 = time.perf_counter()
+        cmd = self.controller.step(t_k, self._values(self._obs, watch.stale), self._values(self._vol, watch.stale),
+                                   q, v, base)
+        self.summary.step_times.append(time.perf_counter() - t0)
+        arrays = [np.asarray(getattr(cmd, a, np.nan), dtype=float) for a in ("q_cmd", "v_cmd", "a_cmd", "tau")]
+        stamp = ros_time(self.wall())
+        if not all(x.shape == (len(self.joints),) and np.isfinite(x).all() for x in arrays):
+            self._stop_reason = f"the controller gave a non-finite command (status {getattr(cmd, 'status', '?')})"
+            self._publish_stop()
+            values["protective_stop"] = self._stop_reason
+            return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
+        self.command_writer.write(command_message(self.config.command.type, self.config.command.interface,
+                                                  self.joints, stamp, self.config.period_s, *arrays))
+        self.summary.commands += 1
+        status = str(cmd.status)
+        values.update(self._controller_values(cmd))
+        stale_note = "; stale: " + ", ".join(f"{n} ({self.config.inputs[n].topic}, {watch.ages[n]:.3f} s)"
+                                             for n in watch.stale) if watch.stale else ""
+        level = OK if status == "ok" and not watch.stale else WARN if status in WARN_STATUSES or status == "ok" \
+            else ERROR
+        return self._status(stamp, level, status, f"{status}{stale_note}", values)
+
+    def _controller_values(self, cmd: Any) -> dict[str, object]:
+        alpha = float(cmd.alpha)
+        proba = np.asarray(cmd.mode_proba, dtype=float)
+        out: dict[str, object] = {"alpha": alpha, "beta": float(cmd.beta),
+                                  "leader": "robot" if alpha >= 0.5 else "wearer",
+                                  "mode": int(np.argmax(proba)) if proba.size and np.isfinite(proba).all() else -1,
+                                  "mode_proba": proba, "novelty": float(cmd.novelty),
+                                  "reasons": " | ".join(cmd.reasons),
+                                  "step_s": float(cmd.timings.get("total", math.nan))}
+        keepout = getattr(self.controller, "keepout", None)
+        if keepout is not None and keepout.limit.clearances:
+            dist = [float(c.distance) for c in keepout.limit.clearances]
+            out["clearance_m"] = min(dist)
+            out.update({f"clearance_{z.name}_m": d for z, d in zip(keepout.limit.zones, dist)})
+        return out
+
+    def _status(self, stamp, level: int, status: str, message: str, values: dict[str, object]) -> str:
+        values = {"status": status, "stamp": f"{stamp.sec}.{stamp.nanosec:09d}", **values}
+        self.status_writer.write(status_message(stamp, "mpcshare: shared controller", self.config.name, level,
+                                                message, values))
+        self.summary.statuses[status] = self.summary.statuses.get(status, 0) + 1
+        return status
+
+    # ------------------------------------------------------------------ the schedule
+    def run(self, duration_s: float | None = None, should_stop: Callable[[], bool] = lambda: False) -> RunSummary:
+        """Tick on the monotonic schedule until ``duration_s`` [s] (None: no end) or ``should_stop()``;
+        then :meth:`shutdown`. Returns the summary."""
+        T, k = self.config.period_s, 0
+        try:
+            while not should_stop():
+                if duration_s is not None and k * T >= duration_s:
+                    break
+                self.tick(k)
+                self.summary.ticks += 1
+                now = self.clock() - self.start
+                nxt = k + 1
+                if now >= nxt * T:  # overran: skip to the next tick still ahead
+                    late = int(now // T) + 1
+                    self.summary.late_ticks += late - nxt
+                    nxt = late
+                while (wait := self.start + nxt * T - self.clock()) > 0 and not should_stop():
+                    time.sleep(min(wait, 0.005))
+                k = nxt
+        finally:
+            self.shutdown()
+        self.summary.stop_reason = self._stop_reason
+        return self.summary
+
+    def shutdown(self) -> None:
+        """Publish the stop command and wait up to 0.2 s for reliable readers to acknowledge it."""
+        sent = self._publish_stop()
+        self._status(ros_time(self.wall()), ERROR if self._stop_reason else OK, "stopped",
+                     "stopped: " + (self._stop_reason or "end of the run"), {"stop_command": int(sent)})
+        if sent:
+            self.command_writer.flush(0.2)
+        self.status_writer.flush(0.05)

@@ -1,0 +1,18 @@
+"""A small trained bundle saved once for the `mpcshare run` tests (real learned parts, ~15 s)."""
+
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def ros_model(tmp_path_factory):
+    """(bundle folder, demonstrations it was trained on)."""
+    pytest.importorskip("cyclonedds", reason="mpcshare run needs the cyclonedds package")
+    from mpcshare.bundle import save_bundle
+    from tests.mpcshare.control.controller_doubles import real_model_bundle
+
+    demos, bundle = real_model_bundle(0)
+    folder = tmp_path_factory.mktemp("ros_model") / "model"
+    save_bundle(bundle, folder)
+    return folder, demos

@@ -1,0 +1,137 @@
+"""The loop of `mpcshare run` tick by tick in one process: what the controller is given, what is published."""
+
+from __future__ import annotations
+
+import time
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("cyclonedds", reason="mpcshare run needs the cyclonedds package (pip install 'mpcshare[ros]')")
+
+from mpcshare.runtime.config import load_run_config  # noqa: E402
+from mpcshare.runtime.loop import RunLoop  # noqa: E402
+from mpcshare.runtime.messages import (  # noqa: E402
+    DiagnosticArray,
+    Float64MultiArray,
+    Header,
+    JointState,
+    Point,
+    Pose,
+    PoseStamped,
+    Quaternion,
+    Time,
+)
+from mpcshare.runtime.transport import NetworkSettings, QosSettings, Transport  # noqa: E402
+from tests.mpcshare.runtime.ros_helpers import DOMAIN, write_config  # noqa: E402
+
+OBS = ["fork_x", "fork_y", "fork_z", "fork_roll", "fork_pitch", "fork_yaw", "fork_fx", "fork_fy", "fork_fz"]
+VOL = ["shoulder_elevation", "shoulder_protraction", "shoulder_abduction"]
+
+
+class Recorder:
+    """A controller that records its arguments and commands q + 0.01."""
+
+    def __init__(self):
+        self.calls = []
+
+    def step(self, t, obs, voluntary, q, v, base_pose=None):
+        self.calls.append((t, np.array(obs), np.array(voluntary), np.array(q), np.array(v), base_pose))
+        n = len(q)
+        return SimpleNamespace(q_cmd=np.nan_to_num(q) + 0.01, v_cmd=np.ones(n), a_cmd=np.zeros(n), tau=np.full(n, 2.0),
+                               alpha=1.0, beta=0.5, mode_proba=np.array([0.2, 0.8]), novelty=1.0, status="ok",
+                               reasons=(), timings={"total": 1e-4})
+
+
+class Clock:
+    def __init__(self):
+        self.t = 100.0
+
+    def __call__(self):
+        return self.t
+
+
+def _wait(reader, n=1, timeout=5.0):
+    got, end = [], time.monotonic() + timeout
+    while len(got) < n and time.monotonic() < end:
+        got += reader.take()
+        time.sleep(0.005)
+    return got
+
+
+@pytest.fixture()
+def setup(tmp_path):
+    cfg = load_run_config(write_config(tmp_path, replace={
+        r'^topic = "/joint_trajectory_controller/joint_trajectory"\ntype = .*$':
+            'topic = "/test_loop/commands"\ntype = "std_msgs/msg/Float64MultiArray"\ninterface = "velocity"',
+        r'^topic = "/mpcshare/status"': 'topic = "/test_loop/status"'}))
+    t = Transport(NetworkSettings(domain_id=DOMAIN))
+    clock, ctl = Clock(), Recorder()
+    loop = RunLoop(cfg, ctl, t, obs_names=OBS, vol_names=VOL, clock=clock, wall=lambda: 1234.5)
+    pubs = {n: t.writer(s.topic, {"sensor_msgs/msg/JointState": JointState,
+                                  "geometry_msgs/msg/PoseStamped": PoseStamped}.get(s.type, PoseStamped))
+            for n, s in cfg.inputs.items() if n != "fork_wrench"}
+    out = (t.reader("/test_loop/commands", Float64MultiArray, QosSettings("reliable", 100)),
+           t.reader("/test_loop/status", DiagnosticArray, QosSettings("reliable", 100)))
+    end = time.monotonic() + 5.0
+    while any(loop.readers[n]._reader.get_matched_publications() == [] for n in pubs) and time.monotonic() < end:
+        time.sleep(0.01)
+    time.sleep(0.05)
+    return loop, ctl, clock, pubs, out
+
+
+def _feed(pubs, frame="plate"):
+    pubs["arm"].write(JointState(Header(Time(1, 0), ""), ["shoulder", "elbow", "base_yaw"], [0.2, 0.3, 0.1],
+                                 [0.02, 0.03, 0.01], []))
+    pubs["fork"].write(PoseStamped(Header(Time(1, 0), frame), Pose(Point(0.1, 0.2, 0.3), Quaternion(0, 0, 0, 1))))
+    pubs["shoulder"].write(JointState(Header(Time(1, 0), ""), [], [0.5, 0.6, 0.7], [], []))
+    pubs["torso"].write(PoseStamped(Header(Time(1, 0), "plate"), Pose(Point(-0.2, 0.1, 0.0), Quaternion())))
+    time.sleep(0.05)
+
+
+def test_inputs_reach_the_controller_in_its_order_and_stale_ones_are_withheld(setup):
+    loop, ctl, clock, pubs, (commands, status) = setup
+    assert loop.tick(0) == "waiting" and ctl.calls == []  # no joint state yet: status only
+    _feed(pubs)
+    clock.t += 0.01
+    assert loop.tick(1) == "ok"
+    t, obs, vol, q, v, base = ctl.calls[-1]
+    assert t == pytest.approx(0.01)
+    np.testing.assert_allclose(q, [0.1, 0.2, 0.3])  # by joint name, in the model's order
+    np.testing.assert_allclose(v, [0.01, 0.02, 0.03])
+    np.testing.assert_allclose(obs[:6], [0.1, 0.2, 0.3, 0, 0, 0])
+    assert np.isnan(obs[6:]).all()  # the optional wrench never sent
+    np.testing.assert_allclose(vol, [0.5, 0.6, 0.7])
+    np.testing.assert_allclose(base[:3, 3], [-0.2, 0.1, 0.0])
+    cmd = _wait(commands)[-1]
+    assert list(cmd.data) == [1.0, 1.0, 1.0] and cmd.layout.dim[0].size == 3  # the velocity interface
+    st = _wait(status, 2)[-1].status[0]
+    values = {kv.key: kv.value for kv in st.values}
+    assert st.level == 0 and values["leader"] == "robot" and values["mode"] == "1" and values["stamp"] == \
+        "1234.500000000"
+    clock.t += 0.06  # everything 0.06 s old: the arm (0.03 s), fork and shoulder (0.05 s) are stale, not the torso
+    loop.tick(7)
+    _, obs, vol, q, v, base = ctl.calls[-1]
+    assert np.isnan(q).all() and np.isnan(v).all() and np.isnan(obs).all() and np.isnan(vol).all()
+    assert np.isfinite(base).all()
+    st = _wait(status)[-1].status[0]
+    assert st.level == 1 and "stale: arm (/joint_states, 0.060 s), fork (/mocap/fork/pose, 0.060 s), shoulder" \
+        in st.message
+    clock.t += 0.1  # the arm past its stop_after_s (0.1 s): protective stop, the controller no longer called
+    n = len(ctl.calls)
+    assert loop.tick(17) == "protective_stop" and len(ctl.calls) == n
+    assert list(_wait(commands)[-1].data) == [0.0, 0.0, 0.0]  # a velocity stop
+    _feed(pubs)
+    clock.t += 0.01
+    assert loop.tick(18) == "protective_stop"  # latched
+
+
+def test_a_message_in_another_frame_is_dropped_and_counted(setup):
+    loop, ctl, clock, pubs, (commands, status) = setup
+    _feed(pubs, frame="world")
+    clock.t += 0.01
+    loop.tick(1)
+    assert np.isnan(ctl.calls[-1][1][:6]).all() and loop.wrong_frame["fork"] == 1
+    values = {kv.key: kv.value for kv in _wait(status)[-1].status[0].values}
+    assert values["wrong_frame_fork"] == "1"
