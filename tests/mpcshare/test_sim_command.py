@@ -165,6 +165,23 @@ def test_sim_on_another_arm_from_its_file(trained, tmp_path, capsys):
     assert main(["sim", "--model", str(model), "--out", str(tmp_path / "m"), "--runs", "reactive",
                  *arm[:4]]) == 1
     assert "--mount" in capsys.readouterr().err
-    fast = arm[:-4] + ["--acceleration-limit", "80"]
+    fast = arm[:-2] + ["--acceleration-limit", "80"]
     assert main(["sim", "--model", str(model), "--out", str(tmp_path / "f"), "--runs", "reactive", *fast]) == 1
-    assert "braking" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "braking at 40 rad/s²" in err and "--acceleration-limit" in err
+
+
+def test_sim_on_an_arm_preset_chooses_and_says_its_caps(trained, tmp_path, capsys):
+    """``--robot panda``: the preset's file, tip, fingers and mount; the caps chosen and printed in one line."""
+    data, model = trained
+    out = tmp_path / "preset"
+    assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "1",
+                 "--runs", "reactive", "--robot", "panda"]) == 0
+    printed = capsys.readouterr().out
+    caps = [line for line in printed.splitlines() if line.startswith("arm caps: ")]
+    assert len(caps) == 1 and "rad/s²" in caps[0] and "chosen" in caps[0]
+    comp = json.loads((out / "comparison.json").read_text())
+    assert comp["strategies"]["reactive"]["limit_violations"] == 0
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "x"), "--robot", "pandas"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("mpcshare sim: --robot pandas: no arm preset 'pandas'; presets: panda, xarm7")
