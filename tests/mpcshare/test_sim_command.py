@@ -185,3 +185,38 @@ def test_sim_on_an_arm_preset_chooses_and_says_its_caps(trained, tmp_path, capsy
     assert main(["sim", "--model", str(model), "--out", str(tmp_path / "x"), "--robot", "pandas"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("mpcshare sim: --robot pandas: no arm preset 'pandas'; presets: panda, xarm7")
+
+
+def test_sim_video_renders_headless_or_says_why_once(trained, tmp_path, capsys, monkeypatch):
+    """``python -m mpcshare sim --video`` with neither DISPLAY nor MUJOCO_GL set writes the clip; without an
+    OpenGL context the command says so in one line, once."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    data, model = trained
+    root = Path(__file__).resolve().parents[2]
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")])
+    out = tmp_path / "video"
+    run = subprocess.run([sys.executable, "-m", "mpcshare", "sim", "--model", str(model), "--out", str(out),
+                          "--trials", "1", "--duration", "1", "--runs", "gate", "--video"], capture_output=True,
+                         text=True, env=env, cwd=root, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert "no video" not in run.stdout + run.stderr and "GLFW" not in run.stderr
+    video = json.loads((out / "comparison.json").read_text())["video"]
+    assert video and (out / video).stat().st_size > 10_000
+
+    import sim.render
+
+    def no_gl(*args, **kwargs):
+        raise RuntimeError("an OpenGL platform library has not been loaded")
+
+    monkeypatch.setattr(sim.render.mujoco, "Renderer", no_gl)
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "novideo"), "--trials", "1", "--duration",
+                 "1", "--runs", "gate", "--video"]) == 0
+    captured = capsys.readouterr()
+    said = [line for line in (captured.out + captured.err).splitlines() if "no video" in line]
+    assert len(said) == 1 and said[0].startswith("no video: offscreen OpenGL is not available") \
+        and "no video: no video" not in said[0] and "MUJOCO_GL" in said[0]
