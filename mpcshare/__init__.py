@@ -11,7 +11,8 @@
   placebo and oracle hand-over schedules (``schedule``, ``handover``) and the ``tune`` sweep of
   K × β × strategy, local or on Ray (``tuning``); :mod:`mpcshare.run_table` — the runs
   (the strategy registry's and the extra ones) every command and report reads; :mod:`mpcshare.line_ratio`
-  — the tracking RMS over the straight voluntary–reactive line; :mod:`mpcshare.conflicts` — the conflict
+  — the tracking RMS over the straight voluntary–reactive line; :mod:`mpcshare.arms` — another arm (a preset or a
+  file) set up for the task, its speed and acceleration caps chosen; :mod:`mpcshare.conflicts` — the conflict
   scenarios of ``sim --scenario`` (a command into the hand, a hand sweep, …);
 - :mod:`mpcshare.runtime` — ``run``: the shared controller on a real arm over ROS 2 topics (DDS),
   its configuration and watchdogs;

@@ -11,7 +11,6 @@ Exit status: 0 success, 1 unusable input (a clear message on stderr), 2 usage er
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from typing import Sequence
 
@@ -33,6 +32,7 @@ from mpcshare.commands.run import RUN_COMMAND
 from mpcshare.commands.sim import SIM_COMMAND
 from mpcshare.commands.train import TRAIN_COMMAND
 from mpcshare.commands.tune import TUNE_COMMAND
+from sim.offscreen_gl import prefer_offscreen_gl  # importing sim chooses offscreen GL, before any MuJoCo import
 
 __all__ = ["COMMANDS", "Command", "CommandError", "build_parser", "main", "positive_int", "positive_float",
            "nonnegative_float", "prepare_output_folder", "load_or_fail"]
@@ -74,16 +74,6 @@ def _merge(extra: Sequence[Command]) -> tuple[Command, ...]:
     by_name = {c.name: c for c in extra}
     merged = [by_name.pop(c.name, c) for c in COMMANDS]
     return tuple(merged) + tuple(c for c in extra if c.name in by_name)
-
-
-def prefer_offscreen_gl() -> None:
-    """Render MuJoCo offscreen through EGL when ``MUJOCO_GL`` is unset and there is no display.
-
-    MuJoCo reads the variable once, at its first import; the simulator's modules are
-    imported by the subcommands that need them, after this.
-    """
-    if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
-        os.environ["MUJOCO_GL"] = "egl"
 
 
 def main(argv: Sequence[str] | None = None, commands: Sequence[Command] = ()) -> int:

@@ -3,7 +3,8 @@
 - :mod:`robot.description` — ``RobotDescription``: one arm (URDF or MJCF → Pinocchio model, tip
   frame, limits, mount) for the QP, the MPC, the controller, the scene and the servo;
   :mod:`robot.mjcf` writes any description's MuJoCo bodies; :mod:`robot.ik` its numerical
-  inverse kinematics.
+  inverse kinematics; :mod:`robot.braking` the speed and acceleration caps whose braking is
+  torque-feasible; :mod:`robot.presets` the common arms of example-robot-data.
 - :mod:`robot.superlimb` — the SuperLimb, one description among others, with its own knowledge:
   one parametric source (``SuperLimbParams``) for its URDF, MJCF and Pinocchio model, the
   closed-form inverse kinematics (``superlimb_description()``).

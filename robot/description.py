@@ -24,10 +24,11 @@ from typing import Any, Sequence
 import numpy as np
 import pinocchio as pin
 
+from robot.braking import braking_torque_ratio
 from robot.errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from robot.limits import JointLimits
 
-__all__ = ["RobotDescription", "as_description", "mount_model"]
+__all__ = ["RobotDescription", "as_description", "braking_torque_ratio", "mount_model"]
 
 Vec3 = tuple[float, float, float]
 FILE_KINDS = {".urdf": "URDF", ".xml": "MJCF", ".mjcf": "MJCF"}
@@ -48,6 +49,23 @@ def mount_model(model, xyz: Sequence[float], rpy: Sequence[float] = (0.0, 0.0, 0
         if frame.parentJoint == 0:
             frame.placement = M * frame.placement
             model.frames[k] = frame
+
+
+def _bounded_continuous(urdf: str) -> str:
+    """The URDF text with every continuous joint made revolute within its limits (±2π where none)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(urdf)
+    for joint in root.iter("joint"):
+        if joint.get("type") != "continuous":
+            continue
+        joint.set("type", "revolute")
+        limit = joint.find("limit")
+        if limit is None:
+            limit = ET.SubElement(joint, "limit")
+        for key, value in (("lower", -2 * np.pi), ("upper", 2 * np.pi)):
+            limit.set(key, limit.get(key) or repr(value))
+    return ET.tostring(root, encoding="unicode")
 
 
 def _per_joint(name: str, value: Any, n: int) -> np.ndarray | None:
@@ -155,6 +173,10 @@ class RobotDescription:
         :func:`robot.description.braking_torque_ratio` checks), ``velocity_limit`` [rad/s] and
         ``torque_limit`` [N·m]: caps below the file's (also what a file without them needs).
         """
+        if model.nq != model.nv:
+            raise UnsupportedModelError(f"{name or model.name}: nq={model.nq} ≠ nv={model.nv} (free-flyer, spherical "
+                                        "or continuous joints); lock them or make them revolute with limits "
+                                        "(from_file: continuous_as_revolute=True)")
         model = model.copy()
         mount_model(model, mount_xyz, mount_rpy)
         n = model.nv
@@ -181,10 +203,11 @@ class RobotDescription:
 
     @classmethod
     def from_file(cls, path: str | Path, tip_frame: str, *, locked_joints: Sequence[str] = (),
-                  **options: Any) -> RobotDescription:
+                  continuous_as_revolute: bool = False, **options: Any) -> RobotDescription:
         """Description of a URDF (``.urdf``) or MJCF (``.xml``, ``.mjcf``) file; ``options`` as
         :meth:`from_model`. ``locked_joints``: joints held at 0 (or their lower limit if 0 is
-        outside), e.g. a gripper's fingers."""
+        outside), e.g. a gripper's fingers. ``continuous_as_revolute`` (URDF): a continuous joint
+        becomes a revolute one within its ``<limit lower upper>``, ±2π [rad] where the file has none."""
         path = Path(path)
         kind = FILE_KINDS.get(path.suffix.lower())
         if kind is None:
@@ -192,7 +215,11 @@ class RobotDescription:
                                         f"valid: {', '.join(FILE_KINDS)}")
         if not path.is_file():
             raise ControllerConfigError(f"robot file {path} does not exist")
-        model = pin.buildModelFromUrdf(str(path)) if kind == "URDF" else pin.buildModelFromMJCF(str(path))
+        if kind == "URDF":
+            text = path.read_text()
+            model = pin.buildModelFromXML(_bounded_continuous(text) if continuous_as_revolute else text)
+        else:
+            model = pin.buildModelFromMJCF(str(path))
         if locked_joints:
             missing = [j for j in locked_joints if not model.existJointName(j)]
             if missing:
@@ -201,22 +228,6 @@ class RobotDescription:
             model = pin.buildReducedModel(model, [model.getJointId(j) for j in locked_joints], q)
         options.setdefault("source", str(path))
         return cls.from_model(model, tip_frame, **options)
-
-
-def braking_torque_ratio(robot: RobotDescription, n_samples: int = 2000, seed: int = 0) -> float:
-    """Largest |M(q)·a + h(q, v)|_i / τ_max,i over sampled q within the limits, |v| ≤ v_max and a at the
-    corners of |a| ≤ a_brake: ≤ 1 means braking (what the viable limits rely on) is torque-feasible."""
-    model, lim = robot.model, robot.limits
-    data = model.createData()
-    rng = np.random.default_rng(seed)
-    worst = 0.0
-    for _ in range(n_samples):
-        q = rng.uniform(lim.q_min, lim.q_max)
-        v = rng.choice([-1.0, 1.0], robot.n) * lim.v_max
-        a = rng.choice([-1.0, 1.0], robot.n) * lim.a_brake
-        tau = pin.rnea(model, data, q, v, a)
-        worst = max(worst, float(np.max(np.abs(tau) / lim.tau_max)))
-    return worst
 
 
 def as_description(robot: Any = None) -> RobotDescription:

@@ -334,5 +334,5 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         video, message = renderer.close()
         info["video"], info["render_message"] = (str(video) if video else None), message
         if message:
-            warnings.warn(message, RuntimeWarning, stacklevel=2)
+            warnings.warn(f"no video: {message}" if video is None else message, RuntimeWarning, stacklevel=2)
     return loop.episode(info)

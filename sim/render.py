@@ -1,9 +1,10 @@
 """Offscreen video of an episode: MuJoCo's renderer, written as MP4 (imageio + ffmpeg) or an animated GIF.
 
-Needs an OpenGL context: ``MUJOCO_GL=egl``, set before MuJoCo is first imported (the
-``mpcshare`` command line sets it when it is unset and there is no display), works
+Needs an OpenGL context: ``MUJOCO_GL=egl``, set before MuJoCo is first imported (importing
+:mod:`sim` sets it when it is unset and there is no display: :mod:`sim.offscreen_gl`), works
 on headless machines with a GPU driver or Mesa's EGL.  Without one, :class:`VideoRecorder`
-records nothing and :meth:`VideoRecorder.close` returns a message saying so; the episode goes on.
+records nothing and :meth:`VideoRecorder.close` returns a message saying why (without a
+"no video" prefix: the caller says that once); the episode goes on.
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+
+from sim.offscreen_gl import gl_hint
 
 __all__ = ["Caption", "VideoRecorder"]
 
@@ -65,8 +68,7 @@ class VideoRecorder:
             self._renderer = mujoco.Renderer(model, height, width)
         except Exception as exc:  # noqa: BLE001  (no OpenGL context, whatever the backend raises: say so)
             self._renderer = None
-            self.message = (f"no video: offscreen OpenGL is not available ({type(exc).__name__}: {exc}); "
-                            "set MUJOCO_GL=egl (or osmesa) to render")
+            self.message = f"offscreen OpenGL is not available ({type(exc).__name__}: {exc}); {gl_hint()}"
             return
         # Shadows, reflections and the skybox cost ~70 % of a frame under software OpenGL
         # (Mesa llvmpipe: 360 → 110 ms per 320×240 frame of the eating scene); the video
@@ -115,7 +117,7 @@ class VideoRecorder:
             self._writer.close()
             return self.path, self.message
         if not self._frames:
-            return None, self.message or "no video: no frame was rendered"
+            return None, self.message or "no frame was rendered"
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._frames[0].save(self.path, save_all=True, append_images=self._frames[1:],
                              duration=round(1000 / self.fps), loop=0)

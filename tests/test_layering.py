@@ -26,7 +26,7 @@ MAY_IMPORT = {
 THIRD_PARTY = {
     "learning": {"numpy", "scipy", "sklearn", "hmmlearn", "torch", "numba", "threadpoolctl", "tqdm", "rosbags",
                  "tomli"},
-    "robot": {"numpy", "scipy", "pinocchio", "qpsolvers", "osqp", "daqp", "ruckig", "casadi"},
+    "robot": {"numpy", "scipy", "pinocchio", "qpsolvers", "osqp", "daqp", "ruckig", "casadi", "example_robot_data"},
     "sim": {"numpy", "scipy", "mujoco", "tqdm", "PIL", "imageio", "imageio_ffmpeg", "mcap"},
 }
 #: inside mpcshare: the online controller never imports training, reports or the command line

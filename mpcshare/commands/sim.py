@@ -8,8 +8,8 @@ upper bound, the placebo ``random_handover`` and the upper bound ``oracle_handov
 trial in MuJoCo
 beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
 ``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
-for Foxglove) and, with ``--video``, a video of the gate on the first trial. ``--robot FILE
---tip-frame NAME --mount X Y Z`` simulates another arm (:mod:`mpcshare.commands.robot_options`).
+for Foxglove) and, with ``--video``, a video of the gate on the first trial. ``--robot PRESET``
+(or ``FILE --tip-frame NAME --mount X Y Z``) simulates another arm (:mod:`mpcshare.commands.robot_options`).
 """
 
 from __future__ import annotations
@@ -195,7 +195,8 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
                                      strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
                                      beta=args.beta, wearer=wearer, scene=scene, scenario=scenario,
-                                     controller_options=options)
+                                     controller_options=options,
+                                     seconds=10.0 if args.duration is None else min(10.0, args.duration))
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
     return write_comparison(comp, out, cutting=cutting_steps(demos, trial_ids[0]))

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
@@ -387,7 +388,9 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
     robot = {} if scene is None else {"robot": scene.robot}
     controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta, **robot,
                                  **(controller_options or {}))
-    episode = run_episode(controller, trial, scene=scene, duration_s=seconds, seed=seed, render=path, record=False,
-                          wearer=wearer, obs_names=list(demos.obs_names), act_names=list(demos.act_names),
-                          fork_truth=fork_truth)
+    with warnings.catch_warnings():  # the message is returned, for the caller to say once
+        warnings.filterwarnings("ignore", message="no video", category=RuntimeWarning)
+        episode = run_episode(controller, trial, scene=scene, duration_s=seconds, seed=seed, render=path,
+                              record=False, wearer=wearer, obs_names=list(demos.obs_names),
+                              act_names=list(demos.act_names), fork_truth=fork_truth)
     return episode.info.get("video"), episode.info.get("render_message")

@@ -165,9 +165,10 @@ def test_sim_on_another_arm_from_its_file(trained, tmp_path, capsys):
     assert main(["sim", "--model", str(model), "--out", str(tmp_path / "m"), "--runs", "reactive",
                  *arm[:4]]) == 1
     assert "--mount" in capsys.readouterr().err
-    fast = arm[:-4] + ["--acceleration-limit", "80"]
+    fast = arm[:-2] + ["--acceleration-limit", "80"]
     assert main(["sim", "--model", str(model), "--out", str(tmp_path / "f"), "--runs", "reactive", *fast]) == 1
-    assert "braking" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "braking at 40 rad/s²" in err and "--acceleration-limit" in err
 
 
 def test_the_announced_size_is_within_ten_percent_of_the_run_files_written(trained, tmp_path, capsys):
@@ -184,3 +185,54 @@ def test_the_announced_size_is_within_ten_percent_of_the_run_files_written(train
     assert abs(announced / written - 1) < 0.10, (announced, written)
     assert said.index("writing about") < said.index("voluntary")  # said before the first run
     assert len(list((out / "runs").iterdir())) == 4  # the oracle keeps one run file per trial: its best
+
+
+def test_sim_on_an_arm_preset_chooses_and_says_its_caps(trained, tmp_path, capsys):
+    """``--robot panda``: the preset's file, tip, fingers and mount; the caps chosen and printed in one line."""
+    data, model = trained
+    out = tmp_path / "preset"
+    assert main(["sim", "--model", str(model), "--out", str(out), "--trials", "1", "--duration", "1",
+                 "--runs", "reactive", "--robot", "panda"]) == 0
+    printed = capsys.readouterr().out
+    caps = [line for line in printed.splitlines() if line.startswith("arm caps: ")]
+    assert len(caps) == 1 and "rad/s²" in caps[0] and "chosen" in caps[0]
+    comp = json.loads((out / "comparison.json").read_text())
+    assert comp["strategies"]["reactive"]["limit_violations"] == 0
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "x"), "--robot", "pandas"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("mpcshare sim: --robot pandas: no arm preset 'pandas'; presets: panda, xarm7")
+
+
+def test_sim_video_renders_headless_or_says_why_once(trained, tmp_path, capsys, monkeypatch):
+    """``python -m mpcshare sim --video`` with neither DISPLAY nor MUJOCO_GL set writes the clip; without an
+    OpenGL context the command says so in one line, once."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    data, model = trained
+    root = Path(__file__).resolve().parents[2]
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")])
+    out = tmp_path / "video"
+    run = subprocess.run([sys.executable, "-m", "mpcshare", "sim", "--model", str(model), "--out", str(out),
+                          "--trials", "1", "--duration", "1", "--runs", "gate", "--video"], capture_output=True,
+                         text=True, env=env, cwd=root, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert "no video" not in run.stdout + run.stderr and "GLFW" not in run.stderr
+    video = json.loads((out / "comparison.json").read_text())["video"]
+    assert video and (out / video).stat().st_size > 10_000
+
+    import sim.render
+
+    def no_gl(*args, **kwargs):
+        raise RuntimeError("an OpenGL platform library has not been loaded")
+
+    monkeypatch.setattr(sim.render.mujoco, "Renderer", no_gl)
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "novideo"), "--trials", "1", "--duration",
+                 "1", "--runs", "gate", "--video"]) == 0
+    captured = capsys.readouterr()
+    said = [line for line in (captured.out + captured.err).splitlines() if "no video" in line]
+    assert len(said) == 1 and said[0].startswith("no video: offscreen OpenGL is not available") \
+        and "no video: no video" not in said[0] and "MUJOCO_GL" in said[0]
