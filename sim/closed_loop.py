@@ -141,6 +141,8 @@ class _Loop:
         base = world.base_pose(t_k)
         cue = self.alpha[k - 1] if k > 0 else None  # what the controller showed at the previous step
         theta = self.person.step(k, tip, alpha_cue=cue)
+        if k == 0 and np.ndim(theta) == 1 and np.size(theta) != self.out["voluntary"].shape[1]:  # not 3 angles
+            self.out["voluntary"] = np.full((self.n_ctrl, theta.size), np.nan)
         q, v = d.qpos.copy(), d.qvel.copy()  # the arm is the whole state
         t0 = time.perf_counter()
         try:

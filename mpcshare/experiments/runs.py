@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
@@ -42,6 +42,7 @@ from mpcshare.experiments.handover import (
 from mpcshare.experiments.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
 from mpcshare.line_ratio import add_line_ratios
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
+from robot.shoulder import ShoulderMap
 from sim.closed_loop import run_episode
 from sim.keepout_metrics import KEEPOUT_KEYS, episode_keepout_metrics
 from sim.metrics import episode_metrics
@@ -54,7 +55,8 @@ from sim.wearer_presets import wearer_preset_name
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
+__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "bundle_wearer", "compare_strategies",
+           "describe_wearer",
            "output_size", "pool_keepout_metrics", "pool_metrics", "pool_task_metrics", "render_clip",
            "intent_preview", "simulate_episode"]
 
@@ -91,6 +93,18 @@ def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
     from mpcshare.control.controller import SharedController
 
     return SharedController.from_bundle(bundle, **options)
+
+
+def bundle_wearer(bundle: Any, wearer: Any) -> Any:
+    """The wearer commanding through the bundle's shoulder channels: a :class:`WearerConfig` ``wearer``
+    (None: ``WearerConfig()``) with its shoulder map's gain and dead zone on the bundle's ``vol_names``
+    (:meth:`robot.shoulder.ShoulderMap.for_channels`, the controller's map); ``wearer`` itself for the
+    three angles or a wearer of another kind. Raises ValueError for channels no map reads."""
+    wc = WearerConfig() if wearer is None else wearer
+    if not isinstance(wc, WearerConfig):
+        return wearer
+    m = ShoulderMap.for_channels(getattr(bundle, "vol_names", ()) or (), wc.shoulder.gain, wc.shoulder.deadband_rad)
+    return wearer if np.array_equal(m.matrix, wc.shoulder.matrix) else replace(wc, shoulder=m)
 
 
 def intent_preview(trial: Any, act_names: Sequence[str], wearer: WearerConfig | None = None) -> Any:
@@ -131,6 +145,7 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
         options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
     if scene is not None:
         options = {**options, "robot": scene.robot}
+    wearer = bundle_wearer(bundle, wearer)
     controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
     # one BLAS thread: the controller's products are small (a 7-joint MPC's take ≈ 2 ms a solve on one
     # thread, ≈ 20 ms with OpenBLAS's threads on a shared 2-core machine; docs/design.md)
@@ -380,6 +395,7 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
         trial, fork_truth = st.trial, st.fork_truth
         bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
     robot = {} if scene is None else {"robot": scene.robot}
+    wearer = bundle_wearer(bundle, wearer)
     controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta, **robot,
                                  **(controller_options or {}))
     episode = run_episode(controller, trial, scene=scene, duration_s=seconds, seed=seed, render=path, record=False,
