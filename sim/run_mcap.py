@@ -44,7 +44,7 @@ from learning.atomic import atomic_open
 from learning.data import Trial
 from robot.shoulder import SHOULDER_CHANNELS
 
-from .closed_loop import FORK_CHANNELS, Episode
+from .closed_loop import FORK_CHANNELS, Episode, fork_pose_rows
 
 __all__ = ["JOINT_NAMES", "SCHEMAS", "TOPICS", "fork_poses", "mcap_bytes_estimate", "write_run_mcap"]
 
@@ -142,12 +142,12 @@ def _status_ok(status: str) -> bool:
 
 
 def fork_poses(trial: Trial, obs_names: Sequence[str]) -> np.ndarray | None:
-    """The fork poses the loop gives the scene: ``trial``'s :data:`~sim.closed_loop.FORK_CHANNELS`
-    columns, (T, 6); None when ``obs_names`` lacks one of them."""
-    names = list(obs_names)
-    if any(c not in names for c in FORK_CHANNELS):
+    """The fork poses the loop gives the scene (:func:`sim.closed_loop.fork_pose_rows`), (T, 6); None when
+    ``obs_names`` lacks a channel they need."""
+    try:
+        return fork_pose_rows(trial.obs, list(obs_names))
+    except ValueError:
         return None
-    return np.asarray(trial.obs, dtype=float)[:, [names.index(c) for c in FORK_CHANNELS]]
 
 
 def mcap_bytes_estimate(seconds: float, control_hz: float, joint_hz: float) -> float:
