@@ -12,7 +12,8 @@
   K × β × strategy, local or on Ray (``tuning``); :mod:`mpcshare.run_table` — the runs
   (the strategy registry's and the extra ones) every command and report reads; :mod:`mpcshare.line_ratio`
   — the tracking RMS over the straight voluntary–reactive line; :mod:`mpcshare.conflicts` — the conflict
-  scenarios of ``sim --scenario`` (a command into the hand, a hand sweep, …);
+  scenarios of ``sim --scenario`` (a command into the hand, a hand sweep, …); :mod:`mpcshare.channel_map`
+  — which channels play the roles the controller and the simulator need (``--map NAME=CHANNEL``);
 - :mod:`mpcshare.errors` — :class:`~mpcshare.errors.MpcshareError` and ``PROJECT_ERRORS``, the
   roots of every error the project raises;
 - :mod:`mpcshare.cli` and :mod:`mpcshare.commands` — the ``mpcshare`` command line (registry

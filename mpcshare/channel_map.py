@@ -9,18 +9,23 @@ name NAME (:meth:`learning.data.Demonstrations.renamed`). ``train``, ``sim`` and
 ``--map``; ``train`` records it in the bundle (``config["channel_map"]``) and ``sim`` applies it again.
 
 :func:`simulator_gaps` says what keeps channel names from driving the closed-loop simulator, each
-with the ``--map`` that fixes it; analysis and training need none of the roles.
+with the ``--map`` that fixes it; analysis and training need none of the roles. :func:`bundle_wearer`
+gives the simulated wearer the shoulder map of the bundle's channels (the controller's).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, Iterable, Sequence
+
+import numpy as np
 
 from learning.data import Demonstrations
 from robot.shoulder import SHOULDER_CHANNELS, ShoulderMap
+from sim.wearer import WearerConfig
 
-__all__ = ["KNIFE", "FORK_POSITION", "FORK_ANGLES", "apply_map", "bundle_map", "parse_map", "simulator_gaps",
-           "simulator_line"]
+__all__ = ["KNIFE", "FORK_POSITION", "FORK_ANGLES", "apply_map", "bundle_map", "bundle_wearer", "parse_map",
+           "simulator_gaps", "simulator_line"]
 
 KNIFE = ("knife_x", "knife_y", "knife_z")
 FORK_POSITION = ("fork_x", "fork_y", "fork_z")
@@ -114,3 +119,15 @@ def simulator_line(obs_names: Sequence[str], act_names: Sequence[str], vol_names
     shoulder = f"shoulder {', '.join(used)}" if vol_names else "no shoulder channels (a simulated 3-angle shoulder)"
     fork = "pose" if all(c in obs_names for c in FORK_ANGLES) else "position (a level fork)"
     return f"yes (knife tip {', '.join(KNIFE)}; fork {fork}; {shoulder})"
+
+
+def bundle_wearer(bundle: Any, wearer: Any) -> Any:
+    """The wearer commanding through the bundle's shoulder channels: a :class:`WearerConfig` ``wearer``
+    (None: ``WearerConfig()``) with its shoulder map's gain and dead zone on the bundle's ``vol_names``
+    (:meth:`robot.shoulder.ShoulderMap.for_channels`, the controller's map); ``wearer`` itself for the
+    three angles or a wearer of another kind. Raises ValueError for channels no map reads."""
+    wc = WearerConfig() if wearer is None else wearer
+    if not isinstance(wc, WearerConfig):
+        return wearer
+    m = ShoulderMap.for_channels(getattr(bundle, "vol_names", ()) or (), wc.shoulder.gain, wc.shoulder.deadband_rad)
+    return wearer if np.array_equal(m.matrix, wc.shoulder.matrix) else replace(wc, shoulder=m)

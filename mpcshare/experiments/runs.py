@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
@@ -31,6 +31,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from learning.data import Demonstrations
+from mpcshare.channel_map import bundle_wearer
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.experiments.handover import (
     LINE_ORACLE_MAX_EFFORT,
@@ -42,7 +43,6 @@ from mpcshare.experiments.handover import (
 from mpcshare.experiments.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
 from mpcshare.line_ratio import add_line_ratios
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
-from robot.shoulder import ShoulderMap
 from sim.closed_loop import run_episode
 from sim.keepout_metrics import KEEPOUT_KEYS, episode_keepout_metrics
 from sim.metrics import episode_metrics
@@ -55,8 +55,7 @@ from sim.wearer_presets import wearer_preset_name
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "bundle_wearer", "compare_strategies",
-           "describe_wearer",
+__all__ = ["DEFAULT_RUNS", "METRIC_KEYS", "Comparison", "StrategyRun", "compare_strategies", "describe_wearer",
            "output_size", "pool_keepout_metrics", "pool_metrics", "pool_task_metrics", "render_clip",
            "intent_preview", "simulate_episode"]
 
@@ -93,18 +92,6 @@ def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
     from mpcshare.control.controller import SharedController
 
     return SharedController.from_bundle(bundle, **options)
-
-
-def bundle_wearer(bundle: Any, wearer: Any) -> Any:
-    """The wearer commanding through the bundle's shoulder channels: a :class:`WearerConfig` ``wearer``
-    (None: ``WearerConfig()``) with its shoulder map's gain and dead zone on the bundle's ``vol_names``
-    (:meth:`robot.shoulder.ShoulderMap.for_channels`, the controller's map); ``wearer`` itself for the
-    three angles or a wearer of another kind. Raises ValueError for channels no map reads."""
-    wc = WearerConfig() if wearer is None else wearer
-    if not isinstance(wc, WearerConfig):
-        return wearer
-    m = ShoulderMap.for_channels(getattr(bundle, "vol_names", ()) or (), wc.shoulder.gain, wc.shoulder.deadband_rad)
-    return wearer if np.array_equal(m.matrix, wc.shoulder.matrix) else replace(wc, shoulder=m)
 
 
 def intent_preview(trial: Any, act_names: Sequence[str], wearer: WearerConfig | None = None) -> Any:
