@@ -103,7 +103,7 @@ def simulator_gaps(obs_names: Sequence[str], act_names: Sequence[str], vol_names
         sim_hz = 1.0 / SceneConfig().control_period
         if abs(float(rate_hz) - sim_hz) > 1e-6 * sim_hz:
             gaps.append(f"the data is sampled at {float(rate_hz):g} Hz, the simulator runs at {sim_hz:g} Hz: "
-                        f"resample it (mpcshare import --rate {sim_hz:g})")
+                        f"resample it to {sim_hz:g} Hz (bags: mpcshare import --rate {sim_hz:g})")
     return gaps
 
 

@@ -167,7 +167,10 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     scenario_name = getattr(args, "scenario", None)
-    scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names)
+    try:
+        scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names)
+    except ValueError as exc:  # e.g. data without the fork's angles
+        raise CommandError(f"--scenario {exc}") from None
     options = None
     if getattr(args, "no_keepout", False):
         options = {"config": ControllerConfig(keepout=None)}
