@@ -69,11 +69,9 @@ def fork_pose_rows(obs: np.ndarray, names: list[str] | None, where: str = "trial
     """(T, 6) the fork pose of each row of ``obs``: the :data:`FORK_CHANNELS` columns, the angles 0 (a level
     fork) where ``names`` has none of them. Raises ValueError naming a missing position channel."""
     cols = _columns(names, FORK_CHANNELS[:3], where)
-    angles = [c for c in FORK_CHANNELS[3:] if c in names]  # type: ignore[operator]
-    if angles and len(angles) < 3:
-        cols += _columns(names, FORK_CHANNELS[3:], where)  # some angles but not all: name the others
-    elif angles:
-        cols += [names.index(c) for c in angles]  # type: ignore[union-attr]
+    names = list(names or ())
+    if any(c in names for c in FORK_CHANNELS[3:]):
+        cols += _columns(names, FORK_CHANNELS[3:], where)  # some angles: all three (names those missing)
     obs = np.asarray(obs, dtype=float)
     return obs[:, cols] if len(cols) == 6 else np.concatenate([obs[:, cols], np.zeros((len(obs), 3))], axis=1)
 

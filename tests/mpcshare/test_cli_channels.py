@@ -128,3 +128,8 @@ def test_a_bad_map_is_one_line(generic, tmp_path, capsys, words, message):
     for command in (["inspect", str(generic)], ["train", str(generic), "--out", str(tmp_path / "m")]):
         assert main([*command, "--map", *words]) == 1
         assert message in _one_line(capsys.readouterr().err, command[0])
+
+
+def test_tune_on_data_that_cannot_drive_the_simulator_is_one_line(generic, tmp_path, capsys):
+    assert main(["tune", str(generic), "--out", str(tmp_path / "t")]) == 1
+    assert "knife_x" in _one_line(capsys.readouterr().err, "tune")
