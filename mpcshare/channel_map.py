@@ -21,7 +21,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
-from robot.shoulder import SHOULDER_CHANNELS, ShoulderMap
+from robot.shoulder import SHOULDER_CHANNELS, SHOULDER_TO_PLATE, ShoulderMap
 from sim.wearer import WearerConfig
 
 __all__ = ["KNIFE", "FORK_POSITION", "FORK_ANGLES", "apply_map", "bundle_map", "bundle_wearer", "parse_map",
@@ -115,7 +115,10 @@ def simulator_line(obs_names: Sequence[str], act_names: Sequence[str], vol_names
     if gaps:
         return "no: " + "; ".join(gaps)
     m = ShoulderMap.for_channels(vol_names)
-    used = [n for j, n in enumerate(vol_names) if m.matrix[:, j].any()]
+    roles = {j: r for j in range(m.n_channels) for r in range(3)
+             if np.array_equal(m.matrix[:, j], SHOULDER_TO_PLATE[:, r])}
+    used = [n if n == SHOULDER_CHANNELS[roles[j]] else f"{n} as {SHOULDER_CHANNELS[roles[j]]}"
+            for j, n in enumerate(vol_names) if j in roles]
     shoulder = f"shoulder {', '.join(used)}" if vol_names else "no shoulder channels (a simulated 3-angle shoulder)"
     fork = "pose" if all(c in obs_names for c in FORK_ANGLES) else "position (a level fork)"
     return f"yes (knife tip {', '.join(KNIFE)}; fork {fork}; {shoulder})"

@@ -46,7 +46,8 @@ def test_renamed_channels_and_a_two_angle_shoulder_from_import_to_sim(bags, tmp_
     assert main(["inspect", str(data)]) == 0
     assert "simulator: no:" in capsys.readouterr().out
     assert main(["inspect", str(data), "--map", *ROLES]) == 0
-    assert "simulator: yes (knife tip knife_x, knife_y, knife_z; fork pose; shoulder imu_a, imu_b)" in \
+    assert "simulator: yes (knife tip knife_x, knife_y, knife_z; fork pose; shoulder imu_a as shoulder_elevation, " \
+        "imu_b as shoulder_protraction)" in \
         capsys.readouterr().out
 
     # unmapped: the bundle is written, the rule choice skipped in one line; sim refuses in one line
