@@ -13,7 +13,8 @@
   (the strategy registry's and the extra ones) every command and report reads; :mod:`mpcshare.line_ratio`
   — the tracking RMS over the straight voluntary–reactive line; :mod:`mpcshare.arms` — another arm (a preset or a
   file) set up for the task, its speed and acceleration caps chosen; :mod:`mpcshare.conflicts` — the conflict
-  scenarios of ``sim --scenario`` (a command into the hand, a hand sweep, …);
+  scenarios of ``sim --scenario`` (a command into the hand, a hand sweep, …); :mod:`mpcshare.channel_map`
+  — which channels play the roles the controller and the simulator need (``--map NAME=CHANNEL``);
 - :mod:`mpcshare.runtime` — ``run``: the shared controller on a real arm over ROS 2 topics (DDS),
   its configuration and watchdogs;
 - :mod:`mpcshare.errors` — :class:`~mpcshare.errors.MpcshareError` and ``PROJECT_ERRORS``, the

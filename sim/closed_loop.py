@@ -49,7 +49,8 @@ from sim.servo import JointServo, ServoConfig
 from sim.wearer_presets import DEFAULT_WEARER
 from sim.wearer_protocol import Wearer, WearerFactory, make_wearer
 
-__all__ = ["FORK_CHANNELS", "LIMIT_TOL", "TIP_CHANNELS", "TORQUE_TOL", "Controller", "Episode", "run_episode"]
+__all__ = ["FORK_CHANNELS", "LIMIT_TOL", "TIP_CHANNELS", "TORQUE_TOL", "Controller", "Episode", "fork_pose_rows",
+           "run_episode"]
 
 LIMIT_TOL = 1e-6  # [rad, rad/s] tolerance of the position and velocity limit checks
 TORQUE_TOL = 1e-9  # [N·m] rounding allowance of the torque check
@@ -62,6 +63,17 @@ class Controller(Protocol):
 
     def step(self, t: float, obs: np.ndarray, voluntary: np.ndarray, q: np.ndarray, v: np.ndarray,
              base_pose: np.ndarray | None = None) -> Any: ...
+
+
+def fork_pose_rows(obs: np.ndarray, names: list[str] | None, where: str = "trial obs") -> np.ndarray:
+    """(T, 6) the fork pose of each row of ``obs``: the :data:`FORK_CHANNELS` columns, the angles 0 (a level
+    fork) where ``names`` has none of them. Raises ValueError naming a missing position channel."""
+    cols = _columns(names, FORK_CHANNELS[:3], where)
+    names = list(names or ())
+    if any(c in names for c in FORK_CHANNELS[3:]):
+        cols += _columns(names, FORK_CHANNELS[3:], where)  # some angles: all three (names those missing)
+    obs = np.asarray(obs, dtype=float)
+    return obs[:, cols] if len(cols) == 6 else np.concatenate([obs[:, cols], np.zeros((len(obs), 3))], axis=1)
 
 
 def _columns(names: list[str] | None, wanted: tuple[str, ...], where: str) -> list[int]:
@@ -97,10 +109,10 @@ class _Loop:
     """
 
     def __init__(self, controller: Controller, trial: Trial, sc: SceneConfig, person: Wearer,
-                 servo: ServoConfig | None, seed: int, n_ctrl: int, fork_cols: list[int], record: bool,
+                 servo: ServoConfig | None, seed: int, n_ctrl: int, fork: np.ndarray, record: bool,
                  fork_truth: np.ndarray | None = None) -> None:
-        self.controller, self.trial, self.sc, self.person, self.fork_cols = controller, trial, sc, person, fork_cols
-        self.fork_truth = trial.obs[:, fork_cols] if fork_truth is None else fork_truth
+        self.controller, self.trial, self.sc, self.person = controller, trial, sc, person
+        self.fork_truth = fork if fork_truth is None else fork_truth
         self.n_ctrl, self.record = n_ctrl, record
         self.world = EatingScene(sc, seed=seed)
         robot = sc.robot
@@ -141,6 +153,8 @@ class _Loop:
         base = world.base_pose(t_k)
         cue = self.alpha[k - 1] if k > 0 else None  # what the controller showed at the previous step
         theta = self.person.step(k, tip, alpha_cue=cue)
+        if k == 0 and np.ndim(theta) == 1 and np.size(theta) != self.out["voluntary"].shape[1]:  # not 3 angles
+            self.out["voluntary"] = np.full((self.n_ctrl, theta.size), np.nan)
         q, v = d.qpos.copy(), d.qvel.copy()  # the arm is the whole state
         t0 = time.perf_counter()
         try:
@@ -240,16 +254,17 @@ class _Loop:
 
 
 def _check_inputs(controller: Controller, trial: Trial, sc: SceneConfig, obs_names: list[str],
-                  act_names: list[str], duration_s: float | None) -> tuple[list[int], np.ndarray, int]:
-    """(fork columns, the intended knife tip (n_ctrl, 3), n_ctrl), or a clear error naming what is wrong."""
+                  act_names: list[str], duration_s: float | None) -> tuple[np.ndarray, np.ndarray, int]:
+    """(the fork poses (T, 6), the intended knife tip (n_ctrl, 3), n_ctrl), or a clear error naming what is
+    wrong."""
     if not callable(getattr(controller, "step", None)):
         raise TypeError(f"controller must have a step(t, obs, voluntary, q, v, base_pose) method, "
                         f"got {type(controller).__name__}")
     tip_cols = _columns(act_names, TIP_CHANNELS, "trial act")
-    fork_cols = _columns(obs_names, FORK_CHANNELS, "trial obs")
     if trial.obs.shape[1] != len(obs_names) or trial.act.shape[1] != len(act_names):
         raise ValueError(f"trial {trial.trial_id}: obs/act have {trial.obs.shape[1]}/{trial.act.shape[1]} "
                          f"columns, names give {len(obs_names)}/{len(act_names)}")
+    fork = fork_pose_rows(trial.obs, obs_names)
     if len(trial) < 2:
         raise ValueError(f"trial {trial.trial_id} has {len(trial)} samples; need at least 2")
     dt_trial = float(np.median(np.diff(trial.t)))
@@ -265,7 +280,7 @@ def _check_inputs(controller: Controller, trial: Trial, sc: SceneConfig, obs_nam
     bad = ~np.isfinite(intent_raw).all(axis=1)
     if bad.any():
         raise ValueError(f"trial {trial.trial_id}: knife tip not finite at row {int(np.flatnonzero(bad)[0])}")
-    return fork_cols, intent_raw, n_ctrl
+    return fork, intent_raw, n_ctrl
 
 
 def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | None = None,
@@ -279,7 +294,8 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         controller: any object with ``step(t, obs, voluntary, q, v, base_pose)``.
         trial: raw 100 Hz demonstration; ``trial.obs`` rows are given to the controller as
             they are; the knife channels (``knife_x/y/z`` in ``act_names``, default the
-            generator's) are the intent, the fork pose channels drive the fork.
+            generator's) are the intent, the fork pose channels drive the fork (``fork_x/y/z``; without
+            ``fork_roll/pitch/yaw`` the fork is level).
         scene, servo: settings (defaults if None).
         wearer: a :class:`sim.wearer_protocol.Wearer`, or a factory of one called on the trial's
             knife tip (a :class:`sim.wearer.WearerConfig` is one); default
@@ -298,13 +314,13 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
     sc = scene or SceneConfig()
     obs_names = list(OBS_NAMES) if obs_names is None else list(obs_names)
     act_names = list(ACT_NAMES) if act_names is None else list(act_names)
-    fork_cols, intent_raw, n_ctrl = _check_inputs(controller, trial, sc, obs_names, act_names, duration_s)
+    fork, intent_raw, n_ctrl = _check_inputs(controller, trial, sc, obs_names, act_names, duration_s)
     if fork_truth is not None:
         fork_truth = np.asarray(fork_truth, dtype=float)
         if fork_truth.shape != (len(trial), 6):
             raise ValueError(f"fork_truth must have shape ({len(trial)}, 6), got {fork_truth.shape}")
     person = make_wearer(DEFAULT_WEARER if wearer is None else wearer, intent_raw, 1.0 / sc.control_period, seed)
-    loop = _Loop(controller, trial, sc, person, servo, seed, n_ctrl, fork_cols, record, fork_truth)
+    loop = _Loop(controller, trial, sc, person, servo, seed, n_ctrl, fork, record, fork_truth)
     if callable(getattr(controller, "reset", None)):
         controller.reset()
     renderer = bar = None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -9,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from learning.atomic import atomic_open
+from robot.shoulder import SHOULDER_CHANNELS, SHOULDER_TO_PLATE
 
 __all__ = ["CONTROL_KEYS", "OPTIONAL_KEYS", "PHYSICS_KEYS", "Episode", "run_file_bytes_estimate"]
 
@@ -44,7 +46,7 @@ class Episode:
     ``v`` (Np, n) realized [rad, rad/s], ``tau`` (Np, n) applied [N·m] (n: the arm's joints).
     Control rate (100 Hz): ``t`` (Nc,) [s], ``alpha``, ``beta`` (Nc,), ``mode`` (Nc,)
     int (argmax of ``mode_proba``, −1 if none), ``tip``, ``tip_reference``,
-    ``tip_intent`` (Nc, 3) [m] plate frame, ``voluntary`` (Nc, 3) [rad], ``status``
+    ``tip_intent`` (Nc, 3) [m] plate frame, ``voluntary`` (Nc, n) [rad] (n shoulder angles, 3 by default), ``status``
     (Nc,) str, ``step_time`` (Nc,) [s], ``base_pose`` (Nc, 4, 4), ``novelty`` (Nc,)
     (the command's ``novelty`` where it has one, else NaN); ``fork_pose`` (Nc, 6) the fork
     pose the scene showed (x, y, z [m], roll, pitch, yaw [rad], plate frame: the truth, also
@@ -74,6 +76,20 @@ class Episode:
     info: dict[str, Any] = field(default_factory=dict)
     fork_pose: np.ndarray | None = None
     knife_heel: np.ndarray | None = None
+
+    @property
+    def shoulder_names(self) -> list[str]:
+        """The names of the ``voluntary`` columns: each column's role in the wearer's shoulder map
+        (``info["shoulder_matrix"]``; absent: the three of ``robot.shoulder.SHOULDER_CHANNELS``),
+        ``shoulder_<j>`` for a column of no role."""
+        matrix = self.info.get("shoulder_matrix")
+        if not matrix:
+            return list(SHOULDER_CHANNELS)
+        names = []
+        for j, col in enumerate(np.array(json.loads(matrix), dtype=float).T):
+            role = [r for r in range(len(SHOULDER_CHANNELS)) if np.array_equal(col, SHOULDER_TO_PLATE[:, r])]
+            names.append(SHOULDER_CHANNELS[role[0]] if role else f"shoulder_{j}")
+        return names
 
     def save(self, path: str | Path) -> Path:
         """Write the run file (NPZ, atomic): every array above plus ``info_<name>`` scalars."""

@@ -12,8 +12,8 @@ control step k (plate frame, [m]) and Δ the control period:
 * ``handovers`` = number of crossings of α through 0.5 (either direction).
 * ``conflict_share`` = fraction of control steps where the wearer and the robot
   push the tip in opposite directions.  The wearer's commanded tip velocity is
-  û_v = ShoulderMap.tip_velocity(θ_k) (the map's gain and dead zone are stored
-  in the episode); the robot's own (reactive) contribution is the rest of the
+  û_v = ShoulderMap.tip_velocity(θ_k) (the map's gain, dead zone and, where it is not
+  the default, matrix are stored in the episode); the robot's own (reactive) contribution is the rest of the
   reference's motion, û_r,eff = ṙ_k − β_k·û_v, with ṙ_k the backward difference
   of ``tip_reference`` [m/s].  A step is in conflict when both speeds exceed
   ``speed_deadband`` (0.01 m/s) and û_v · û_r,eff < 0.
@@ -26,11 +26,12 @@ control step k (plate frame, [m]) and Δ the control period:
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 import numpy as np
 
-from robot.shoulder import ShoulderMap
+from robot.shoulder import SHOULDER_TO_PLATE, ShoulderMap
 from sim.episode import Episode
 
 __all__ = ["METRIC_KEYS", "conflict_mask", "episode_metrics"]
@@ -41,8 +42,10 @@ METRIC_KEYS = ("tracking_rmse_m", "tracking_p95_m", "voluntary_effort", "reactiv
 
 def conflict_mask(episode: Episode, speed_deadband: float = 0.01) -> np.ndarray:
     """(Nc,) bool: the steps in conflict (module docstring); the first step never is."""
+    matrix = episode.info.get("shoulder_matrix")
     shoulder = ShoulderMap(gain=float(episode.info.get("shoulder_gain", 0.5)),
-                           deadband_rad=float(episode.info.get("shoulder_deadband_rad", 0.01)))
+                           deadband_rad=float(episode.info.get("shoulder_deadband_rad", 0.01)),
+                           matrix=SHOULDER_TO_PLATE if not matrix else np.array(json.loads(matrix), dtype=float))
     n = episode.t.size
     out = np.zeros(n, dtype=bool)
     if n < 2:

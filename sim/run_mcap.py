@@ -42,8 +42,9 @@ from scipy.spatial.transform import Rotation
 
 from learning.atomic import atomic_open
 from learning.data import Trial
+from robot.shoulder import SHOULDER_CHANNELS
 
-from .closed_loop import FORK_CHANNELS, Episode
+from .closed_loop import FORK_CHANNELS, Episode, fork_pose_rows
 
 __all__ = ["JOINT_NAMES", "SCHEMAS", "TOPICS", "fork_poses", "mcap_bytes_estimate", "write_run_mcap"]
 
@@ -53,7 +54,7 @@ MCAP_BYTES_PER_CONTROL_STEP = 390
 MCAP_BYTES_PER_JOINT_STATE = 125
 
 JOINT_NAMES: tuple[str, ...] = ("joint_1", "joint_2", "joint_3")
-SHOULDER_NAMES: tuple[str, ...] = ("shoulder_elevation", "shoulder_protraction", "shoulder_abduction")
+SHOULDER_NAMES: tuple[str, ...] = SHOULDER_CHANNELS
 PLATE_FRAME = "plate"
 
 
@@ -141,12 +142,12 @@ def _status_ok(status: str) -> bool:
 
 
 def fork_poses(trial: Trial, obs_names: Sequence[str]) -> np.ndarray | None:
-    """The fork poses the loop gives the scene: ``trial``'s :data:`~sim.closed_loop.FORK_CHANNELS`
-    columns, (T, 6); None when ``obs_names`` lacks one of them."""
-    names = list(obs_names)
-    if any(c not in names for c in FORK_CHANNELS):
+    """The fork poses the loop gives the scene (:func:`sim.closed_loop.fork_pose_rows`), (T, 6); None when
+    ``obs_names`` lacks a channel they need."""
+    try:
+        return fork_pose_rows(trial.obs, list(obs_names))
+    except ValueError:
         return None
-    return np.asarray(trial.obs, dtype=float)[:, [names.index(c) for c in FORK_CHANNELS]]
 
 
 def mcap_bytes_estimate(seconds: float, control_hz: float, joint_hz: float) -> float:
@@ -213,6 +214,7 @@ def _control_events(episode: Episode, fork: np.ndarray | None, ns_c: list[int], 
         fork_q = np.zeros((nc, 4))
         if ok_rows.any():
             fork_q[ok_rows] = Rotation.from_euler("ZYX", fork[ok_rows][:, [5, 4, 3]]).as_quat()
+    shoulder_names = episode.shoulder_names
     previous = None
     for k, ns in enumerate(ns_c):
         add(ns, "/knife/tip", _pose(ns, episode.tip[k]))
@@ -225,7 +227,7 @@ def _control_events(episode: Episode, fork: np.ndarray | None, ns_c: list[int], 
         add(ns, "/tf", {"timestamp": _stamp(ns), "parent_frame_id": PLATE_FRAME, "child_frame_id": "torso",
                         "translation": {"x": float(p[0]), "y": float(p[1]), "z": float(p[2])},
                         "rotation": dict(zip("xyzw", (float(c) for c in base_q[k])))})
-        add(ns, "/wearer/shoulder", {"timestamp": _stamp(ns), "name": list(SHOULDER_NAMES),
+        add(ns, "/wearer/shoulder", {"timestamp": _stamp(ns), "name": shoulder_names,
                                      "position": [_num(x) for x in episode.voluntary[k]], "velocity": [],
                                      "effort": []})
         add(ns, "/control/arbitration", {"timestamp": _stamp(ns), "alpha": _num(episode.alpha[k]),

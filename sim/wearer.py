@@ -36,7 +36,8 @@ leads (and ``feedforward``), 0 otherwise, the wanted tip velocity is
 
     u = λ·ṗ_r(t_k) + u_c,      capped at ‖u‖ ≤ ``max_speed_mps`` (both parts scaled alike).
 
-**Shoulder.**  With the shoulder map's linear part z = P⁻¹u/g (robot.shoulder.ShoulderMap),
+**Shoulder.**  With the shoulder map's linear part z = P⁻¹u/g (robot.shoulder.ShoulderMap;
+P⁺, the least-squares angles, for a map of fewer than three angles: n angles in all),
 the corrective part goes through a critically damped second-order low-pass at the
 corrective bandwidth f_c (``bandwidth_hz``), the feed-forward part does not (its
 bandwidth was applied to the plan):  z = LP_fc(z_c) + z_r.  The wearer pushes past the
@@ -53,6 +54,7 @@ commanding through the affected shoulder).
 
 from __future__ import annotations
 
+import json
 import math
 from collections import deque
 from dataclasses import asdict, dataclass, field
@@ -61,7 +63,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from robot.shoulder import ShoulderMap
+from robot.shoulder import SHOULDER_TO_PLATE, ShoulderMap
 from sim.errors import WearerConfigError
 
 __all__ = ["SimulatedWearer", "WearerConfig", "rhythmic_plan", "smooth_intent"]
@@ -84,7 +86,7 @@ class WearerConfig:
         noise_rad: σ₀ [rad], tremor and postural sway of the shoulder.
         noise_signal_dependent: c [-], standard deviation per unit of |θ|.
         intent_cutoff_hz: [Hz] zero-phase low-pass of the recorded intent (sensor noise).
-        shoulder: the shoulder map the controller uses (gain, dead zone).
+        shoulder: the shoulder map the controller uses (gain, dead zone, its n channels).
     """
 
     reaction_delay_s: float = 0.3
@@ -154,7 +156,7 @@ class SimulatedWearer:
     Follows :class:`sim.wearer_protocol.Wearer`; the class and its config are wearer factories.
 
     :meth:`step` is called once per control step with the perceived knife tip (and the
-    controller's α of the previous step as the cue) and returns the shoulder angles (3,)
+    controller's α of the previous step as the cue) and returns the shoulder angles (n,)
     [rad] (module docstring).
     """
 
@@ -174,7 +176,7 @@ class SimulatedWearer:
         self.delay_steps = round(c.reaction_delay_s * rate_hz)
         # critically damped 2nd-order low-pass, discretised per step: x'' = ω²(u − x) − 2ω x'
         self._a = math.exp(-2.0 * math.pi * c.bandwidth_hz / rate_hz)
-        self._to_z = np.linalg.inv(c.shoulder.matrix) / c.shoulder.gain  # u [m/s] → z [rad]
+        self._to_z = c.shoulder.inverse() / c.shoulder.gain  # u [m/s] → z [rad], (n, 3)
         self._seed = seed
         self.reset()
 
@@ -182,8 +184,9 @@ class SimulatedWearer:
         """Forget the perceived history, the leader and the shoulder state; restart the noise stream."""
         self._errors: deque[np.ndarray] = deque(maxlen=self.delay_steps + 1)
         self._cues: deque[float] = deque(maxlen=self.delay_steps + 1)
-        self._s1 = np.zeros(3)
-        self._s2 = np.zeros(3)
+        n = self.config.shoulder.n_channels
+        self._s1 = np.zeros(n)
+        self._s2 = np.zeros(n)
         self._rng = np.random.default_rng(self._seed)
         self.desired_velocity = np.zeros(3)
         self.engagement = 0.0
@@ -195,8 +198,11 @@ class SimulatedWearer:
         from sim.wearer_presets import wearer_preset_name  # the presets are built from this module
 
         c = self.config
-        return {"shoulder_gain": c.shoulder.gain, "shoulder_deadband_rad": c.shoulder.deadband_rad,
-                "wearer_deadband_m": c.deadband_m, "wearer_preset": wearer_preset_name(c)}
+        out = {"shoulder_gain": c.shoulder.gain, "shoulder_deadband_rad": c.shoulder.deadband_rad,
+               "wearer_deadband_m": c.deadband_m, "wearer_preset": wearer_preset_name(c)}
+        if not np.array_equal(c.shoulder.matrix, SHOULDER_TO_PLATE):
+            out["shoulder_matrix"] = json.dumps(c.shoulder.matrix.tolist())
+        return out
 
     def _perceive_cue(self, alpha_cue: float | None) -> None:
         """Push the cue into the delay line; the one given d steps ago decides who leads (if finite)."""
@@ -212,7 +218,8 @@ class SimulatedWearer:
                 self.wearer_leads = seen < 0.5
 
     def step(self, k: int, tip: np.ndarray, alpha_cue: float | None = None) -> np.ndarray:
-        """Shoulder angles (3,) [rad] at control step k for the perceived tip (3,) [m].
+        """Shoulder angles (n,) [rad] (the shoulder map's channels) at control step k for the perceived
+        tip (3,) [m].
 
         ``alpha_cue``: the controller's α of the previous step (None or NaN: no cue now).
         """
@@ -241,6 +248,7 @@ class SimulatedWearer:
         eps = _DEADZONE_RAMP * c.shoulder.deadband_rad
         theta = z + (c.shoulder.deadband_rad * np.clip(z / eps, -1.0, 1.0) if eps > 0 else 0.0)
         if c.noise_rad > 0 or c.noise_signal_dependent > 0:
-            n = self._rng.standard_normal(6)
-            theta = theta + c.noise_rad * n[:3] + c.noise_signal_dependent * np.abs(theta) * n[3:]
+            d = theta.size
+            n = self._rng.standard_normal(2 * d)
+            theta = theta + c.noise_rad * n[:d] + c.noise_signal_dependent * np.abs(theta) * n[d:]
         return theta

@@ -13,12 +13,14 @@ The loop reads, per episode:
 - ``intent`` (≥ N, 3) [m], plate frame: the tip the wearer intends at control step k
   (the episode records ``intent[:N]`` as ``tip_intent``, the metrics' reference, and
   starts the arm at the configuration nearest to ``intent[0]``);
-- ``step(k, tip, alpha_cue)`` → shoulder angles θ (3,) [rad], once per control step,
+- ``step(k, tip, alpha_cue)`` → shoulder angles θ (n,) [rad] (n = 3, or the channels of the
+  shoulder map it commands through), once per control step,
   given the measured knife tip (3,) [m] and the α of the controller's previous
   command (None before the first, NaN after a step without a command);
 - ``info()`` → JSON-able settings stored in the episode's ``info``; it must hold
   ``shoulder_gain`` and ``shoulder_deadband_rad`` (the shoulder map the wearer commands
-  through: :func:`sim.metrics.conflict_mask` maps θ back to a tip velocity with it).
+  through: :func:`sim.metrics.conflict_mask` maps θ back to a tip velocity with it), and
+  ``shoulder_matrix`` (its P, JSON) where that is not ``robot.shoulder.SHOULDER_TO_PLATE``.
 
 :class:`sim.wearer.SimulatedWearer` is the project's wearer; its settings
 (:class:`sim.wearer.WearerConfig`, the presets in :mod:`sim.wearer_presets`) are

@@ -15,6 +15,12 @@ A mapping file has the tables ``[obs]``, ``[act]`` (both required, non-empty) an
     knife_x = "/knife/pose pose.position.x"
     [voluntary]
     shoulder_elevation = "/shoulder/joint_states position[0]"   # [i]: an element of an array
+    [map]                                # optional: NAME = "CHANNEL" renames a channel above to NAME
+    knife_x = "blade_x"                  # (the roles the simulator needs; as ``mpcshare train --map``)
+
+The ``[map]`` table renames channels of the tables above (each entry ``NAME = "CHANNEL"``, as
+``--map NAME=CHANNEL`` of ``mpcshare train`` and ``sim``): the data set holds the new names, so a
+mapping file that keeps its own channel names still gives the channels the simulator looks for.
 
 A field path is attribute names separated by dots, each optionally followed by
 ``[i]`` indices; it ends at a number, or at a quaternion followed by ``@roll``,
@@ -52,7 +58,7 @@ KINDS: tuple[str, ...] = ("obs", "act", "voluntary")
 ANGLES: tuple[str, ...] = ("roll", "pitch", "yaw")
 #: Time sources: the message's header stamp, or the time the recorder received it.
 TIME_SOURCES: tuple[str, ...] = ("header", "receive")
-_TOP_KEYS = KINDS + ("subject", "time")
+_TOP_KEYS = KINDS + ("subject", "time", "map")
 
 _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
 _PATH = re.compile(rf"^(?P<body>{_IDENT}(\[\d+\])*(\.{_IDENT}(\[\d+\])*)*)(@(?P<angle>[A-Za-z]+))?$")
@@ -216,7 +222,31 @@ def parse_mapping(doc: dict[str, Any], source: str | None = None) -> BagMapping:
             except ValueError as exc:
                 raise DataFormatError(str(exc), path=source, field=label) from None
             channels.append(ChannelSource(kind, str(name), parts[0], path))
-    return BagMapping(tuple(channels), time, _subject(doc.get("subject"), source), source)
+    return BagMapping(_renamed(channels, doc.get("map"), source), time, _subject(doc.get("subject"), source), source)
+
+
+def _renamed(channels: list[ChannelSource], table: Any, source: str | None) -> tuple[ChannelSource, ...]:
+    """``channels`` with the ``[map]`` table's renames applied (NAME = "CHANNEL")."""
+    if table is None:
+        return tuple(channels)
+    if not isinstance(table, dict):
+        raise DataFormatError(f"must be a table of NAME = \"CHANNEL\", got {table!r}", path=source, field="[map]")
+    out = list(channels)
+    for name, channel in table.items():
+        label = f"[map] {name}"
+        if not isinstance(channel, str):
+            raise DataFormatError(f"expected the name of a channel above, got {channel!r}", path=source, field=label)
+        hits = [i for i, c in enumerate(channels) if c.name == channel]
+        if len(hits) != 1:
+            raise DataFormatError(f"no channel {channel!r} in [obs], [act] or [voluntary]" if not hits else
+                                  f"{channel!r} is a channel of more than one table", path=source, field=label)
+        c = out[hits[0]]
+        if c.name != channel:
+            raise DataFormatError(f"{channel!r} is renamed twice (to {c.name!r} too)", path=source, field=label)
+        if any(o.kind == c.kind and o.name == name for o in out):
+            raise DataFormatError(f"[{c.kind}] already has a channel {name!r}", path=source, field=label)
+        out[hits[0]] = ChannelSource(c.kind, str(name), c.topic, c.path)
+    return tuple(out)
 
 
 def load_mapping(path: PathLike) -> BagMapping:

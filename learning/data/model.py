@@ -172,6 +172,43 @@ class Demonstrations:
         return Demonstrations(list(trials), self.rate_hz, list(self.obs_names),
                               list(self.act_names), list(self.vol_names))
 
+    def renamed(self, mapping: dict[str, str]) -> Demonstrations:
+        """A new set (the same trials) with channels renamed: ``mapping`` NAME → CHANNEL gives the
+        channel CHANNEL the name NAME (``sim --map NAME=CHANNEL``). CHANNEL may be qualified by its
+        field, ``obs:``, ``act:`` or ``voluntary:``, where a name is in more than one.
+
+        Raises ValueError naming the entry: a channel the set does not have (listing those it has), one
+        in two fields unqualified, a channel renamed twice, or a new name that another channel of
+        the field keeps.
+        """
+        fields = self.names()
+        new = {k: list(v) for k, v in fields.items()}
+        seen: set[tuple[str, str]] = set()
+        for name, channel in mapping.items():
+            kind, sep, bare = str(channel).partition(":")
+            if sep and kind in fields:
+                kinds, channel = [kind], bare
+            else:
+                kinds = [k for k, names in fields.items() if channel in names]
+            hits = [k for k in kinds if channel in fields[k]]
+            if not hits:
+                have = "; ".join(f"{k}: {', '.join(v) or 'none'}" for k, v in fields.items())
+                raise ValueError(f"{name}={channel}: the data has no channel {channel!r} ({have})")
+            if len(hits) > 1:
+                raise ValueError(f"{name}={channel}: {channel!r} is a channel of {' and '.join(hits)}; write "
+                                 f"{name}={hits[0]}:{channel} or {name}={hits[1]}:{channel}")
+            kind = hits[0]
+            if (kind, channel) in seen:
+                raise ValueError(f"{name}={channel}: the {kind} channel {channel!r} is renamed twice")
+            seen.add((kind, channel))
+            new[kind][fields[kind].index(channel)] = str(name)
+        for kind, names in new.items():
+            twice = sorted({n for n in names if names.count(n) > 1})
+            if twice:
+                raise ValueError(f"after renaming, the {kind} channels name {twice} twice ({', '.join(names)}): "
+                                 f"map the channel that has that name now too, or another")
+        return Demonstrations(list(self.trials), self.rate_hz, new["obs"], new["act"], new["voluntary"])
+
     def validate(self, path: PathLike | None = None) -> Demonstrations:
         """Check the whole set (:func:`learning.data.checks.check_set`); raise
         :class:`DataFormatError` on the first problem.

@@ -10,6 +10,7 @@ import time
 from typing import Sequence
 
 from learning.data import Demonstrations, save, saved_bytes_estimate
+from mpcshare.channel_map import apply_map, parse_map, simulator_gaps, simulator_line
 from mpcshare.commands.base import Command, CommandError, human_bytes, load_or_fail, positive_float, positive_int
 from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 from sim.world_family import world_demonstrations
@@ -49,16 +50,25 @@ def format_summary(demos: Demonstrations, mode_names: Sequence[str] | None = Non
 
 def _inspect_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", help=DATA_HELP)
+    p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
+                   help="rename the data's CHANNEL to NAME first, as `train --map` and `sim --map` do")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
 
 
 def _inspect(args: argparse.Namespace) -> int:
     demos = load_or_fail(args.data)
+    try:
+        demos = apply_map(demos, parse_map(args.map))
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
+    vol = demos.vol_names if demos.has_voluntary else []
+    gaps = simulator_gaps(demos.obs_names, demos.act_names, vol, demos.rate_hz)
     if args.json:
-        print(json.dumps(demos.summary(), indent=2))
+        print(json.dumps({**demos.summary(), "simulator": {"can_drive": not gaps, "gaps": gaps}}, indent=2))
     else:
-        print(f"{args.data}: usable")
+        print(f"{args.data}: usable (analysis and training)")
         print(format_summary(demos))
+        print("simulator: " + simulator_line(demos.obs_names, demos.act_names, vol, demos.rate_hz))
     return 0
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from ..channel_map import simulator_line
 from .base import Command, CommandError, positive_float
 from .data import format_summary
 
@@ -60,6 +61,8 @@ def _run(args: argparse.Namespace) -> int:
           + (f"; split at gaps: {', '.join(f'{b} -> {n}' for b, n in split.items())}" if split else "")
           + f" ({time.perf_counter() - t0:.1f} s in all)")
     print(format_summary(result.demos))
+    d = result.demos
+    print("simulator: " + simulator_line(d.obs_names, d.act_names, d.vol_names if d.has_voluntary else [], d.rate_hz))
     return 0
 
 

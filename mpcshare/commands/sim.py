@@ -10,6 +10,8 @@ beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
 ``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
 for Foxglove) and, with ``--video``, a video of the gate on the first trial. ``--robot PRESET``
 (or ``FILE --tip-frame NAME --mount X Y Z``) simulates another arm (:mod:`mpcshare.commands.robot_options`).
+``--map NAME=CHANNEL`` renames the data's channels (:mod:`mpcshare.channel_map`; on top of the map the
+bundle was trained with); data or a bundle that cannot drive the simulator is one line, exit status 1.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from learning.data import Demonstrations
+from mpcshare.channel_map import apply_map, bundle_map, parse_map, simulator_gaps
 from mpcshare.commands.base import (
     Command,
     CommandError,
@@ -83,7 +86,8 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", default=None,
                    help="an NPZ file or CSV folder (default: the data the bundle was trained on)")
     p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
-                   help="use the data's CHANNEL as the bundle's channel NAME (e.g. fork_x=obs_3)")
+                   help="use the data's CHANNEL as the bundle's channel NAME (e.g. fork_x=obs_3; roles: "
+                        "docs/design.md, 'Data format'), on top of the map the bundle was trained with")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--mcap", action="store_true",
                    help="also write each run as runs/*.mcap (opens in Foxglove); its size is printed first")
@@ -94,39 +98,31 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     add_robot_arguments(p)
 
 
-def _parse_map(items: Any) -> dict[str, str]:
-    mapping: dict[str, str] = {}
-    for item in items:
-        name, sep, channel = str(item).partition("=")
-        if not sep or not name or not channel:
-            raise CommandError(f"--map {item!r}: expected NAME=CHANNEL")
-        mapping[name] = channel
-    return mapping
-
-
 def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str, str] | None = None) -> Demonstrations:
-    """The data's trials with their obs columns in the bundle's order (raises CommandError naming what is missing).
-
-    ``mapping``: bundle channel name → the data's channel name, for data whose channels
-    are named otherwise. Act channels are renamed the same way; the knife position
-    channels (``knife_x/y/z``) must then be present (the wearer's intent).
-    """
-    mapping = dict(mapping or {})
-    reverse = {v: k for k, v in mapping.items()}
-    obs_names = [reverse.get(n, n) for n in demos.obs_names]
-    act_names = [reverse.get(n, n) for n in demos.act_names]
-    missing = [n for n in bundle.obs_names if n not in obs_names]
+    """The data's trials renamed by ``mapping`` (NAME → the data's CHANNEL, :mod:`mpcshare.channel_map`) with
+    their obs columns in the bundle's order. Raises CommandError in one line where the map does not fit the
+    data, where the bundle or the data cannot drive the simulator (saying which ``--map`` would), or where the
+    data lacks an obs channel of the bundle."""
+    try:
+        demos = apply_map(demos, dict(mapping or {}))
+    except ValueError as exc:
+        raise CommandError(f"--map {exc}") from None
+    gaps = simulator_gaps(bundle.obs_names, bundle.act_names, bundle.vol_names)
+    if gaps:
+        raise CommandError("the bundle's channels cannot drive the simulator (train it again with the --map "
+                           "named here): " + "; ".join(gaps))
+    gaps = simulator_gaps(demos.obs_names, demos.act_names, (), demos.rate_hz)
+    if gaps:
+        raise CommandError("the data cannot drive the simulator: " + "; ".join(gaps))
+    missing = [n for n in bundle.obs_names if n not in demos.obs_names]
     if missing:
         raise CommandError(f"the data has no obs channel(s) {missing} that the bundle needs "
                            f"(data obs: {list(demos.obs_names)}); map them with --map NAME=CHANNEL")
-    tip = [n for n in ("knife_x", "knife_y", "knife_z") if n not in act_names]
-    if tip:
-        raise CommandError(f"the data has no knife tip channel(s) {tip} (data act: {list(demos.act_names)}); "
-                           f"map them with --map knife_x=CHANNEL ...")
-    order = [obs_names.index(n) for n in bundle.obs_names]
+    order = [demos.obs_names.index(n) for n in bundle.obs_names]
     trials = [type(tr)(obs=tr.obs[:, order], act=tr.act, t=tr.t, trial_id=tr.trial_id, subject=tr.subject,
                        mode=tr.mode, voluntary=tr.voluntary) for tr in demos.trials]
-    return Demonstrations(trials, demos.rate_hz, list(bundle.obs_names), act_names, list(demos.vol_names))
+    return Demonstrations(trials, demos.rate_hz, list(bundle.obs_names), list(demos.act_names),
+                          list(demos.vol_names))
 
 
 def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list[int], args: argparse.Namespace,
@@ -173,7 +169,10 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     print(f"simulating {len(runs)} strategies x {len(trial_ids)} trial(s) "
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     scenario_name = getattr(args, "scenario", None)
-    scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names)
+    try:
+        scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names)
+    except ValueError as exc:  # e.g. data without the fork's angles
+        raise CommandError(f"--scenario {exc}") from None
     options = None
     if getattr(args, "no_keepout", False):
         options = {"config": ControllerConfig(keepout=None)}
@@ -206,7 +205,10 @@ def _run(args: argparse.Namespace) -> int:
     from mpcshare.bundle import BundleError, load_bundle
 
     out = prepare_output_folder(args.out)
-    mapping = _parse_map(args.map)
+    try:
+        given = parse_map(args.map)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
     try:
         bundle = load_bundle(args.model)
     except BundleError as exc:
@@ -216,7 +218,8 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError("the bundle does not record its training data; pass --data")
     if args.data is None and not Path(data).exists():
         raise CommandError(f"the bundle's training data {data} is gone; pass --data")
-    demos = align_channels(load_or_fail(str(data)), bundle, mapping)
+    demos = load_or_fail(str(data))
+    demos = align_channels(demos, bundle, bundle_map(bundle.config.get("channel_map"), demos, given))
     ids = set(demos.trial_ids)
     # the bundle's held-out trials; other data (--data) without them: all of its trials
     trial_ids = [t for t in bundle.heldout_trials if t in ids]

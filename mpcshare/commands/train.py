@@ -5,6 +5,11 @@
 - ``mpcshare train DATA --sweep --out DIR`` writes ``sweep.json``, ``sweep.md`` and
   ``sweep.png`` (:mod:`mpcshare.training.sweep`).
 
+``--map NAME=CHANNEL`` renames the data's channels first (:mod:`mpcshare.channel_map`: the knife tip,
+the fork, the shoulder), recorded in the bundle for ``mpcshare sim``. Data that cannot drive the
+simulator still gives a bundle: the closed-loop choice of the hand-over rule is skipped, in one line
+saying why and which ``--map`` enables it.
+
 Unusable data (too few or too short trials, no act channels, a rate that cannot be
 downsampled to the model rate) gives one message and exit status 1; bad option values
 exit with 2 (argparse). The output path is checked before any training starts.
@@ -16,6 +21,7 @@ import argparse
 import math
 from pathlib import Path
 
+from mpcshare.channel_map import apply_map, parse_map, simulator_gaps
 from mpcshare.commands.base import (
     Command,
     CommandError,
@@ -46,6 +52,9 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True,
                    help="bundle folder (absent, empty or an older bundle); with --sweep the folder "
                         "for sweep.json, sweep.md, sweep.png")
+    p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
+                   help="use the data's CHANNEL as the channel NAME, e.g. knife_x=u4 (roles: docs/design.md, "
+                        "'Data format'); recorded in the bundle for `mpcshare sim`")
     p.add_argument("--percentile", type=percentile, default=d.percentile,
                    help=f"K = this percentile of the within-mode quotients (default {d.percentile:g})")
     p.add_argument("--sweep", action="store_true",
@@ -135,6 +144,8 @@ def _run(args: argparse.Namespace) -> int:
     demos = load_or_fail(args.data)
     try:
         config = _config(args)
+        mapping = parse_map(args.map)
+        demos = apply_map(demos, mapping)
     except ValueError as exc:
         raise CommandError(str(exc)) from None
     try:
@@ -149,7 +160,8 @@ def _run(args: argparse.Namespace) -> int:
         from mpcshare.training import train_bundle
         bundle = train_bundle(demos, config, progress=not args.quiet)
         bundle.config["data_path"] = str(Path(args.data).resolve())  # `mpcshare sim`'s default --data
-        choice = _choose_rule(bundle, demos, args)
+        bundle.config["channel_map"] = mapping  # applied again by `mpcshare sim`
+        choice, skipped = _choose_rule(bundle, demos, args)
     except TrainingError as exc:
         raise CommandError(f"cannot train on {args.data}: {exc}") from None
     try:
@@ -159,25 +171,37 @@ def _run(args: argparse.Namespace) -> int:
     from mpcshare.reports.training import write_training_md
     from mpcshare.training.rule_choice import rule_markdown
 
-    md = write_training_md(bundle.metrics, Path(out) / "training.md",
-                           extra="" if choice is None else rule_markdown(choice))
+    extra = rule_markdown(choice) if choice is not None else \
+        f"## Hand-over rule\n\nThe {skipped}.\n" if skipped else ""
+    md = write_training_md(bundle.metrics, Path(out) / "training.md", extra=extra)
     print_metrics(bundle.metrics)
     if choice is not None:
         print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']})")
+    elif skipped:
+        print(f"hand-over rule: the {skipped}")
     print(f"bundle: {out} (summary: {md})")
     return 0
 
 
-def _choose_rule(bundle, demos, args: argparse.Namespace) -> dict | None:
-    """The gate's settings chosen in the closed loop (:mod:`mpcshare.training.rule_choice`), recorded in
-    ``bundle.metrics`` (``rule_settings``, ``rule_choice``); None with ``--no-rule-choice``."""
+def _choose_rule(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, str | None]:
+    """(the gate's settings chosen in the closed loop (:mod:`mpcshare.training.rule_choice`), recorded in
+    ``bundle.metrics`` (``rule_settings``, ``rule_choice``), or None; why the choice was skipped, or None).
+    Skipped with ``--no-rule-choice`` (no reason given) and where the data cannot drive the simulator."""
     if args.no_rule_choice:
-        return None
+        return None, None
+    gaps = simulator_gaps(demos.obs_names, demos.act_names, demos.vol_names if demos.has_voluntary else (),
+                          demos.rate_hz)
+    if gaps:
+        why = ("closed-loop choice was skipped (the gate keeps its default settings): the data cannot drive the "
+               "simulator: " + "; ".join(gaps))
+        bundle.metrics["rule_choice_skipped"] = why
+        return None, why
     from mpcshare.training.rule_choice import choose_for_bundle
     from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
-                             wearer_name=args.rule_wearer, mode_names=MODE_NAMES, log=None if args.quiet else print)
+                             wearer_name=args.rule_wearer, mode_names=MODE_NAMES,
+                             log=None if args.quiet else print), None
 
 
 TRAIN_COMMAND = Command("train", "train gates and the reactive predictor into a model bundle, "

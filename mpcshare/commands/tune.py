@@ -112,6 +112,11 @@ def _run(args: argparse.Namespace) -> int:
             return _usage_error("--backend ray needs Ray: pip install -e .[ray] (or --backend local)")
     out = prepare_output_folder(args.out)
     demos = load_or_fail(args.data)  # a clear message before any training
+    from mpcshare.channel_map import simulator_gaps
+
+    if gaps := simulator_gaps(demos.obs_names, demos.act_names, demos.vol_names, demos.rate_hz):
+        raise CommandError("the data cannot drive the simulator (tune reads the channels as named: rename them in "
+                           "the data, e.g. the import mapping's [map]): " + "; ".join(gaps))
     config = TrainConfig(max_epochs=args.epochs)
     _, held = split_by_trial(demos, config.heldout_fraction, seed=config.seed)  # the split training makes
     n_trials, n_seeds = default_trials_and_seeds(len(held.trial_ids), args.trials, args.seeds)

@@ -55,7 +55,7 @@ from mpcshare.control.keepout import KeepOutSettings, make_keepout_mpc, make_kee
 from mpcshare.control.models_tick import fast_step, models_tick
 from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.preview import PreviewPlan, mpc_preview
-from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc
+from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc, shoulder_map
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, bound_reference, check_base_pose
 from mpcshare.errors import ControllerTypeError
@@ -99,7 +99,7 @@ class SharedController:
         self.config = cfg = config or ControllerConfig()
         self.layout: BundleLayout = check_bundle(bundle, tip_channels, fork_channels)
         self.bundle, self.strategy = bundle, strategy
-        self.shoulder = shoulder if shoulder is not None else ShoulderMap()
+        self.shoulder = shoulder_map(bundle, shoulder)
         self.robot = as_description(robot)  # TypeError naming the choices for anything else
         self.dt = 1.0 / float(bundle.rate_hz)
         heel = cfg.keepout.heel_offset if cfg.keepout is not None else KeepOutSettings().heel_offset
@@ -314,8 +314,9 @@ class SharedController:
         ff = v_hat if cfg.reactive_feedforward else None
         u_r = reactive_velocity(p_hat, p_ref, cfg.reactive_gain, cfg.reactive_max_speed, ff) if pred_ok \
             else np.zeros(3)
-        th = np.asarray(voluntary, dtype=float) if voluntary is not None else np.full(3, np.nan)
-        shoulder_ok = th.shape == (3,) and _finite(th)
+        n_th = self.shoulder.n_channels
+        th = np.asarray(voluntary, dtype=float) if voluntary is not None else np.full(n_th, np.nan)
+        shoulder_ok = th.shape == (n_th,) and _finite(th)
         u_v = self.shoulder.tip_velocity(th) if shoulder_ok else np.zeros(3)
         if fe.predicting_for_s > cfg.stale_after_s:
             why = f"no fork measurement for {fe.predicting_for_s:.2f} s: control handed to the wearer"
@@ -331,7 +332,7 @@ class SharedController:
         if shoulder_ok:
             u = fuse(alpha, u_r, beta, u_v)
         else:
-            faults.append(("invalid_shoulder", "shoulder signal NaN, missing or not (3,): reference held"))
+            faults.append(("invalid_shoulder", f"shoulder signal NaN, missing or not ({n_th},): reference held"))
             u = np.zeros(3)
             self._acc_ff = np.zeros(3)
         self._preview = PreviewPlan(alpha if pred_ok else 0.0, beta, u_v, t_aim)

@@ -16,11 +16,12 @@ import numpy as np
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import decimation_factor
 from mpcshare.errors import ControllerSetupError
+from robot.shoulder import ShoulderMap
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["BundleLayout", "arbitration_inputs", "check_bundle", "make_mpc", "make_qp"]
+__all__ = ["BundleLayout", "arbitration_inputs", "check_bundle", "make_mpc", "make_qp", "shoulder_map"]
 
 DEFAULT_TIP = ("knife_x", "knife_y", "knife_z")
 DEFAULT_FORK = ("fork_x", "fork_y", "fork_z")
@@ -68,10 +69,7 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
     obs_names, act_names = tuple(bundle.obs_names), tuple(bundle.act_names)
     tip = _indices(act_names, tip_channels or DEFAULT_TIP, "act_names", "tip_channels")
     fork = _indices(obs_names, fork_channels or DEFAULT_FORK, "obs_names", "fork_channels")
-    vol = tuple(getattr(bundle, "vol_names", ()) or ())
-    if vol and len(vol) != 3:
-        raise ControllerSetupError(f"the bundle's vol_names {list(vol)} must be the 3 shoulder angles of the "
-                                   f"voluntary channel")
+    shoulder_map(bundle)  # raises for shoulder channels no map reads
     d_o, d_u = len(obs_names), len(act_names)
     pre = bundle.preprocessor
     for side, d in (("obs", d_o), ("act", d_u)):
@@ -102,6 +100,22 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
                                    f"(act channels)")
     return BundleLayout(d_o, d_u, K, L, tip, fork, np.asarray(pre.act.mean_, dtype=float),
                         np.asarray(pre.act.scale_, dtype=float))
+
+
+def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> ShoulderMap:
+    """The shoulder map of the bundle's voluntary channels (``vol_names``): ``shoulder`` when given (its
+    channels must match), else :meth:`robot.shoulder.ShoulderMap.for_channels` of the names (none: the
+    three angles). Raises ControllerSetupError naming the channels."""
+    vol = [str(n) for n in (getattr(bundle, "vol_names", ()) or ())]
+    if shoulder is not None:
+        if vol and shoulder.n_channels != len(vol):
+            raise ControllerSetupError(f"the shoulder map reads {shoulder.n_channels} angle(s), the bundle's "
+                                       f"vol_names {vol} are {len(vol)}")
+        return shoulder
+    try:
+        return ShoulderMap.for_channels(vol)
+    except ValueError as exc:
+        raise ControllerSetupError(f"the bundle's vol_names: {exc}") from None
 
 
 def arbitration_inputs(bundle: ModelBundle, options: dict[str, float] | None = None) -> dict[str, Any]:

@@ -32,6 +32,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from learning.data import Demonstrations
+from mpcshare.channel_map import bundle_wearer
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.experiments.handover import (
     LINE_ORACLE_MAX_EFFORT,
@@ -132,6 +133,7 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
         options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
     if scene is not None:
         options = {**options, "robot": scene.robot}
+    wearer = bundle_wearer(bundle, wearer)
     controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
     # one BLAS thread: the controller's products are small (a 7-joint MPC's take ≈ 2 ms a solve on one
     # thread, ≈ 20 ms with OpenBLAS's threads on a shared 2-core machine; docs/design.md)
@@ -386,6 +388,7 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
         trial, fork_truth = st.trial, st.fork_truth
         bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
     robot = {} if scene is None else {"robot": scene.robot}
+    wearer = bundle_wearer(bundle, wearer)
     controller = make_controller(bundle, strategy=strategy, use_mpc=use_mpc, beta=beta, **robot,
                                  **(controller_options or {}))
     with warnings.catch_warnings():  # the message is returned, for the caller to say once

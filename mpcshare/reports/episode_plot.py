@@ -74,8 +74,8 @@ def plot_episode(episode: Any, path: str | Path, title: str = "", cutting: np.nd
     axes[3].set_ylim(-0.05, 1.05)
     axes[3].set_ylabel("weight")
     legend_outside(axes[3])
-    for i, name in enumerate(("elevation", "protraction", "abduction")):
-        axes[4].plot(t, episode.voluntary[:, i], lw=0.8, label=name)
+    for i, name in enumerate(episode.shoulder_names):
+        axes[4].plot(t, episode.voluntary[:, i], lw=0.8, label=name.removeprefix("shoulder_"))
     axes[4].set_ylabel("shoulder [rad]")
     legend_outside(axes[4])
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0

@@ -177,7 +177,7 @@ def preview_skill(table: dict[str, Any], n_modes: int) -> np.ndarray:
 def fit_fast(data: TrainingData, predictor: ReactivePredictor) -> tuple[FastForecaster | None, dict[str, Any]]:
     """The fast forecaster fitted on the fit trials, its preview skill from the validation trials and
     its skill table on the held-out trials; (None, reason) when the data has no knife tip channels
-    or the predictor no forecast."""
+    or the predictor no forecast, or too few fit steps for its features."""
     c = data.config
     names = list(data.act_names)
     if not all(n in names for n in TIP):
@@ -189,6 +189,10 @@ def fit_fast(data: TrainingData, predictor: ReactivePredictor) -> tuple[FastFore
     pre = data.preprocessor
     train = fast_rows(data.train_raw, data.train, predictor, pre, tip, c.model_hz, lags)
     fit = np.isin(train.trial, data.fit_trials)
+    n_fit, n_features = int(fit.sum()), int(train.phi.shape[1])
+    if n_fit <= n_features:
+        return None, {"skipped": f"{n_fit} fit steps for {n_features} features: too few to fit (more or longer "
+                                 f"trials)"}
     model = FastForecaster(alpha=c.fast_alpha, lags=lags).fit(train.phi[fit], train.slow[fit], train.truth[fit])
     scale = np.asarray(pre.act.scale_)[tip]
     step_s = 1.0 / c.model_hz

@@ -103,6 +103,24 @@ def test_summary() -> None:
     json.dumps(s)
 
 
+def test_renamed_gives_channels_new_names_and_refuses_what_does_not_fit() -> None:
+    d = make_demos()
+    r = d.renamed({"knife_x": ACT[0], "shoulder_elevation": VOL[-1]})
+    assert r.act_names == ["knife_x", *ACT[1:]] and r.vol_names == [*VOL[:-1], "shoulder_elevation"]
+    assert r.obs_names == OBS and r.trials[0] is d.trials[0] and d.act_names == ACT  # the set itself unchanged
+    with pytest.raises(ValueError, match="no channel 'nope'"):
+        d.renamed({"a": "nope"})
+    with pytest.raises(ValueError, match="renamed twice"):
+        d.renamed({"a": ACT[0], "b": f"act:{ACT[0]}"})
+    with pytest.raises(ValueError, match="twice"):
+        d.renamed({OBS[1]: OBS[0]})
+    both = Demonstrations(d.trials, d.rate_hz, [str(j) for j in range(len(OBS))],
+                          [str(j) for j in range(len(ACT))], VOL)
+    with pytest.raises(ValueError, match="obs and act; write knife_x=obs:0 or knife_x=act:0"):
+        both.renamed({"knife_x": "0"})
+    assert both.renamed({"knife_x": "act:0"}).act_names[0] == "knife_x"
+
+
 # ------------------------------------------------------------ in-memory checks
 
 

@@ -164,10 +164,22 @@ def test_field_paths():
     ({"obs": {"f": "/f x"}, "act": {"k": "/k x"}, "time": "wall"}, r"'time'.*\"header\" or \"receive\""),
     ({"obs": {"f": "/f x"}, "act": {"k": "/k x"}, "rate": 100}, r"field 'rate': unknown key"),
     ({"obs": {"f": "/f x"}, "act": {"k": "/k x"}, "subject": "(("}, r"'subject': not a regular expression"),
+    ({"obs": {"f": "/f x"}, "act": {"k": "/k x"}, "map": {"knife_x": "nope"}}, r"'\[map\] knife_x': no channel"),
+    ({"obs": {"f": "/f x"}, "act": {"k": "/k x", "knife_x": "/k y"}, "map": {"knife_x": "k"}},
+     r"\[act\] already has a channel 'knife_x'"),
+    ({"obs": {"f": "/f x"}, "act": {"k": "/k x"}, "map": {"a": "k", "b": "k"}}, r"renamed twice"),
+    ({"obs": {"f": "/f x"}, "act": {"k": "/k x"}, "map": {"a": 3}}, r"'\[map\] a': expected the name"),
 ])
 def test_mapping_errors(doc, match):
     with pytest.raises(DataFormatError, match=match):
         parse_mapping(doc, "map.toml")
+
+
+def test_the_map_table_renames_channels_in_place():
+    m = parse_mapping({"obs": {"f": "/f x", "g": "/f y"}, "act": {"k": "/k x"}, "voluntary": {"s": "/s position[0]"},
+                       "map": {"knife_x": "k", "fork_y": "g", "shoulder_abduction": "s"}})
+    assert m.names("obs") == ["f", "fork_y"] and m.names("act") == ["knife_x"]
+    assert m.names("voluntary") == ["shoulder_abduction"] and m.channels[1].path.text == "y"
 
 
 def test_subject_per_bag_table():

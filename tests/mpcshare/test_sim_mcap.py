@@ -64,7 +64,8 @@ def _stand_in_bundle(demos, tmp_path, monkeypatch) -> None:
     """`mpcshare sim --model stand-in` loads a stand-in bundle over ``demos`` whose controllers idle."""
     data = tmp_path / "demos.npz"
     save(demos, data)
-    bundle = SimpleNamespace(obs_names=list(demos.obs_names), rate_hz=demos.rate_hz, heldout_trials=[0],
+    bundle = SimpleNamespace(obs_names=list(demos.obs_names), act_names=list(demos.act_names),
+                             vol_names=list(demos.vol_names), rate_hz=demos.rate_hz, heldout_trials=[0],
                              config={"data_path": str(data)})
     monkeypatch.setattr(mpcshare.bundle, "load_bundle", lambda path: bundle)
     monkeypatch.setattr(mpcshare.experiments.runs, "_from_bundle", _idle)

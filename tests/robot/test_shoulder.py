@@ -25,3 +25,25 @@ def test_invalid_settings_raise():
         ShoulderMap(matrix=np.zeros((3, 3)))
     with pytest.raises(ValueError, match="shape"):
         ShoulderMap().tip_velocity(np.zeros(2))
+
+
+def test_for_channels_reads_any_number_of_angles_by_role_or_position():
+    three = ShoulderMap.for_channels(["vol_0", "vol_1", "vol_2"], gain=0.4)
+    np.testing.assert_array_equal(three.matrix, ShoulderMap().matrix)  # by position: the default map
+    np.testing.assert_array_equal(ShoulderMap.for_channels([]).matrix, ShoulderMap().matrix)
+    two = ShoulderMap.for_channels(["shoulder_abduction", "imu_temp", "shoulder_elevation"], deadband_rad=0.0)
+    assert two.n_channels == 3
+    # abduction → y, the unnamed channel commands nothing, elevation → z
+    np.testing.assert_allclose(two.tip_velocity(np.array([0.2, 5.0, -0.1])), [0.0, 0.1, -0.05])
+    # fewer angles than axes: the command nearest to the wish (least squares), x out of reach
+    np.testing.assert_allclose(two.tip_velocity(two.angles_for(np.array([0.3, 0.1, -0.05]))), [0.0, 0.1, -0.05])
+    one = ShoulderMap.for_channels(["angle"])  # one channel: elevation → z
+    np.testing.assert_allclose(one.tip_velocity(np.array([0.11])), [0.0, 0.0, 0.05])
+    with pytest.raises(ValueError, match="shape \\(1,\\)"):
+        one.tip_velocity(np.zeros(3))
+    with pytest.raises(ValueError, match="none named by its role"):
+        ShoulderMap.for_channels(["a", "b", "c", "d"])
+    with pytest.raises(ValueError, match="repeat"):
+        ShoulderMap.for_channels(["a", "a"])
+    with pytest.raises(ValueError, match="linearly independent"):
+        ShoulderMap(matrix=np.array([[1.0, 2.0], [0.0, 0.0], [0.0, 0.0]]))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from robot.superlimb import SuperLimbParams
-from sim.closed_loop import run_episode
+from sim.closed_loop import fork_pose_rows, run_episode
 from sim.demonstrator import generate_demonstrations
 from sim.episode import CONTROL_KEYS, PHYSICS_KEYS, Episode
 from sim.metrics import METRIC_KEYS, episode_metrics
@@ -200,3 +200,13 @@ def test_a_caption_is_drawn_across_the_top_of_a_frame():
     assert (banner == 20).all(axis=2).mean() > 0.5 and (banner == 255).all(axis=2).any()  # dark, white text
     assert (np.abs(banner.astype(int) - [0xC4, 0x4E, 0x52]).sum(axis=2) == 0).any()  # the mode's colour
     assert (below == 200).all()
+
+
+def test_fork_pose_rows_make_a_level_fork_without_angles_and_name_what_is_missing():
+    obs = np.arange(12.0).reshape(3, 4)
+    np.testing.assert_array_equal(fork_pose_rows(obs, ["f", "fork_x", "fork_y", "fork_z"]),
+                                  np.c_[obs[:, 1:], np.zeros((3, 3))])
+    with pytest.raises(ValueError, match=r"no channel\(s\) \['fork_pitch', 'fork_yaw'\]"):
+        fork_pose_rows(obs, ["fork_roll", "fork_x", "fork_y", "fork_z"])
+    with pytest.raises(ValueError, match="fork_z"):
+        fork_pose_rows(obs, ["a", "fork_x", "fork_y", "b"])

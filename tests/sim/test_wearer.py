@@ -236,3 +236,20 @@ def test_bad_intent_is_refused():
         SimulatedWearer(np.full((10, 3), np.nan), RATE)
     with pytest.raises(ValueError, match=r"\(T, 3\)"):
         SimulatedWearer(np.zeros((10, 2)), RATE)
+
+
+def test_a_two_angle_shoulder_tracks_the_axes_it_reaches():
+    """Through a map of elevation and protraction only (z and x), the wearer drives those axes and
+    returns two angles; y stays where it started."""
+    intent = np.zeros((300, 3))
+    intent[:, 0] = np.linspace(0.0, 0.05, 300)
+    intent[:, 1] = np.linspace(0.0, 0.04, 300)  # y: out of this shoulder's reach
+    intent[:, 2] = np.linspace(0.0, -0.03, 300)
+    shoulder = ShoulderMap.for_channels(["shoulder_elevation", "shoulder_protraction"])
+    w = SimulatedWearer(intent, RATE, replace(WearerConfig(), shoulder=shoulder, noise_rad=0.0,
+                                               noise_signal_dependent=0.0))
+    tips, thetas = _drive(w, intent)
+    assert thetas.shape == (300, 2)
+    assert abs(tips[-1, 0] - 0.05) < 0.01 and abs(tips[-1, 2] + 0.03) < 0.01
+    assert np.all(tips[:, 1] == 0.0)
+    assert "shoulder_matrix" in w.info() and "shoulder_matrix" not in SimulatedWearer(intent, RATE).info()
