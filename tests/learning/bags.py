@@ -170,3 +170,52 @@ def write_bag(path: str | Path, *, storage: str = "mcap", duration_s: float = 4.
                            zero_stamps)
             writer.write(conns[topic], BASE_NS + int(round(recv * 1e9)), serialize(msg, topics[topic].msgtype))
     return len(events)
+
+
+#: the topics :func:`write_trial_bag` records, as the README's mapping names them
+TRIAL_TOPICS = {"/mocap/fork/pose": "geometry_msgs/msg/PoseStamped",
+                "/mocap/knife/pose": "geometry_msgs/msg/PoseStamped",
+                "/shoulder/joint_states": "sensor_msgs/msg/JointState"}
+
+
+def write_trial_bag(path: str | Path, trial, obs_names, act_names, vol_names) -> None:
+    """One demonstration trial as a rosbag2 (MCAP) folder, as a motion-capture set-up would record it.
+
+    The fork's and the knife's poses (``PoseStamped``: position, and the quaternion of the trial's
+    roll/pitch/yaw, or identity where the trial has no angles) and the shoulder (``JointState``, one
+    position per voluntary channel) on :data:`TRIAL_TOPICS`, every sample, stamped with the trial's time
+    (from :data:`BASE_NS`) and received 4 ms later.
+    """
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    T = ts.types
+    columns = {"fork": dict(zip(obs_names, trial.obs.T)), "knife": dict(zip(act_names, trial.act.T))}
+    shoulder = np.asarray(trial.voluntary, dtype=float)
+    zero = [np.zeros(len(trial.t))] * 3
+
+    def header(t: float, frame: str):
+        sec, nsec = divmod(BASE_NS + int(round(t * 1e9)), 1_000_000_000)
+        return T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec),
+                                        frame_id=frame)
+
+    def pose(t: float, who: str, i: int):
+        ch = columns[who]
+        xyz = [float(ch[f"{who}_{a}"][i]) for a in "xyz"]
+        angles = [ch.get(f"{who}_{a}", z)[i] for a, z in zip(("roll", "pitch", "yaw"), zero)]
+        return T["geometry_msgs/msg/PoseStamped"](
+            header=header(t, who), pose=T["geometry_msgs/msg/Pose"](
+                position=T["geometry_msgs/msg/Point"](*xyz),
+                orientation=T["geometry_msgs/msg/Quaternion"](*rpy_quaternion(*(float(a) for a in angles)))))
+
+    with Writer(Path(path), version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        conns = {topic: writer.add_connection(topic, msgtype, typestore=ts) for topic, msgtype in TRIAL_TOPICS.items()}
+        for i, t in enumerate(np.asarray(trial.t, dtype=float) - float(trial.t[0])):
+            messages = {"/mocap/fork/pose": pose(t, "fork", i), "/mocap/knife/pose": pose(t, "knife", i),
+                        "/shoulder/joint_states": T["sensor_msgs/msg/JointState"](
+                            header=header(t, "shoulder"), name=list(vol_names), position=shoulder[i],
+                            velocity=np.zeros(len(vol_names)), effort=np.zeros(len(vol_names)))}
+            for topic, msg in messages.items():
+                writer.write(conns[topic], BASE_NS + int(round((t + 0.004) * 1e9)),
+                             ts.serialize_cdr(msg, TRIAL_TOPICS[topic]))
