@@ -102,7 +102,8 @@ def _run(cmd: list[str], cwd: Path, what: str) -> None:
     env["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")])
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
     run = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=900)
-    assert run.returncode == 0, f"README {what} failed (exit {run.returncode}):\n{run.stdout[-3000:]}\n{run.stderr[-3000:]}"
+    tail = f"{run.stdout[-3000:]}\n{run.stderr[-3000:]}"
+    assert run.returncode == 0, f"README {what} failed (exit {run.returncode}):\n{tail}"
 
 
 def test_every_other_block_runs_as_written(workdir):
