@@ -21,9 +21,7 @@ settings), ``comparison.md`` and ``comparison.png``.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import asdict, dataclass, field
-from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
@@ -32,6 +30,7 @@ from threadpoolctl import threadpool_limits
 
 from learning.data import Demonstrations
 from mpcshare.control.types import DEFAULT_BETA
+from mpcshare.experiments.episode_pool import EpisodeJob, EpisodePool
 from mpcshare.experiments.handover import (
     LINE_ORACLE_MAX_EFFORT,
     SCHEDULE_SOURCES,
@@ -154,7 +153,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        mode_names: Sequence[str] | None = None, mcap: bool = False,
                        wearer: WearerConfig | None = None, scene: SceneConfig | None = None,
                        mcap_rate_hz: float | None = None, scenario: Any = None,
-                       controller_options: dict[str, Any] | None = None) -> Comparison:
+                       controller_options: dict[str, Any] | None = None,
+                       pool: EpisodePool | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -170,23 +170,27 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     the comparison records them and the preset's name. ``scene``: the arm's world (:func:`simulate_episode`).
     ``mcap_rate_hz``: the MCAP's joint states at about this rate (default: every physics step).
     ``scenario``: a conflict scenario (:class:`mpcshare.conflicts.Scenario`) applied to every trial;
-    ``controller_options``: added to every controller's options (e.g. ``config``).
+    ``controller_options``: added to every controller's options (e.g. ``config``). ``pool``: where the
+    episodes run (:class:`mpcshare.experiments.episode_pool.EpisodePool`; default: this process, one torch
+    thread); the figures are the same whatever its number of workers.
     """
     make_controller = make_controller or _from_bundle
     extra = dict(controller_options or {})
     _check_request(demos, trial_ids, runs)
-    runner = _Runner(bundle, demos, partial(simulate_episode, beta=beta, duration_s=duration_s, seed=seed,
-                                            wearer=wearer, mode_names=mode_names, make_controller=make_controller,
-                                            scene=scene, scenario=scenario),
-                     extra, seed, Path(out) if out is not None else None, mcap, mcap_rate_hz)
+    settings = dict(beta=beta, duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names,
+                    make_controller=None if make_controller is _from_bundle else make_controller, scene=scene,
+                    scenario=scenario)
+    runner = _Runner(bundle, demos, pool or EpisodePool(demos), settings, extra, seed,
+                     Path(out) if out is not None else None, mcap, mcap_rate_hz)
+    tids = [int(t) for t in trial_ids]
+    runner.run_all(runs, tids)
     pooled: dict[str, dict[str, float]] = {}
     per_trial: dict[str, dict[str, dict[str, float]]] = {}
     for run in runs:
         metrics, steps, seconds = [], [], []
-        per_trial[run.name], runner.files[run.name] = {}, []
-        for tid in (int(t) for t in trial_ids):
-            t0 = time.perf_counter()
-            trial_metrics, trial_steps, trial_seconds = runner.trial(run, tid)
+        per_trial[run.name] = {}
+        for tid in tids:
+            trial_metrics, trial_steps, trial_seconds, wall = runner.trial(run, tid)
             metrics, steps, seconds = metrics + trial_metrics, steps + trial_steps, seconds + trial_seconds
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
                 {**pool_metrics(trial_metrics, trial_steps, trial_seconds),
@@ -195,13 +199,13 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             if log is not None:
                 log(f"  {run.name:12s} trial {tid}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
-                    f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
+                    f"violations {m['limit_violations']} ({wall:.0f} s)")
         pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps),
                             **pool_keepout_metrics(metrics)}
     add_line_ratios(pooled)
-    for tid in (str(int(t)) for t in trial_ids):
+    for tid in (str(t) for t in tids):
         add_line_ratios({name: per_trial[name][tid] for name in per_trial})
-    return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
+    return Comparison(strategies=pooled, per_trial=per_trial, trials=tids,
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=runner.files,
                       wearer=describe_wearer(wearer),
                       offline_wearer_share_by_mode=_offline_share(bundle, mode_names),
@@ -221,13 +225,15 @@ def _check_request(demos: Demonstrations, trial_ids: Sequence[int], runs: Sequen
 
 
 class _Runner:
-    """The episodes of :func:`compare_strategies`: simulated (``simulate(bundle, demos, trial, run,
-    options)``, the settings bound), the schedule sources' episodes cached for the scheduled runs, and
-    the run files written under ``out/runs`` (``files``: run name → paths relative to ``out``)."""
+    """The episodes of :func:`compare_strategies` in two batches of ``pool`` (:meth:`run_all`): the runs
+    without a schedule and the schedule sources, then the scheduled runs' draws built from the sources;
+    each run file written under ``out/runs`` as its batch ends (``files``: run name → paths relative to
+    ``out``); per (run, trial) the metrics, step times, simulated seconds and wall time kept."""
 
-    def __init__(self, bundle: Any, demos: Demonstrations, simulate: Callable[..., tuple[Any, dict[str, Any]]],
+    def __init__(self, bundle: Any, demos: Demonstrations, pool: EpisodePool, settings: dict[str, Any],
                  extra: dict[str, Any], seed: int, out: Path | None, mcap: bool, mcap_rate_hz: float | None) -> None:
-        self.bundle, self.demos, self._simulate, self.extra, self.seed = bundle, demos, simulate, extra, seed
+        self.bundle, self.demos, self.pool, self.settings = bundle, demos, pool, settings
+        self.extra, self.seed = extra, seed
         self.out, self.mcap, self.mcap_rate_hz = out, mcap, mcap_rate_hz
         self.by_id = {tr.trial_id: tr for tr in demos.trials}
         self.runs_dir = out / "runs" if out is not None else None
@@ -235,19 +241,38 @@ class _Runner:
             self.runs_dir.mkdir(parents=True, exist_ok=True)
         self.files: dict[str, list[str]] = {}
         self.cache: dict[tuple[str, int], tuple[Any, dict[str, Any]]] = {}  # episodes the scheduled runs use
+        self.done: dict[tuple[str, int], list[tuple[Any, dict[str, Any]]]] = {}
 
-    def simulate(self, run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-        episode, m = self._simulate(self.bundle, self.demos, self.by_id[tid], run, {**self.extra, **options})
-        if run.name in _SOURCES:
-            self.cache[(run.name, tid)] = (episode, m)
-        return episode, m
+    def _batch(self, wanted: list[tuple[StrategyRun, int, dict[str, Any]]], save: set[str]) -> None:
+        """Simulate ``wanted`` (run, trial, options) in one batch; runs named in ``save`` get run files."""
+        jobs = [EpisodeJob(tid, run, {**self.extra, **options}) for run, tid, options in wanted]
+        results = self.pool.map(simulate_episode, self.bundle, jobs, **self.settings)
+        counts: dict[tuple[str, int], int] = {}
+        for run, tid, _ in wanted:
+            counts[(run.name, tid)] = counts.get((run.name, tid), 0) + 1
+        for (run, tid, _), (episode, m) in zip(wanted, results):
+            if run.name in _SOURCES:
+                self.cache[(run.name, tid)] = (episode, m)
+            if run.name in save:
+                done = self.done.setdefault((run.name, tid), [])
+                self._save(run, tid, len(done), counts[(run.name, tid)], episode)
+                done.append((episode if run.name in _SOURCES else _Kept(episode), m))
+
+    def run_all(self, runs: Sequence[StrategyRun], tids: Sequence[int]) -> None:
+        """Every episode of ``runs`` on ``tids`` (class docstring)."""
+        names = {r.name for r in runs}
+        for run in runs:
+            self.files[run.name] = []
+        sources = [next(r for r in DEFAULT_RUNS if r.name == n) for n in sorted(_needed_sources(runs) - names)]
+        plain = [r for r in runs if r.schedule is None]
+        self._batch([(r, tid, {}) for r in plain + sources for tid in tids], names)
+        self._batch([(r, tid, options) for r in runs if r.schedule is not None for tid in tids
+                     for options in _draw_options(r, tid, self.seed, self.source)], names)
 
     def source(self, name: str, tid: int) -> tuple[Any, dict[str, Any]]:
-        if (name, tid) not in self.cache:
-            self.simulate(next(r for r in DEFAULT_RUNS if r.name == name), tid, {})
         return self.cache[(name, tid)]
 
-    def save(self, run: StrategyRun, tid: int, j: int, n_draws: int, episode: Any) -> None:
+    def _save(self, run: StrategyRun, tid: int, j: int, n_draws: int, episode: Any) -> None:
         if self.runs_dir is None or self.out is None:
             return
         path = self.runs_dir / f"{run.name}_trial{tid}{f'_draw{j}' if n_draws > 1 else ''}.npz"
@@ -258,15 +283,11 @@ class _Runner:
                            joint_stride=_joint_stride(episode, self.mcap_rate_hz))
         self.files[run.name].append(str(path.relative_to(self.out)))
 
-    def trial(self, run: StrategyRun, tid: int) -> tuple[list[dict[str, Any]], list[np.ndarray], list[float]]:
+    def trial(self, run: StrategyRun, tid: int) -> tuple[list[dict[str, Any]], list[np.ndarray], list[float], float]:
         """``run`` on trial ``tid`` (every draw; ``oracle``: the best replay only): (metrics, step times [s],
-        simulated seconds) per episode kept."""
-        draws = _draw_options(run, tid, self.seed, self.source)
-        done = []
-        for j, options in enumerate(draws):
-            episode, m = self.simulate(run, tid, options)
-            self.save(run, tid, j, len(draws), episode)
-            done.append((episode, m))
+        simulated seconds) per episode kept, and the wall time of its episodes [s]."""
+        done = list(self.done[(run.name, tid)])
+        wall = sum(float(e.info.get("wall_time_s", 0.0)) for e, _ in done)
         if run.schedule == "oracle":  # the best replay, the pure runs' own episodes included
             done.append(min(done + [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle"]],
                             key=lambda em: em[1]["tracking_rmse_m"]))
@@ -276,7 +297,19 @@ class _Runner:
             done = [best_on_line(done + pure, pure[0][1], pure[1][1])]
         steps = [np.asarray(e.step_time, dtype=float) for e, _ in done]
         seconds = [float(e.t[-1] - e.t[0]) + float(np.median(np.diff(e.t))) for e, _ in done]
-        return [m for _, m in done], steps, seconds
+        return [m for _, m in done], steps, seconds, wall
+
+
+class _Kept:
+    """What the pooling reads of an episode whose run file is written: its times, step times and info."""
+
+    def __init__(self, episode: Any) -> None:
+        self.t, self.step_time, self.info = episode.t, episode.step_time, episode.info
+
+
+def _needed_sources(runs: Sequence[StrategyRun]) -> set[str]:
+    """The runs whose episodes the scheduled runs among ``runs`` are built from."""
+    return {n for r in runs if r.schedule is not None for n in SCHEDULE_SOURCES.get(r.schedule, ())}
 
 
 def best_on_line(done: Sequence[tuple[Any, dict[str, Any]]], voluntary: dict[str, Any], reactive: dict[str, Any],
