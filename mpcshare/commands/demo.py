@@ -168,17 +168,38 @@ def _save(bundle: Any, mixture: Any, out: Path) -> tuple[Any, dict | None]:
     return bundle, mode_sources
 
 
-def _sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainConfig, out: Path) -> dict | None:
-    """Stage 5: the trade-off between accuracy and effort as K moves (None with ``--no-sweep``)."""
-    if args.no_sweep:
-        _stage(5, "K sweep skipped (--no-sweep)")
-        return None
+def _run_sweep(_bundle: Any, demos: Demonstrations, config: TrainConfig, folder: Path,
+               progress: bool) -> tuple[dict, float]:
+    """The K sweep into ``folder`` (:func:`mpcshare.training.sweep.run_sweep`): its rows and conclusion, and its
+    seconds; in any process (an :meth:`EpisodePool.call`, the bundle unused)."""
     from mpcshare.training.sweep import run_sweep
 
-    _stage(5, "the trade-off between accuracy and effort (K sweep)")
-    result = run_sweep(demos, config, out=prepare_output_folder(out / "sweep"), progress=True)
-    print(result.conclusion)
-    return {"rows": result.rows, "conclusion": result.conclusion}
+    t0 = time.perf_counter()
+    result = run_sweep(demos, config, out=folder, progress=progress)
+    return {"rows": result.rows, "conclusion": result.conclusion}, time.perf_counter() - t0
+
+
+def _start_sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainConfig, out: Path,
+                 pool: EpisodePool) -> Callable[[], tuple[dict | None, float | None]]:
+    """Stage 5: the trade-off between accuracy and effort as K moves, with workers in one of them beside the
+    training (it needs no bundle), else when its result is asked for. Returns what waits for it and prints
+    it: (rows and conclusion, its seconds), or (None, None) with ``--no-sweep``."""
+    if args.no_sweep:
+        def skipped() -> tuple[None, None]:
+            _stage(5, "K sweep skipped (--no-sweep)")
+            return None, None
+        return skipped
+    folder = prepare_output_folder(out / "sweep")
+    if pool.workers > 1:
+        print("the K sweep (stage 5) runs in a worker process beside the training", flush=True)
+        future = pool.call(_run_sweep, None, config, folder, False)
+
+    def finish() -> tuple[dict, float]:
+        _stage(5, "the trade-off between accuracy and effort (K sweep)")
+        sweep, seconds = future.result() if pool.workers > 1 else _run_sweep(None, demos, config, folder, True)
+        print(sweep["conclusion"])
+        return sweep, seconds
+    return finish
 
 
 def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, out: Path, pool: EpisodePool) -> dict:
@@ -241,17 +262,19 @@ def _demo(args: argparse.Namespace) -> int:
     _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
     rule_s = min(RULE_DURATION_S, 2 * args.sim_duration)  # the choice as `mpcshare train`, shorter in short demos
-    with EpisodePool(demos, args.workers) as pool:  # one pool for the rule choice and the comparison
+    # one pool for the K sweep, the rule choice and the comparison; with workers the sweep runs beside the
+    # training and the choice beside the mixture's training
+    with EpisodePool(demos, args.workers) as pool:
+        finish_sweep = _start_sweep(args, demos, config, out, pool)
         bundle = _fit(demos, config)
         t_choice = time.perf_counter()
         finish_choice = _start_choice(bundle, demos, args.wearer, rule_s, pool)
         mixture = _mixture(demos, config, analysis)
         lap("training", t0)
 
-        t0 = time.perf_counter()
-        sweep = _sweep(args, demos, config, out)
-        if sweep is not None:
-            lap("sweep", t0)
+        sweep, sweep_s = finish_sweep()
+        if sweep_s is not None:
+            timings["sweep" if pool.workers == 1 else "sweep (beside training)"] = sweep_s
         finish_choice()
         if pool.workers > 1:
             lap("rule choice (beside training and sweep)", t_choice)
