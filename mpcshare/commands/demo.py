@@ -57,6 +57,9 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sim-duration", type=positive_float, default=30.0,
                    help="seconds simulated per trial and strategy (default 30)")
     p.add_argument("--no-video", action="store_true", help="do not render the video of the gate")
+    p.add_argument("--rule-duration", type=positive_float, default=None,
+                   help=f"seconds of each held-out trial the hand-over rule is chosen on (default: "
+                        f"{RULE_DURATION_S:g} as `mpcshare train`, at most twice --sim-duration)")
     p.add_argument("--workers", type=positive_int, default=default_workers(),
                    help="processes that run the closed-loop episodes of the rule choice and the comparison "
                         f"(default {default_workers()}: the CPU count, at most {MAX_DEFAULT_WORKERS}); the "
@@ -172,10 +175,13 @@ def _run_sweep(_bundle: Any, demos: Demonstrations, config: TrainConfig, folder:
                progress: bool) -> tuple[dict, float]:
     """The K sweep into ``folder`` (:func:`mpcshare.training.sweep.run_sweep`): its rows and conclusion, and its
     seconds; in any process (an :meth:`EpisodePool.call`, the bundle unused)."""
+    from threadpoolctl import threadpool_limits
+
     from mpcshare.training.sweep import run_sweep
 
     t0 = time.perf_counter()
-    result = run_sweep(demos, config, out=folder, progress=progress)
+    with threadpool_limits(limits=1, user_api="blas"):  # the same figures in this process and in a worker
+        result = run_sweep(demos, config, out=folder, progress=progress)
     return {"rows": result.rows, "conclusion": result.conclusion}, time.perf_counter() - t0
 
 
@@ -261,7 +267,7 @@ def _demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
-    rule_s = min(RULE_DURATION_S, 2 * args.sim_duration)  # the choice as `mpcshare train`, shorter in short demos
+    rule_s = args.rule_duration or min(RULE_DURATION_S, 2 * args.sim_duration)  # shorter in short demos
     # one pool for the K sweep, the rule choice and the comparison; with workers the sweep runs beside the
     # training and the choice beside the mixture's training
     with EpisodePool(demos, args.workers) as pool:

@@ -117,8 +117,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     extra = dict(controller_options or {})
     _check_request(demos, trial_ids, runs)
     settings = dict(beta=beta, duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names,
-                    make_controller=None if make_controller is _from_bundle else make_controller, scene=scene,
-                    scenario=scenario)
+                    make_controller=make_controller, scene=scene, scenario=scenario)
     runner = _Runner(bundle, demos, pool or EpisodePool(demos), settings, extra, seed,
                      Path(out) if out is not None else None, mcap, mcap_rate_hz)
     tids = [int(t) for t in trial_ids]
