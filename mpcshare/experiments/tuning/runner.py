@@ -176,7 +176,8 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     n_total = len(tasks) + n_placebo
     where = f"{workers} local worker(s)" if backend == "local" else "a Ray cluster"
     if log is not None:
-        log(f"tune plans {n_total} closed-loop episodes of {duration_s or 'whole trials'} s: {len(tasks)} of the "
+        length = f"{duration_s:g} s" if duration_s else "whole trials"
+        log(f"tune plans {n_total} closed-loop episodes of {length}: {len(tasks)} of the "
             f"settings and the parties, {n_placebo} placebo draws ({draws} per setting episode), on {where}"
             + (f"; {len(store.rows)} already done" if store.rows else ""))
     bundles = _bundles(demos, config, percentiles, out, progress)
