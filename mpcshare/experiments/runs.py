@@ -202,7 +202,7 @@ class _Runner:
         for run in runs:
             self.files[run.name] = []
         sources = [next(r for r in DEFAULT_RUNS if r.name == n) for n in sorted(_needed_sources(runs) - names)]
-        plain = [r for r in runs if r.schedule is None]
+        plain = sorted((r for r in runs if r.schedule is None), key=lambda r: not r.use_mpc)  # the slowest first
         self._batch([(r, tid, {}) for r in plain + sources for tid in tids], names)
         self._batch([(r, tid, options) for r in runs if r.schedule is not None for tid in tids
                      for options in _draw_options(r, tid, self.seed, self.source)], names)
