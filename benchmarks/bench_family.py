@@ -115,7 +115,8 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
     # the gate's rule chosen in the closed loop as `mpcshare train` does, on the last held-out trials;
     # the runs below are evaluated on the other held-out trials only
-    choice = choose_for_bundle(bundle, demos, mode_names=mode_names, log=None)  # as `mpcshare train`: 60 s a trial
+    choice = choose_for_bundle(bundle, demos, mode_names=mode_names, log=None,  # as `mpcshare train`: 60 s a trial
+                               workers=1)  # one process per world: the worlds run in parallel
     info["rule_choice"] = {k: choice[k] for k in ("wearer_modes", "settings", "why", "trials", "mode_costs",
                                                   "price_order", "cutting_modes", "seconds")}
     t_train = time.perf_counter() - t0

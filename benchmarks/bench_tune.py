@@ -1,7 +1,9 @@
 """Speed of ``mpcshare tune``: the same sweep with 1 and with 2 local workers (issue 20).
 
-Prints one JSON object: ``episodes``, ``seconds`` per worker count, ``speedup`` (1 worker / 2
-workers; target ≥ 1.8 on 2 free cores) and ``same_rows`` (the rows equal but the timing keys).
+Prints one JSON object: ``planned`` (what ``run_tune`` announced before it began: the episodes it
+plans, then its estimate from the first episode, per worker count), ``episodes``, ``seconds`` per worker
+count, ``seconds_per_episode`` (1 worker), ``speedup`` (1 worker / 2 workers; target ≥ 1.8 on 2 free
+cores) and ``same_rows`` (the rows equal but the timing keys).
 The bundles are trained once (into ``--out``/bundles) and shared by both runs, so only the
 episodes are timed. The machine may be shared: the speedup is only meaningful on idle cores.
 
@@ -39,7 +41,7 @@ def main() -> None:
                   seeds=list(range(args.seeds)), duration_s=args.duration, wearer="hemiparetic_mild",
                   config=TrainConfig(max_epochs=10), progress=False, log=None, mode_names=MODE_NAMES)
     run_tune(data, out / "prep", workers=1, **{**kwargs, "seeds": []})  # no episodes: trains the bundles only
-    seconds, rows = {}, {}
+    seconds, rows, said = {}, {}, {}
     for workers in (1, 2):
         folder = out / f"w{workers}"
         if folder.exists():
@@ -47,11 +49,13 @@ def main() -> None:
         folder.mkdir()
         (folder / "bundles").symlink_to((out / "prep" / "bundles").resolve())
         t0 = time.perf_counter()
-        res = run_tune(data, folder, workers=workers, **kwargs)
+        said[workers] = []
+        res = run_tune(data, folder, workers=workers, **{**kwargs, "log": said[workers].append})
         seconds[workers] = time.perf_counter() - t0
         rows[workers] = [{k: v for k, v in r.items() if k not in TIMING_KEYS} for r in res["rows"]]
-    print(json.dumps({"episodes": len(rows[1]), "seconds": seconds, "speedup": seconds[1] / seconds[2],
-                      "same_rows": rows[1] == rows[2]}))
+    print(json.dumps({"planned": {w: lines[:2] for w, lines in said.items()}, "episodes": len(rows[1]),
+                      "seconds": seconds, "seconds_per_episode": seconds[1] / len(rows[1]),
+                      "speedup": seconds[1] / seconds[2], "same_rows": rows[1] == rows[2]}))
 
 
 if __name__ == "__main__":

@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import argparse
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from learning.atomic import atomic_open, write_json
 from learning.data import Demonstrations, save
@@ -33,6 +35,7 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.data import format_summary
 from mpcshare.commands.sim import add_wearer_argument, cutting_steps
+from mpcshare.experiments.episode_pool import MAX_DEFAULT_WORKERS, EpisodePool, default_workers
 from mpcshare.training.config import RULE_DURATION_S, TrainConfig
 from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 
@@ -55,6 +58,13 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sim-duration", type=positive_float, default=30.0,
                    help="seconds simulated per trial and strategy (default 30)")
     p.add_argument("--no-video", action="store_true", help="do not render the video of the gate")
+    p.add_argument("--rule-duration", type=positive_float, default=None,
+                   help=f"seconds of each held-out trial the hand-over rule is chosen on (default: "
+                        f"{RULE_DURATION_S:g} as `mpcshare train`, at most twice --sim-duration)")
+    p.add_argument("--workers", type=positive_int, default=default_workers(),
+                   help="processes that run the closed-loop episodes of the rule choice and the comparison "
+                        f"(default {default_workers()}: the CPU count, at most {MAX_DEFAULT_WORKERS}); the "
+                        "figures are the same with any number")
     add_wearer_argument(p)
     add_analysis_arguments(p)
 
@@ -84,60 +94,124 @@ def _summarise(demos: Demonstrations, out: Path) -> tuple[dict, str]:
     return summary, summary_md
 
 
-def _train(demos: Demonstrations, config: TrainConfig, out: Path, analysis: Any, wearer_name: str,
-           rule_duration_s: float) -> tuple[Any, dict | None]:
-    """Stage 4: the bundle in ``out/model`` (read back as ``mpcshare sim --model`` would), its hand-over
-    rule chosen in the closed loop as ``mpcshare train`` does (on the last held-out trials, ``rule_duration_s``
-    each, beside the wearer ``wearer_name``), and, where the analysis advises the time-free mixture, the
-    comparison of the two mode sources (else None)."""
-    from mpcshare.bundle import load_bundle, save_bundle
-    from mpcshare.reports.claims import mixture_advice
-    from mpcshare.reports.mode_sources import mode_source_comparison, mode_source_sentence
+def _fit(demos: Demonstrations, config: TrainConfig) -> Any:
+    """Stage 4: the gates and the reactive predictor (:func:`mpcshare.training.train_bundle`)."""
     from mpcshare.training import TrainingError, train_bundle
 
     try:
-        bundle = train_bundle(demos, config, progress=True)
+        return train_bundle(demos, config, progress=True)
     except TrainingError as exc:
         raise CommandError(f"cannot train on the demonstrations: {exc}") from None
+
+
+def _start_choice(bundle: Any, demos: Demonstrations, wearer_name: str, rule_duration_s: float,
+                  pool: EpisodePool) -> Callable[[], None]:
+    """The bundle's hand-over rule chosen in the closed loop as ``mpcshare train`` chooses it (on the last
+    held-out trials, ``rule_duration_s`` each, beside the wearer ``wearer_name``; recorded in
+    ``bundle.metrics``), its episodes in ``pool``: with workers, in a thread that waits for them while this
+    process goes on (its lines printed at the end); else at once. Returns what ends it and prints it."""
     from mpcshare.training.rule_choice import choose_for_bundle
 
-    print("choosing the hand-over rule in the closed loop on held-out trials", flush=True)
-    try:
-        choice = choose_for_bundle(bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,
-                                   mode_names=MODE_NAMES, log=print)
+    lines: list[str] = []
+    choose = partial(choose_for_bundle, bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,
+                     mode_names=MODE_NAMES, pool=pool)
+    if pool.workers > 1:
+        print(f"choosing the hand-over rule in the closed loop on held-out trials ({pool.workers} workers, "
+              "beside the training and the K sweep)", flush=True)
+        thread = ThreadPoolExecutor(max_workers=1)
+        future = thread.submit(choose, log=lines.append)
+        thread.shutdown(wait=False)
+    else:
+        print("choosing the hand-over rule in the closed loop on held-out trials", flush=True)
+        future = Future()
+        try:
+            future.set_result(choose(log=print))
+        except ValueError as exc:
+            future.set_exception(exc)
+
+    def finish() -> None:
+        try:
+            choice = future.result()
+        except ValueError as exc:
+            print(f"hand-over rule: its defaults ({exc})")
+            return
+        if lines:
+            print("the hand-over rule's candidates in the closed loop:")
+            print("\n".join(lines))
         print(f"hand-over rule: the wearer leads modes {choice['wearer_modes']} ({choice['why']})")
-    except ValueError as exc:
-        print(f"hand-over rule: its defaults ({exc})")
+    return finish
+
+
+def _mixture(demos: Demonstrations, config: TrainConfig, analysis: Any) -> Any:
+    """The bundle trained on the time-free mixture's modes where the analysis advises them (else None)."""
+    from mpcshare.reports.claims import mixture_advice
+    from mpcshare.training import TrainingError, train_bundle
+
+    if not mixture_advice(analysis.segmentation_test.to_dict()):  # modes help, the temporal model adds nothing
+        return None
+    print("training on the time-free mixture's modes too, to compare (--modes-from mixture)", flush=True)
+    try:
+        return train_bundle(demos, replace(config, modes_from="mixture"), progress=False)
+    except TrainingError as exc:
+        raise CommandError(f"cannot train on the mixture's modes: {exc}") from None
+
+
+def _save(bundle: Any, mixture: Any, out: Path) -> tuple[Any, dict | None]:
+    """The bundle in ``out/model``, read back as ``mpcshare sim --model`` would, and the comparison of the
+    two mode sources where the mixture was trained (else None)."""
+    from mpcshare.bundle import load_bundle, save_bundle
+    from mpcshare.reports.mode_sources import mode_source_comparison, mode_source_sentence
+
     bundle.config["data_path"] = str((out / "demos.npz").resolve())
     save_bundle(bundle, out / "model")
     bundle = load_bundle(out / "model")
-    mode_sources = None
-    if mixture_advice(analysis.segmentation_test.to_dict()):  # modes help, the temporal model adds nothing
-        print("training on the time-free mixture's modes too, to compare (--modes-from mixture)", flush=True)
-        try:
-            mixture = train_bundle(demos, replace(config, modes_from="mixture"), progress=False)
-        except TrainingError as exc:
-            raise CommandError(f"cannot train on the mixture's modes: {exc}") from None
-        mode_sources = mode_source_comparison({"hmm": bundle, "mixture": mixture})
-        print(mode_source_sentence(mode_sources))
+    if mixture is None:
+        return bundle, None
+    mode_sources = mode_source_comparison({"hmm": bundle, "mixture": mixture})
+    print(mode_source_sentence(mode_sources))
     return bundle, mode_sources
 
 
-def _sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainConfig, out: Path) -> dict | None:
-    """Stage 5: the trade-off between accuracy and effort as K moves (None with ``--no-sweep``)."""
-    if args.no_sweep:
-        _stage(5, "K sweep skipped (--no-sweep)")
-        return None
+def _run_sweep(_bundle: Any, demos: Demonstrations, config: TrainConfig, folder: Path,
+               progress: bool) -> tuple[dict, float]:
+    """The K sweep into ``folder`` (:func:`mpcshare.training.sweep.run_sweep`): its rows and conclusion, and its
+    seconds; in any process (an :meth:`EpisodePool.call`, the bundle unused)."""
+    from threadpoolctl import threadpool_limits
+
     from mpcshare.training.sweep import run_sweep
 
-    _stage(5, "the trade-off between accuracy and effort (K sweep)")
-    result = run_sweep(demos, config, out=prepare_output_folder(out / "sweep"), progress=True)
-    print(result.conclusion)
-    return {"rows": result.rows, "conclusion": result.conclusion}
+    t0 = time.perf_counter()
+    with threadpool_limits(limits=1, user_api="blas"):  # the same figures in this process and in a worker
+        result = run_sweep(demos, config, out=folder, progress=progress)
+    return {"rows": result.rows, "conclusion": result.conclusion}, time.perf_counter() - t0
 
 
-def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, out: Path) -> dict:
-    """Stage 6: every run of the run table on the held-out trials, the video, ``sim/comparison.*``."""
+def _start_sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainConfig, out: Path,
+                 pool: EpisodePool) -> Callable[[], tuple[dict | None, float | None]]:
+    """Stage 5: the trade-off between accuracy and effort as K moves, with workers in one of them beside the
+    training (it needs no bundle), else when its result is asked for. Returns what waits for it and prints
+    it: (rows and conclusion, its seconds), or (None, None) with ``--no-sweep``."""
+    if args.no_sweep:
+        def skipped() -> tuple[None, None]:
+            _stage(5, "K sweep skipped (--no-sweep)")
+            return None, None
+        return skipped
+    folder = prepare_output_folder(out / "sweep")
+    if pool.workers > 1:
+        print("the K sweep (stage 5) runs in a worker process beside the training", flush=True)
+        future = pool.call(_run_sweep, None, config, folder, False)
+
+    def finish() -> tuple[dict, float]:
+        _stage(5, "the trade-off between accuracy and effort (K sweep)")
+        sweep, seconds = future.result() if pool.workers > 1 else _run_sweep(None, demos, config, folder, True)
+        print(sweep["conclusion"])
+        return sweep, seconds
+    return finish
+
+
+def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, out: Path, pool: EpisodePool) -> dict:
+    """Stage 6: every run of the run table on the held-out trials (episodes in ``pool``), the video,
+    ``sim/comparison.*``."""
     from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, output_size, render_clip
     from mpcshare.reports.comparison import write_comparison
     from sim.wearer_presets import wearer_preset
@@ -150,11 +224,14 @@ def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, o
     print(f"writing about {human_bytes(npz_bytes)} of run files into {sim_out / 'runs'} "
           "(fewer with --sim-trials or --sim-duration)", flush=True)
     wearer = wearer_preset(args.wearer)
+    # with workers the video renders beside the comparison's first episodes, else after them
+    render = partial(pool.call, render_clip, bundle, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
+                     seed=args.seed, wearer=wearer)
+    clip = render() if pool.workers > 1 and not args.no_video else None
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
-                              mode_names=MODE_NAMES, wearer=wearer)
+                              mode_names=MODE_NAMES, wearer=wearer, pool=pool)
     if not args.no_video:
-        video, message = render_clip(bundle, demos, ids[0], sim_out / "gate_trial.mp4", seconds=8.0,
-                                     seed=args.seed, wearer=wearer)
+        video, message = (clip or render()).result()
         comp.video = None if video is None else str(Path(video).relative_to(sim_out))
         print(f"video: {video}" if video else f"no video: {message}")
     return write_comparison(comp, sim_out, cutting=cutting_steps(demos, ids[0]))
@@ -191,18 +268,28 @@ def _demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
-    rule_s = min(RULE_DURATION_S, 2 * args.sim_duration)  # the choice as `mpcshare train`, shorter in short demos
-    bundle, mode_sources = _train(demos, config, out, analysis, args.wearer, rule_s)
-    lap("training", t0)
+    rule_s = args.rule_duration or min(RULE_DURATION_S, 2 * args.sim_duration)  # shorter in short demos
+    # one pool for the K sweep, the rule choice and the comparison; with workers the sweep runs beside the
+    # training and the choice beside the mixture's training
+    with EpisodePool(demos, args.workers) as pool:
+        finish_sweep = _start_sweep(args, demos, config, out, pool)
+        bundle = _fit(demos, config)
+        t_choice = time.perf_counter()
+        finish_choice = _start_choice(bundle, demos, args.wearer, rule_s, pool)
+        mixture = _mixture(demos, config, analysis)
+        lap("training", t0)
 
-    t0 = time.perf_counter()
-    sweep = _sweep(args, demos, config, out)
-    if sweep is not None:
-        lap("sweep", t0)
+        sweep, sweep_s = finish_sweep()
+        if sweep_s is not None:
+            timings["sweep" if pool.workers == 1 else "sweep (beside training)"] = sweep_s
+        finish_choice()
+        if pool.workers > 1:
+            lap("rule choice (beside training and sweep)", t_choice)
+        bundle, mode_sources = _save(bundle, mixture, out)
 
-    t0 = time.perf_counter()
-    comparison = _closed_loop(args, bundle, demos, out)
-    lap("closed loop", t0)
+        t0 = time.perf_counter()
+        comparison = _closed_loop(args, bundle, demos, out, pool)
+        lap("closed loop", t0)
 
     timings["total"] = time.perf_counter() - t_start
     missing = write_demo_report(out, data_summary_md=summary_md, analysis=analysis.to_dict(),

@@ -1,12 +1,14 @@
 """The ``tune`` subcommand: the closed-loop sweep of K × β × strategy with paired seeds.
 
 ``mpcshare tune DATA --out DIR`` trains one bundle per percentile (the HMM and quotients
-fitted once), simulates every setting and the baselines (``voluntary``, ``reactive``,
-``random_handover`` matched to each setting, the mean of 5 draws per pair, ``oracle_preview``) on
-held-out trials × seeds (defaults: 10 pairs, tests Holm-corrected across settings)
-(:mod:`mpcshare.experiments.tuning`), and writes ``tune.json``, ``tune.md`` and ``pareto.png``. Episodes
-run in a local process pool (``--workers``) or on Ray (``--backend ray``, the optional extra
-``pip install -e .[ray]``); an interrupted sweep started again with the same arguments resumes.
+fitted once), simulates every setting and what its comparison needs (the parties ``voluntary`` and
+``reactive``, ``random_handover`` matched to each setting, the mean of :data:`DEFAULT_DRAWS` draws per
+pair; ``oracle_preview`` only with ``--oracle-preview``) on held-out trials × seeds (defaults: ≥ 10 pairs,
+tests Holm-corrected across settings) (:mod:`mpcshare.experiments.tuning`), and writes ``tune.json``,
+``tune.md`` and ``pareto.png``. It says first how many episodes it plans and, after a first one timed, about
+how long they will take. Episodes run in a local process pool (``--workers``, default the CPU count, at
+most 2) or on Ray (``--backend ray``, the optional extra ``pip install -e .[ray]``); an interrupted sweep
+started again with the same arguments resumes.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from mpcshare.commands import base
 from mpcshare.commands.base import Command, CommandError, load_or_fail, prepare_output_folder
 from mpcshare.commands.data import DATA_HELP
 from mpcshare.commands.sim import add_wearer_argument
+from mpcshare.experiments.episode_pool import MAX_DEFAULT_WORKERS, default_workers
 from mpcshare.run_table import RANDOM_DRAWS, TUNABLE
 from sim.demonstrator import MODE_NAMES
 
@@ -27,10 +30,14 @@ __all__ = ["TUNE_COMMAND"]
 #: Defaults: up to 5 held-out trials x enough paired seeds for >= 10 pairs per setting (the default
 #: data's 4 held-out trials x 3 seeds = 12), so that one-sided p < 0.01 is reachable after Holm's
 #: correction across the 6 settings (exact Wilcoxon floor 0.5^10 ≈ 0.001); 2 percentiles x 1 β x
-#: 3 strategies; per pair 2 + 2 x (1 + 3) = 10 episodes and 6 x 5 placebo draws.
+#: 3 strategies; per pair 1 + 2 x (1 + 3) = 9 episodes and 6 x 2 placebo draws.
 DEFAULT_PERCENTILES = (100.0, 70.0)
 DEFAULT_BETAS = (0.5,)
 DEFAULT_TRIALS, MIN_PAIRS = 5, 10
+#: Placebo draws per pair: the pairs give the test its power, the draws only steady each pair's placebo
+#: figure; 2 keep 3 percentiles x 2 β x 3 strategies x 10 pairs at 30 s (580 episodes) within 15 min on 2
+#: cores, where 5 (the comparison's) take 1,120 (about 20 min).
+DEFAULT_DRAWS = 2
 
 
 def default_trials_and_seeds(n_heldout: int, trials: int | None, seeds: int | None) -> tuple[int, int]:
@@ -81,9 +88,14 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seeds", type=base.positive_int, default=None,
                    help=f"paired seeds 0..N-1 (default: enough for >= {MIN_PAIRS} trial x seed pairs, so that "
                         "p < 0.01 is reachable after Holm's correction)")
-    p.add_argument("--draws", type=base.positive_int, default=RANDOM_DRAWS,
-                   help=f"random_handover draws per pair, their mean is the placebo (default {RANDOM_DRAWS})")
-    p.add_argument("--workers", type=base.positive_int, default=1, help="local worker processes (default 1)")
+    p.add_argument("--draws", type=base.positive_int, default=DEFAULT_DRAWS,
+                   help=f"random_handover draws per pair, their mean is the placebo (default {DEFAULT_DRAWS}; "
+                        f"the comparison's is {RANDOM_DRAWS})")
+    p.add_argument("--oracle-preview", action="store_true",
+                   help="also simulate the upper bound oracle_preview (the robot given the true intent)")
+    p.add_argument("--workers", type=base.positive_int, default=default_workers(),
+                   help=f"local worker processes (default {default_workers()}: the CPU count, at most "
+                        f"{MAX_DEFAULT_WORKERS}); the rows are the same with any number")
     p.add_argument("--backend", choices=["local", "ray"], default="local",
                    help="local process pool, or a Ray cluster (optional extra: pip install -e .[ray])")
     p.add_argument("--address", default=None, help="Ray cluster address (default: start a local Ray)")
@@ -126,7 +138,8 @@ def _run(args: argparse.Namespace) -> int:
                        betas=sorted(set(args.betas)), strategies=list(dict.fromkeys(args.strategies)),
                        n_trials=n_trials, seeds=seeds, duration_s=args.duration, wearer=args.wearer,
                        config=config, backend=args.backend, workers=args.workers,
-                       address=args.address, progress=not args.quiet, mode_names=MODE_NAMES, draws=args.draws)
+                       address=args.address, progress=not args.quiet, mode_names=MODE_NAMES, draws=args.draws,
+                       oracle=args.oracle_preview)
     except RayMissing as exc:
         return _usage_error(str(exc))
     except ValueError as exc:

@@ -21,19 +21,18 @@ settings), ``comparison.md`` and ``comparison.png``.
 from __future__ import annotations
 
 import math
-import time
 import warnings
 from dataclasses import asdict, dataclass, field
-from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from learning.data import Demonstrations
 from mpcshare.channel_map import bundle_wearer
 from mpcshare.control.types import DEFAULT_BETA
+from mpcshare.experiments.episode import _from_bundle, intent_preview, simulate_episode
+from mpcshare.experiments.episode_pool import EpisodeJob, EpisodePool
 from mpcshare.experiments.handover import (
     LINE_ORACLE_MAX_EFFORT,
     SCHEDULE_SOURCES,
@@ -45,11 +44,10 @@ from mpcshare.experiments.pooling import pool_keepout_metrics, pool_metrics, poo
 from mpcshare.line_ratio import add_line_ratios
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
 from sim.closed_loop import run_episode
-from sim.keepout_metrics import KEEPOUT_KEYS, episode_keepout_metrics
-from sim.metrics import episode_metrics
+from sim.keepout_metrics import KEEPOUT_KEYS
 from sim.run_mcap import fork_poses, write_run_mcap
 from sim.scene import SceneConfig
-from sim.task_metrics import TASK_KEYS, episode_task_metrics
+from sim.task_metrics import TASK_KEYS
 from sim.wearer import WearerConfig
 from sim.wearer_presets import wearer_preset_name
 
@@ -88,67 +86,6 @@ class Comparison:
                 "scenario": self.scenario, "keepout": self.keepout}
 
 
-def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
-    """The default controller factory: :meth:`SharedController.from_bundle` (imported when first used)."""
-    from mpcshare.control.controller import SharedController
-
-    return SharedController.from_bundle(bundle, **options)
-
-
-def intent_preview(trial: Any, act_names: Sequence[str], wearer: WearerConfig | None = None) -> Any:
-    """The wearer's true intent as a known tip trajectory (the ``oracle_preview`` run's preview):
-    the trial's knife tip smoothed as :class:`sim.wearer.SimulatedWearer` smooths its intent."""
-    from mpcshare.control.forecast import KnownTrajectory
-    from sim.closed_loop import TIP_CHANNELS
-    from sim.wearer import smooth_intent
-
-    names = list(act_names)
-    missing = [c for c in TIP_CHANNELS if c not in names]
-    if missing:
-        raise ValueError(f"oracle_preview needs the knife tip channels {missing} in the act names {names}")
-    rate = 1.0 / float(np.median(np.diff(trial.t)))
-    cutoff = (wearer or WearerConfig()).intent_cutoff_hz
-    positions, _ = smooth_intent(trial.act[:, [names.index(c) for c in TIP_CHANNELS]], rate, cutoff)
-    return KnownTrajectory(positions, 1.0 / rate)
-
-
-def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: StrategyRun, options: dict[str, Any],
-                     *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
-                     mode_names: Sequence[str] | None,
-                     make_controller: Callable[..., Any] | None = None,
-                     scene: SceneConfig | None = None, scenario: Any = None) -> tuple[Any, dict[str, Any]]:
-    """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
-    its metrics: :func:`sim.metrics.episode_metrics`, the task figures of :mod:`sim.task_metrics`
-    and the keep-out figures of :mod:`sim.keepout_metrics`. ``scene``: the world and its arm (default
-    ``SceneConfig()``, the SuperLimb); the controller is given the scene's arm (``robot=``).
-    ``scenario``: a :class:`mpcshare.conflicts.Scenario` that transforms the trial (and the bundle's
-    predictor) first."""
-    make_controller = make_controller or _from_bundle
-    fork_truth = None
-    if scenario is not None:
-        st = scenario.apply(trial, duration_s)
-        trial, fork_truth = st.trial, st.fork_truth
-        bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
-    if run.oracle:
-        options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
-    if scene is not None:
-        options = {**options, "robot": scene.robot}
-    wearer = bundle_wearer(bundle, wearer)
-    controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
-    # one BLAS thread: the controller's products are small (a 7-joint MPC's take ≈ 2 ms a solve on one
-    # thread, ≈ 20 ms with OpenBLAS's threads on a shared 2-core machine; docs/design.md)
-    with threadpool_limits(limits=1, user_api="blas"):
-        episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
-                              obs_names=list(demos.obs_names), act_names=list(demos.act_names),
-                              fork_truth=fork_truth)
-    m = episode_metrics(episode)
-    true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
-    m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
-                                  true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
-    m.update(episode_keepout_metrics(episode))
-    return episode, m
-
-
 def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Sequence[int], *,
                        runs: Sequence[StrategyRun] = DEFAULT_RUNS, duration_s: float | None = None,
                        out: str | Path | None = None, seed: int = 0, beta: float = DEFAULT_BETA,
@@ -157,7 +94,8 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
                        mode_names: Sequence[str] | None = None, mcap: bool = False,
                        wearer: WearerConfig | None = None, scene: SceneConfig | None = None,
                        mcap_rate_hz: float | None = None, scenario: Any = None,
-                       controller_options: dict[str, Any] | None = None) -> Comparison:
+                       controller_options: dict[str, Any] | None = None,
+                       pool: EpisodePool | None = None) -> Comparison:
     """Simulate every run on every trial in ``trial_ids`` and pool the metrics.
 
     ``bundle``: a loaded :class:`mpcshare.bundle.ModelBundle`; ``demos``: raw data (the
@@ -173,23 +111,26 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     the comparison records them and the preset's name. ``scene``: the arm's world (:func:`simulate_episode`).
     ``mcap_rate_hz``: the MCAP's joint states at about this rate (default: every physics step).
     ``scenario``: a conflict scenario (:class:`mpcshare.conflicts.Scenario`) applied to every trial;
-    ``controller_options``: added to every controller's options (e.g. ``config``).
+    ``controller_options``: added to every controller's options (e.g. ``config``). ``pool``: where the
+    episodes run (:class:`mpcshare.experiments.episode_pool.EpisodePool`; default: this process, one torch
+    thread); the figures are the same whatever its number of workers.
     """
     make_controller = make_controller or _from_bundle
     extra = dict(controller_options or {})
     _check_request(demos, trial_ids, runs)
-    runner = _Runner(bundle, demos, partial(simulate_episode, beta=beta, duration_s=duration_s, seed=seed,
-                                            wearer=wearer, mode_names=mode_names, make_controller=make_controller,
-                                            scene=scene, scenario=scenario),
-                     extra, seed, Path(out) if out is not None else None, mcap, mcap_rate_hz)
+    settings = dict(beta=beta, duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names,
+                    make_controller=make_controller, scene=scene, scenario=scenario)
+    runner = _Runner(bundle, demos, pool or EpisodePool(demos), settings, extra, seed,
+                     Path(out) if out is not None else None, mcap, mcap_rate_hz)
+    tids = [int(t) for t in trial_ids]
+    runner.run_all(runs, tids)
     pooled: dict[str, dict[str, float]] = {}
     per_trial: dict[str, dict[str, dict[str, float]]] = {}
     for run in runs:
         metrics, steps, seconds = [], [], []
-        per_trial[run.name], runner.files[run.name] = {}, []
-        for tid in (int(t) for t in trial_ids):
-            t0 = time.perf_counter()
-            trial_metrics, trial_steps, trial_seconds = runner.trial(run, tid)
+        per_trial[run.name] = {}
+        for tid in tids:
+            trial_metrics, trial_steps, trial_seconds, wall = runner.trial(run, tid)
             metrics, steps, seconds = metrics + trial_metrics, steps + trial_steps, seconds + trial_seconds
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
                 {**pool_metrics(trial_metrics, trial_steps, trial_seconds),
@@ -198,13 +139,13 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             if log is not None:
                 log(f"  {run.name:12s} trial {tid}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
-                    f"violations {m['limit_violations']} ({time.perf_counter() - t0:.0f} s)")
+                    f"violations {m['limit_violations']} ({wall:.0f} s)")
         pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps),
                             **pool_keepout_metrics(metrics)}
     add_line_ratios(pooled)
-    for tid in (str(int(t)) for t in trial_ids):
+    for tid in (str(t) for t in tids):
         add_line_ratios({name: per_trial[name][tid] for name in per_trial})
-    return Comparison(strategies=pooled, per_trial=per_trial, trials=[int(t) for t in trial_ids],
+    return Comparison(strategies=pooled, per_trial=per_trial, trials=tids,
                       duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=runner.files,
                       wearer=describe_wearer(wearer),
                       offline_wearer_share_by_mode=_offline_share(bundle, mode_names),
@@ -224,13 +165,15 @@ def _check_request(demos: Demonstrations, trial_ids: Sequence[int], runs: Sequen
 
 
 class _Runner:
-    """The episodes of :func:`compare_strategies`: simulated (``simulate(bundle, demos, trial, run,
-    options)``, the settings bound), the schedule sources' episodes cached for the scheduled runs, and
-    the run files written under ``out/runs`` (``files``: run name → paths relative to ``out``)."""
+    """The episodes of :func:`compare_strategies` in two batches of ``pool`` (:meth:`run_all`): the runs
+    without a schedule and the schedule sources, then the scheduled runs' draws built from the sources;
+    each run file written under ``out/runs`` as its batch ends (``files``: run name → paths relative to
+    ``out``); per (run, trial) the metrics, step times, simulated seconds and wall time kept."""
 
-    def __init__(self, bundle: Any, demos: Demonstrations, simulate: Callable[..., tuple[Any, dict[str, Any]]],
+    def __init__(self, bundle: Any, demos: Demonstrations, pool: EpisodePool, settings: dict[str, Any],
                  extra: dict[str, Any], seed: int, out: Path | None, mcap: bool, mcap_rate_hz: float | None) -> None:
-        self.bundle, self.demos, self._simulate, self.extra, self.seed = bundle, demos, simulate, extra, seed
+        self.bundle, self.demos, self.pool, self.settings = bundle, demos, pool, settings
+        self.extra, self.seed = extra, seed
         self.out, self.mcap, self.mcap_rate_hz = out, mcap, mcap_rate_hz
         self.by_id = {tr.trial_id: tr for tr in demos.trials}
         self.runs_dir = out / "runs" if out is not None else None
@@ -238,19 +181,40 @@ class _Runner:
             self.runs_dir.mkdir(parents=True, exist_ok=True)
         self.files: dict[str, list[str]] = {}
         self.cache: dict[tuple[str, int], tuple[Any, dict[str, Any]]] = {}  # episodes the scheduled runs use
+        self.done: dict[tuple[str, int], list[tuple[Any, dict[str, Any]]]] = {}
 
-    def simulate(self, run: StrategyRun, tid: int, options: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-        episode, m = self._simulate(self.bundle, self.demos, self.by_id[tid], run, {**self.extra, **options})
-        if run.name in _SOURCES:
-            self.cache[(run.name, tid)] = (episode, m)
-        return episode, m
+    def _batch(self, wanted: list[tuple[StrategyRun, int, dict[str, Any]]], save: set[str]) -> None:
+        """Simulate ``wanted`` (run, trial, options) in one batch; runs named in ``save`` get run files."""
+        jobs = [EpisodeJob(tid, run, {**self.extra, **options}) for run, tid, options in wanted]
+        results = self.pool.map(simulate_episode, self.bundle, jobs, **self.settings)
+        counts: dict[tuple[str, int], int] = {}
+        for run, tid, _ in wanted:
+            counts[(run.name, tid)] = counts.get((run.name, tid), 0) + 1
+        for (run, tid, _), (episode, m) in zip(wanted, results):
+            if run.name in _SOURCES:
+                self.cache[(run.name, tid)] = (episode, m)
+            if run.name in save:
+                done = self.done.setdefault((run.name, tid), [])
+                best_only = run.schedule in _BEST_ONLY  # one kept replay: only it gets a run file (:meth:`trial`)
+                if not best_only:
+                    self._save(run, tid, len(done), counts[(run.name, tid)], episode)
+                done.append((episode if run.name in _SOURCES or best_only else _Kept(episode), m))
+
+    def run_all(self, runs: Sequence[StrategyRun], tids: Sequence[int]) -> None:
+        """Every episode of ``runs`` on ``tids`` (class docstring)."""
+        names = {r.name for r in runs}
+        for run in runs:
+            self.files[run.name] = []
+        sources = [next(r for r in DEFAULT_RUNS if r.name == n) for n in sorted(_needed_sources(runs) - names)]
+        plain = sorted((r for r in runs if r.schedule is None), key=lambda r: not r.use_mpc)  # the slowest first
+        self._batch([(r, tid, {}) for r in plain + sources for tid in tids], names)
+        self._batch([(r, tid, options) for r in runs if r.schedule is not None for tid in tids
+                     for options in _draw_options(r, tid, self.seed, self.source)], names)
 
     def source(self, name: str, tid: int) -> tuple[Any, dict[str, Any]]:
-        if (name, tid) not in self.cache:
-            self.simulate(next(r for r in DEFAULT_RUNS if r.name == name), tid, {})
         return self.cache[(name, tid)]
 
-    def save(self, run: StrategyRun, tid: int, j: int, n_draws: int, episode: Any) -> None:
+    def _save(self, run: StrategyRun, tid: int, j: int, n_draws: int, episode: Any) -> None:
         if self.runs_dir is None or self.out is None:
             return
         path = self.runs_dir / f"{run.name}_trial{tid}{f'_draw{j}' if n_draws > 1 else ''}.npz"
@@ -261,17 +225,11 @@ class _Runner:
                            joint_stride=_joint_stride(episode, self.mcap_rate_hz))
         self.files[run.name].append(str(path.relative_to(self.out)))
 
-    def trial(self, run: StrategyRun, tid: int) -> tuple[list[dict[str, Any]], list[np.ndarray], list[float]]:
+    def trial(self, run: StrategyRun, tid: int) -> tuple[list[dict[str, Any]], list[np.ndarray], list[float], float]:
         """``run`` on trial ``tid`` (every draw; ``oracle``: the best replay only): (metrics, step times [s],
-        simulated seconds) per episode kept."""
-        draws = _draw_options(run, tid, self.seed, self.source)
-        done = []
-        best_only = run.schedule in ("oracle", "oracle_line")  # one kept replay: only it gets a run file
-        for j, options in enumerate(draws):
-            episode, m = self.simulate(run, tid, options)
-            if not best_only:
-                self.save(run, tid, j, len(draws), episode)
-            done.append((episode, m))
+        simulated seconds) per episode kept, and the wall time of its episodes [s]."""
+        done = list(self.done[(run.name, tid)])
+        wall = sum(float(e.info.get("wall_time_s", 0.0)) for e, _ in done)
         if run.schedule == "oracle":  # the best replay, the pure runs' own episodes included
             done.append(min(done + [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle"]],
                             key=lambda em: em[1]["tracking_rmse_m"]))
@@ -279,11 +237,23 @@ class _Runner:
         elif run.schedule == "oracle_line":  # the lowest line ratio within the effort cap, the pure runs included
             pure = [self.source(n, tid) for n in SCHEDULE_SOURCES["oracle_line"]]
             done = [best_on_line(done + pure, pure[0][1], pure[1][1])]
-        if best_only:
-            self.save(run, tid, 0, 1, done[0][0])
+        if run.schedule in _BEST_ONLY:
+            self._save(run, tid, 0, 1, done[0][0])
         steps = [np.asarray(e.step_time, dtype=float) for e, _ in done]
         seconds = [float(e.t[-1] - e.t[0]) + float(np.median(np.diff(e.t))) for e, _ in done]
-        return [m for _, m in done], steps, seconds
+        return [m for _, m in done], steps, seconds, wall
+
+
+class _Kept:
+    """What the pooling reads of an episode whose run file is written: its times, step times and info."""
+
+    def __init__(self, episode: Any) -> None:
+        self.t, self.step_time, self.info = episode.t, episode.step_time, episode.info
+
+
+def _needed_sources(runs: Sequence[StrategyRun]) -> set[str]:
+    """The runs whose episodes the scheduled runs among ``runs`` are built from."""
+    return {n for r in runs if r.schedule is not None for n in SCHEDULE_SOURCES.get(r.schedule, ())}
 
 
 def best_on_line(done: Sequence[tuple[Any, dict[str, Any]]], voluntary: dict[str, Any], reactive: dict[str, Any],
@@ -333,6 +303,7 @@ def output_size(runs: Sequence[StrategyRun], demos: Demonstrations, trial_ids: S
 
 
 _SOURCES = {name for names in SCHEDULE_SOURCES.values() for name in names}
+_BEST_ONLY = ("oracle", "oracle_line")  # schedules whose best replay alone is kept
 
 
 def _draw_options(run: StrategyRun, tid: int, seed: int,

@@ -38,6 +38,7 @@ figures, the per-mode costs and why are returned for the bundle's ``metrics`` an
 from __future__ import annotations
 
 import time
+from contextlib import nullcontext
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -46,6 +47,7 @@ from learning.data import Demonstrations
 from mpcshare.control.strategies.gate import DEFAULTS as GATE_DEFAULTS
 from mpcshare.control.types import ControllerConfig
 from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
+from mpcshare.experiments.episode_pool import EpisodeJob, EpisodePool, default_workers
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
 from mpcshare.training.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
@@ -53,8 +55,8 @@ from sim.task_metrics import saws as task_saws
 from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
-           "SECOND_STAGE_TOP", "candidate_sets",
-           "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio", "pooled_run", "rule_markdown", "saws"]
+           "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
+           "pooled_run", "pooled_runs", "rule_markdown", "saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
              "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
@@ -118,21 +120,36 @@ def _variants(sets: list[list[int]], timings: Sequence[str], wearer_alphas: Sequ
             for a in (wearer_alphas if m else (0.0,)) for r in robot_alphas]
 
 
+def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
+                specs: Sequence[tuple[str, dict | None]], duration_s: float | None, wearer: WearerConfig | None,
+                seed: int, mode_names: Sequence[str] | None = None,
+                pool: EpisodePool | None = None) -> list[tuple[dict[str, float], list[Any]]]:
+    """:func:`pooled_run` of each (strategy, gate options) in ``specs``, every episode in one batch of
+    ``pool`` (default: this process), in the order of ``specs``."""
+    jobs = [EpisodeJob(int(tid), StrategyRun(strategy, strategy),
+                       {"config": ControllerConfig(strategy_options=dict(options))} if options else {})
+            for strategy, options in specs for tid in trials]
+    done = (pool or EpisodePool(demos)).map(simulate_episode, bundle, jobs, beta=0.5, duration_s=duration_s,
+                                           seed=seed, wearer=wearer, mode_names=mode_names)
+    n = len(trials)
+    return [_pooled(done[i * n:(i + 1) * n]) for i in range(len(specs))]
+
+
 def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
-            duration_s: float | None, wearer: WearerConfig | None, seed: int,
-            mode_names: Sequence[str] | None = None) -> tuple[dict[str, float], list[Any]]:
+               duration_s: float | None, wearer: WearerConfig | None, seed: int,
+               mode_names: Sequence[str] | None = None,
+               pool: EpisodePool | None = None) -> tuple[dict[str, float], list[Any]]:
     """Pooled figures of ``strategy`` on ``trials`` (RMS, effort, limit violations, mean stroke correlation
     while cutting or None) and the episodes."""
-    by_id = {tr.trial_id: tr for tr in demos.trials}
-    ms, steps, secs, episodes = [], [], [], []
-    extra = {"config": ControllerConfig(strategy_options=dict(options))} if options else {}
-    for tid in trials:
-        ep, m = simulate_episode(bundle, demos, by_id[int(tid)], StrategyRun(strategy, strategy), extra, beta=0.5,
-                                 duration_s=duration_s, seed=seed, wearer=wearer, mode_names=mode_names)
-        ms.append(m)
-        episodes.append(ep)
-        steps.append(np.asarray(ep.step_time, dtype=float))
-        secs.append(float(ep.t[-1] - ep.t[0]))
+    return pooled_runs(bundle, demos, trials, [(strategy, options)], duration_s, wearer, seed, mode_names, pool)[0]
+
+
+def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float], list[Any]]:
+    """The figures of :func:`pooled_run` from (episode, metrics) per trial, and the episodes."""
+    ms = [m for _, m in done]
+    episodes = [ep for ep, _ in done]
+    steps = [np.asarray(ep.step_time, dtype=float) for ep in episodes]
+    secs = [float(ep.t[-1] - ep.t[0]) for ep in episodes]
     p = pool_metrics(ms, steps, secs)
     out = {k: p[k] for k in ("tracking_rmse_m", "voluntary_effort", "limit_violations")}
     for key in ("saw_correlation", "saw_amplitude_ratio"):
@@ -215,7 +232,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
                 timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
-                log: Callable[[str], None] | None = None) -> dict[str, Any]:
+                log: Callable[[str], None] | None = None, pool: EpisodePool | None = None) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
     ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
@@ -223,7 +240,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer
     leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's
     shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
-    with the second stage's (module docstring). Returns ``{"settings", "wearer_modes", "why",
+    with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
+    stage's episodes are one batch). Returns ``{"settings", "wearer_modes", "why",
     "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "cutting_effort_vs_voluntary" (:func:`mpcshare.training.mode_cost.cutting_effort`), "trials", "duration_s",
     "seconds"}``. Raises ValueError when the bundle has no mode model or no
@@ -233,8 +251,11 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
         raise ValueError("choose_rule needs at least one held-out trial")
     n_modes = _n_modes(bundle)
     t0 = time.perf_counter()
-    run = lambda s, o=None: pooled_run(bundle, demos, trials, s, o, duration_s, wearer, seed, mode_names)  # noqa: E731
-    (vol, vol_eps), (rea, rea_eps) = run("voluntary"), run("reactive")
+
+    def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
+        return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool)
+
+    (vol, vol_eps), (rea, rea_eps) = run([("voluntary", None), ("reactive", None)])
     costs = mode_costs(vol_eps, rea_eps, n_modes)
     order = price_order(costs)
     cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
@@ -246,29 +267,26 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     if bad or not robot_alphas:
         raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
 
-    def evaluate(modes: list[int], timing: str, a_w: float, a_r: float) -> None:
+    def evaluate(variants: list[tuple[list[int], str, float, float]]) -> None:
         # every setting written out, so that none is taken from a bundle's earlier choice (rule_settings)
-        settings = {"wearer_modes": modes, **HANDOVER_TIMINGS[timing], "wearer_alpha": a_w,
-                    "robot_alphas": [a_r] * n_modes}
-        m, _ = run("gate", settings)
-        rows.append({"wearer_modes": modes, "timing": timing, "wearer_alpha": a_w, "robot_alpha": a_r,
-                     "settings": settings, **m,
-                     "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
-                     "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
-        if log is not None:
-            r = rows[-1]
-            lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-            log(f"  gate with wearer modes {r['wearer_modes']} ({timing} hand-over, robot share {a_w:g} while the "
-                f"wearer leads, {a_r:g} while it leads): "
-                f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
-                f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
+        settings = [{"wearer_modes": modes, **HANDOVER_TIMINGS[timing], "wearer_alpha": a_w,
+                     "robot_alphas": [a_r] * n_modes} for modes, timing, a_w, a_r in variants]
+        for (modes, timing, a_w, a_r), st, (m, _) in zip(variants, settings, run([("gate", x) for x in settings])):
+            rows.append({"wearer_modes": modes, "timing": timing, "wearer_alpha": a_w, "robot_alpha": a_r,
+                         "settings": st, **m,
+                         "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
+                         "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
+            if log is not None:
+                r = rows[-1]
+                lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
+                log(f"  gate with wearer modes {r['wearer_modes']} ({timing} hand-over, robot share {a_w:g} while "
+                    f"the wearer leads, {a_r:g} while it leads): "
+                    f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
+                    f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
 
-    for modes, timing, a_w, a_r in _variants(candidate_sets(order, cutting, n_modes), list(timings), wearer_alphas,
-                                             robot_alphas[:1]):
-        evaluate(modes, timing, a_w, a_r)
-    for r in _second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP):
-        for a_r in robot_alphas[1:]:
-            evaluate(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
+    evaluate(_variants(candidate_sets(order, cutting, n_modes), list(timings), wearer_alphas, robot_alphas[:1]))
+    evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
+              for r in _second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
     best, why = _criterion(rows, vol, rea, max_effort)
     task_effort = cutting_effort(costs, cutting)
     if task_effort is not None and task_effort > max_effort and not (saws(best) and
@@ -295,17 +313,22 @@ def choice_trials(heldout: Sequence[int], n_trials: int | None = None) -> list[i
 def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
                       duration_s: float | None = RULE_DURATION_S, wearer_name: str | None = None,
                       mode_names: Sequence[str] | None = None,
-                      log: Callable[[str], None] | None = None) -> dict[str, Any]:
+                      log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
+                      workers: int | None = None) -> dict[str, Any]:
     """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
     1 to 2) with the wearer preset ``wearer_name`` (default the default preset) and the demonstrations'
     ``mode_names`` (for the cutting modes), recorded in
     ``bundle.metrics`` (``rule_settings``, ``rule_choice``) so that the saved bundle's ``gate`` uses it;
-    returns the choice. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
+    returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
+    :func:`mpcshare.experiments.episode_pool.default_workers`) closed afterwards; the choice is the same
+    whatever the number. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
     from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
 
     name = wearer_name or DEFAULT_WEARER_PRESET
-    choice = choose_rule(bundle, demos, choice_trials(bundle.heldout_trials, n_trials), duration_s=duration_s,
-                         log=log, wearer=wearer_preset(name), mode_names=mode_names)
+    trials = choice_trials(bundle.heldout_trials, n_trials)
+    with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
+        choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
+                             mode_names=mode_names, pool=episodes)
     choice["wearer"] = name
     bundle.metrics["rule_settings"] = choice["settings"]
     bundle.metrics["rule_choice"] = choice

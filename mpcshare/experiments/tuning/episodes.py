@@ -6,8 +6,9 @@ A sweep over percentiles p (one bundle per K_p), β and strategies S ⊆ the reg
 held-out trials × paired seeds (for each seed every setting sees the same trial, torso sway
 and wearer noise: ``run_episode(seed=seed)``):
 
-* phase 1 — every setting (S, p, β); the baselines ``voluntary`` (once: no K, no β),
-  ``reactive`` (per K: the predictor differs) and ``oracle_preview`` (once: the true intent);
+* phase 1 — every setting (S, p, β); the parties ``voluntary`` (once: no K, no β) and
+  ``reactive`` (per K: the predictor differs), what the line ratio needs; with ``oracle``, also
+  ``oracle_preview`` (once: the true intent; an upper bound no test needs);
 * phase 2 — ``random_handover`` matched to each setting (``matched_to`` = S), from the
   setting's schedule on the same trial and seed (:func:`mpcshare.experiments.handover.schedule_record`),
   ``draws`` draws (default :data:`mpcshare.run_table.RANDOM_DRAWS`), draw j seeded by (seed, trial,
@@ -67,7 +68,7 @@ def task_key(row_or_task: Any) -> str:
 def plan_tasks(percentiles: Sequence[float], betas: Sequence[float], strategies: Sequence[str],
                trials: Sequence[int], seeds: Sequence[int], bundles: dict[float, str], data_path: str,
                duration_s: float | None, wearer: str,
-               mode_names: Sequence[str] | None = None) -> list[EpisodeTask]:
+               mode_names: Sequence[str] | None = None, oracle: bool = False) -> list[EpisodeTask]:
     """Phase 1 of the sweep (module docstring), in a fixed order."""
     first = bundles[percentiles[0]]
     common = dict(data_path=data_path, duration_s=duration_s, wearer=wearer,
@@ -76,7 +77,8 @@ def plan_tasks(percentiles: Sequence[float], betas: Sequence[float], strategies:
     for seed in seeds:
         for trial in trials:
             tasks.append(EpisodeTask("voluntary", None, None, trial, seed, first, **common))
-            tasks.append(EpisodeTask("oracle_preview", None, None, trial, seed, first, **common))
+            if oracle:
+                tasks.append(EpisodeTask("oracle_preview", None, None, trial, seed, first, **common))
             for p in percentiles:
                 tasks.append(EpisodeTask("reactive", p, None, trial, seed, bundles[p], **common))
                 for s in strategies:

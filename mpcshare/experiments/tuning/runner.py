@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
@@ -27,7 +28,7 @@ from mpcshare.errors import MpcshareError
 from mpcshare.experiments.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
 from mpcshare.run_table import RANDOM_DRAWS
 
-__all__ = ["BACKENDS", "RayMissing", "open_backend", "run_tune"]
+__all__ = ["BACKENDS", "RayMissing", "estimate_line", "open_backend", "run_tune"]
 
 BACKENDS: tuple[str, ...] = ("local", "ray")
 
@@ -127,13 +128,26 @@ def _bundles(data: Any, config: Any, percentiles: Sequence[float], out: Path, pr
     return {p: str(paths[p]) for p in percentiles}
 
 
+def estimate_line(n_left: int, first_s: float, workers: int | None) -> str:
+    """``about M min for the N episodes left`` at ``first_s`` [s] a episode (the first one, timed) on
+    ``workers`` processes (None: a Ray cluster, the time of one process given)."""
+    if workers is None:
+        return (f"the first episode took {first_s:.1f} s: about {n_left * first_s / 60:.0f} min of episodes left "
+                "for one process (divided among the cluster's)")
+    return (f"the first episode took {first_s:.1f} s: about {n_left * first_s / max(1, workers) / 60:.1f} min for "
+            f"the {n_left} left on {workers} worker(s)")
+
+
 def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[float], betas: Sequence[float],
              strategies: Sequence[str], n_trials: int, seeds: Sequence[int], duration_s: float | None,
              wearer: str, config: Any = None, backend: str = "local", workers: int = 1,
              address: str | None = None, progress: bool = True, mode_names: Sequence[str] | None = None,
-             log: Callable[[str], None] | None = print, draws: int = RANDOM_DRAWS) -> dict[str, Any]:
-    """Run the sweep (module docstring; ``draws`` placebo episodes per setting episode); returns
-    ``{"rows": [...], "trials": [...], "bundles": {...}}``.
+             log: Callable[[str], None] | None = print, draws: int = RANDOM_DRAWS,
+             oracle: bool = False) -> dict[str, Any]:
+    """Run the sweep (module docstring; ``draws`` placebo episodes per setting episode; ``oracle``: with the
+    ``oracle_preview`` upper bound); returns ``{"rows": [...], "trials": [...], "bundles": {...}}``. Before
+    the bundles are trained it logs how many episodes it plans, and after a first episode run here and timed,
+    about how long the rest will take (:func:`estimate_line`).
 
     Raises ValueError when the data has fewer held-out trials than ``n_trials``.
     """
@@ -145,7 +159,8 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     config = config or TrainConfig()
     signature = {"data": str(Path(data_path).resolve()), "percentiles": list(percentiles), "betas": list(betas),
                  "strategies": list(strategies), "trials": n_trials, "seeds": list(seeds),
-                 "duration_s": duration_s, "wearer": wearer, "config": config.to_dict(), "draws": draws}
+                 "duration_s": duration_s, "wearer": wearer, "config": config.to_dict(), "draws": draws,
+                 "oracle": oracle}
     demos = load(data_path)
     _, held = split_by_trial(demos, config.heldout_fraction, seed=config.seed)  # the split training makes
     heldout = [int(t) for t in held.trial_ids]
@@ -154,15 +169,29 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
                          f"valid: 1 to {len(heldout)}")
     trials = heldout[:n_trials]
     store = _Store(out, signature)
+    paths = {p: str(out / "bundles" / f"p{p:g}") for p in percentiles}
+    tasks = plan_tasks(percentiles, betas, strategies, trials, seeds, paths, str(Path(data_path).resolve()),
+                       duration_s, wearer, mode_names, oracle=oracle)
+    n_placebo = draws * sum(t.strategy in strategies for t in tasks)  # phase 2: draws per setting episode
+    n_total = len(tasks) + n_placebo
+    where = f"{workers} local worker(s)" if backend == "local" else "a Ray cluster"
+    if log is not None:
+        length = f"{duration_s:g} s" if duration_s else "whole trials"
+        log(f"tune plans {n_total} closed-loop episodes of {length}: {len(tasks)} of the "
+            f"settings and the parties, {n_placebo} placebo draws ({draws} per setting episode), on {where}"
+            + (f"; {len(store.rows)} already done" if store.rows else ""))
     bundles = _bundles(demos, config, percentiles, out, progress)
-    tasks = plan_tasks(percentiles, betas, strategies, trials, seeds, bundles, str(Path(data_path).resolve()),
-                       duration_s, wearer, mode_names)
-    n_total = len(tasks) + draws * sum(t.strategy in strategies for t in tasks)  # phase 2: draws per setting episode
+    todo = [t for t in tasks if task_key(t) not in store.rows]
+    if todo:  # the first episode here, timed: what the rest will take
+        t0 = time.perf_counter()
+        store.add(run_task(todo[0]))
+        seconds = time.perf_counter() - t0
+        if log is not None:
+            log(estimate_line(n_total - len(store.rows), seconds, workers if backend == "local" else None))
     bar = None
     if progress:
         from learning.progress import progress_bar
         bar = progress_bar(total=int(n_total), desc="tune", unit="episode", initial=len(store.rows))
-
     runner = open_backend(backend, workers, address)
 
     def run(batch: list[EpisodeTask]) -> None:

@@ -16,7 +16,7 @@ from mpcshare.experiments.tuning.stats import gate_vs_random, pareto, recommend,
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 SWEEP = ["--percentiles", "90", "70", "--betas", "0", "1", "--strategies", "gate", "--trials", "1",
-         "--duration", "2", "--seeds", "2", "--draws", "2", "--epochs", "3", "--quiet"]
+         "--duration", "2", "--seeds", "2", "--draws", "2", "--epochs", "3", "--quiet", "--workers", "1"]
 
 
 @pytest.fixture(scope="module")
@@ -40,16 +40,15 @@ def _comparable(rows):
 def test_tiny_sweep_writes_the_three_files_with_the_documented_keys(swept):
     result = json.loads((swept / "tune.json").read_text())
     assert {"rows", "summary", "tests", "recommended", "pareto"} <= set(result)
-    # 2 seeds x 1 trial x (voluntary + oracle_preview + 2 reactive + 2x2 gate + 2x2x2 random_handover draws)
-    assert len(result["rows"]) == 2 * (2 + 2 + 4 + 8)
+    # 2 seeds x 1 trial x (voluntary + 2 reactive + 2x2 gate + 2x2x2 random_handover draws): what the tests need
+    assert len(result["rows"]) == 2 * (1 + 2 + 4 + 8)
     assert result["multiple_testing"]["method"] == "Holm" and result["multiple_testing"]["m"] >= 1
     assert result["summary"]["voluntary"]["line_ratio"] == pytest.approx(1.0)
     assert all(result["summary"][n]["line_ratio"] is not None for n in result["tests"])
     for r in result["rows"]:
         assert {"percentile", "beta", "strategy", "trial", "seed", "tracking_rmse_m", "voluntary_effort",
                 "saw_amplitude_ratio", "lag_s"} <= set(r)
-    assert {r["strategy"] for r in result["rows"]} == {"voluntary", "oracle_preview", "reactive", "gate",
-                                                      "random_handover"}
+    assert {r["strategy"] for r in result["rows"]} == {"voluntary", "reactive", "gate", "random_handover"}
     assert set(result["tests"]) == {"gate p90 b0", "gate p90 b1", "gate p70 b0", "gate p70 b1"}
     for t in result["tests"].values():
         (key,) = t
@@ -91,6 +90,22 @@ def test_one_and_two_workers_give_the_same_rows_and_a_rerun_resumes(data, swept,
     again = run_tune(data, tmp_path / "a", workers=1, config=cfg, **kwargs)
     assert _comparable(again["rows"]) == _comparable(one["rows"])
     assert len((tmp_path / "a" / "episodes.jsonl").read_text().splitlines()) == len(lines)  # only 2 re-run
+
+
+def test_the_plan_and_its_time_are_said_before_the_episodes_run(data, swept, tmp_path):
+    from mpcshare.training.config import TrainConfig
+
+    (tmp_path / "t").mkdir()
+    (tmp_path / "t" / "bundles").symlink_to(swept / "bundles")  # trained: only the episodes run
+    said: list[str] = []
+    run = run_tune(data, tmp_path / "t", percentiles=[90.0], betas=[0.5], strategies=["gate"], n_trials=1,
+                   seeds=[0], duration_s=0.5, wearer="hemiparetic_mild", progress=False, log=said.append,
+                   mode_names=MODE_NAMES, draws=2, config=TrainConfig(max_epochs=3), workers=1)
+    # voluntary, reactive p90, gate p90 b0.5 and its 2 placebo draws
+    assert said[0] == ("tune plans 5 closed-loop episodes of 0.5 s: 3 of the settings and the parties, 2 placebo "
+                       "draws (2 per setting episode), on 1 local worker(s)")
+    assert said[1].startswith("the first episode took ") and said[1].endswith(" for the 4 left on 1 worker(s)")
+    assert len(run["rows"]) == 5
 
 
 def _row(strategy, seed, trial, rmse, matched_to=None, effort=0.1):
@@ -157,7 +172,9 @@ def test_plan_pairs_every_setting_with_the_same_trials_and_seeds():
     bundles = {90.0: "b90", 70.0: "b70"}
     tasks = plan_tasks([90.0, 70.0], [0.0, 1.0], ["gate", "blend"], [3, 4], [0, 1], bundles, "d.npz", 2.0,
                        "hemiparetic_mild")
-    assert len({task_key(t) for t in tasks}) == len(tasks) == 2 * 2 * (2 + 2 * (1 + 4))
+    assert len({task_key(t) for t in tasks}) == len(tasks) == 2 * 2 * (1 + 2 * (1 + 4))
+    with_bound = plan_tasks([90.0], [0.5], ["gate"], [3], [0], bundles, "d.npz", 2.0, "hemiparetic_mild", oracle=True)
+    assert [t.strategy for t in with_bound] == ["voluntary", "oracle_preview", "reactive", "gate"]
     settings = [t for t in tasks if t.strategy in ("gate", "blend")]
     rows = [{"strategy": t.strategy, "matched_to": None, "percentile": t.percentile, "beta": t.beta,
              "trial": t.trial, "seed": t.seed, "schedule": {"steps": 10}} for t in settings]

@@ -52,7 +52,7 @@ class _Bundle:
 
 
 def _fake_runs(figures, by_modes, calls):
-    """pooled_run replaced: the parties' figures and episodes (mode 1 costs the robot most per effort), and
+    """pooled_runs replaced: the parties' figures and episodes (mode 1 costs the robot most per effort), and
     per gate candidate (its wearer modes, or (modes, timing), (modes, robot share while the wearer leads) or
     (modes, ("robot", share while the robot leads)) where that differs) given (RMS, effort, stroke
     correlation)."""
@@ -74,7 +74,10 @@ def _fake_runs(figures, by_modes, calls):
         ep = _Episode(mode, np.repeat(err, 100), np.repeat(effort, 100))
         return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
                 "saw_amplitude_ratio": 0.9}, [ep]
-    return fake
+
+    def fake_many(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names=None, pool=None):
+        return [fake(bundle, demos, trials, s, o, duration_s, wearer, seed, mode_names) for s, o in specs]
+    return fake_many
 
 
 def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
@@ -84,7 +87,7 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
     calls: list = []
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, calls))
     choice = choose_rule(_Bundle(), None, [3], robot_alphas=(1.0,))
     assert choice["price_order"] == [1, 2, 0]  # mode 1: 0.0009 - 0.000025 m² saved for 0.04 rad
     # each non-empty set with the prompt and the early hand-over; the empty set (no hand-over) once
@@ -99,10 +102,10 @@ def test_the_criterion_prefers_the_best_line_within_the_effort_cap(monkeypatch):
     # none within the cap: the lowest line ratio without it, not the lowest RMS (which would hand the wearer
     # nearly everything): [1] at 0.775x tracks at 0.885 of the line, [1, 2] at 0.99x at 1.03
     both = {(1,): (0.0115, 0.062, None), (1, 2): (0.0105, 0.079, None), (): (0.021, 0.075, None)}
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, both, []))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, both, []))
     relaxed = choose_rule(_Bundle(), None, [3])
     assert relaxed["wearer_modes"] == [1] and "no candidate" in relaxed["why"] and "line ratio" in relaxed["why"]
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, calls))
     md = rule_markdown(choice)
     assert "| gate | [1, 2] |" in md and "| 1 | 0.33 | 5.0 | 30.0 |" in md
     by_modes.update({(1,): (0.0105, 0.04, None), (1, 2): (0.0104, 0.05, None)})
@@ -121,7 +124,7 @@ def test_where_the_wearer_saws_the_choice_saws(monkeypatch):
     """The task first: a candidate that does not saw loses to one that does, even at a better line."""
     figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
     by_modes = {(1,): (0.012, 0.04, 0.65), (1, 2): (0.0125, 0.05, 0.9), (): (0.02, 0.02, 0.1)}  # 0.65: not sawing
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, []))
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["wearer_modes"] == [1, 2] and "that saw" in choice["why"]
     by_modes[(1, 2)] = (0.0125, 0.07, 0.9)  # the sawing candidate costs too much: the best line among the rest
@@ -135,7 +138,7 @@ def test_where_sawing_and_the_effort_cap_exclude_each_other_the_choice_says_so(m
     figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
     by_modes = {(1,): (0.012, 0.04, 0.65), (1, 2): (0.0125, 0.07, 0.9), (): (0.02, 0.02, 0.1),
                 (2,): (0.013, 0.07, 0.9)}
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, []))
     monkeypatch.setattr(rule_choice, "_cutting", lambda *a: [1, 2])
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["cutting_effort_vs_voluntary"] == pytest.approx(0.8)
@@ -153,7 +156,7 @@ def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better
     figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
     calls: list = []
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, calls))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, calls))
     choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25), timings=("prompt",), robot_alphas=(1.0,))
     # each non-empty set alone and with the robot's share 0.25 while the wearer leads; the empty set once
     assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1,), (1, 2), (1, 2), ()]
@@ -180,7 +183,7 @@ def test_the_early_hand_over_is_chosen_where_it_measures_better(monkeypatch):
     where its closed loop is better, and its settings are then what the saved gate reads."""
     figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, []))
     assert choose_rule(_Bundle(), None, [3])["settings"]["share_on"] == 0.5  # a tie: the prompt one
     by_modes[((1,), "early")] = (0.012, 0.05, None)  # 0.012 at 0.625x: line 0.73, better than 0.82
     choice = choose_rule(_Bundle(), None, [3])
@@ -197,7 +200,7 @@ def test_a_robot_share_below_one_while_the_robot_leads_is_chosen_where_it_measur
     closed loop is better; it is written out per mode, for the saved gate; a share below 0.5 is refused."""
     figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
     by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
-    monkeypatch.setattr(rule_choice, "pooled_run", _fake_runs(figures, by_modes, []))
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, []))
     assert choose_rule(_Bundle(), None, [3])["settings"]["robot_alphas"] == [1.0] * 3  # a tie: the robot's full share
     by_modes[((), ("robot", 0.5))] = (0.0115, 0.03, None)  # 0.0115 at 0.375x: line 0.70, better than 0.82
     choice = choose_rule(_Bundle(), None, [3])
