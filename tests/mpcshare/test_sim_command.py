@@ -22,7 +22,8 @@ def trained(tmp_path_factory):
     data = root / "demos.npz"
     save(generate_demonstrations(2, 4.0, seed=2), data)
     model = root / "model"
-    assert main(["train", str(data), "--out", str(model), "--epochs", "5", "--quiet"]) == 0
+    assert main(["train", str(data), "--out", str(model), "--epochs", "5", "--quiet",
+                 "--rule-duration", "10"]) == 0
     assert "skill vs hold" in (model / "training.md").read_text()  # the forecast's skill table
     return data, model
 
