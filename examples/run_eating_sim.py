@@ -17,21 +17,16 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mpcshare.cli import prefer_offscreen_gl
-
-# MuJoCo picks its OpenGL backend when first imported: render offscreen when there is no display.
-prefer_offscreen_gl()
-
-from learning.data import load  # noqa: E402
-from mpcshare.bundle import load_bundle, save_bundle  # noqa: E402
-from mpcshare.control.arbitration import STRATEGIES  # noqa: E402
-from mpcshare.control.controller import SharedController  # noqa: E402
-from mpcshare.reports.episode_plot import plot_episode  # noqa: E402
-from mpcshare.training import train_bundle  # noqa: E402
-from mpcshare.training.config import TrainConfig  # noqa: E402
-from sim.closed_loop import run_episode  # noqa: E402
-from sim.demonstrator import CUTTING, generate_demonstrations  # noqa: E402
-from sim.metrics import episode_metrics  # noqa: E402
+from learning.data import load
+from mpcshare.bundle import load_bundle, save_bundle
+from mpcshare.control.arbitration import STRATEGIES
+from mpcshare.control.controller import SharedController
+from mpcshare.reports.episode_plot import plot_episode
+from mpcshare.training import train_bundle
+from mpcshare.training.config import TrainConfig
+from sim.closed_loop import run_episode
+from sim.demonstrator import CUTTING, generate_demonstrations
+from sim.metrics import episode_metrics
 
 
 def main(argv: list[str] | None = None) -> dict:

@@ -1,9 +1,7 @@
-"""Test-suite configuration: render MuJoCo offscreen (EGL) on a machine without a display.
+"""Test-suite configuration: MuJoCo renders offscreen (EGL) on a machine without a display.
 
-MuJoCo reads ``MUJOCO_GL`` once, when it is first imported, so it is set here,
-before any test module imports ``mujoco``; the product never sets it on import.
+MuJoCo reads ``MUJOCO_GL`` once, when it is first imported; importing :mod:`sim` chooses it
+(:mod:`sim.offscreen_gl`), so it is imported here, before any test module imports ``mujoco`` directly.
 """
 
-from mpcshare.cli import prefer_offscreen_gl  # imports neither mujoco nor torch
-
-prefer_offscreen_gl()
+import sim  # noqa: F401  (chooses MUJOCO_GL; imports neither mujoco nor torch)
