@@ -1,11 +1,12 @@
 """The ``run`` subcommand: the shared controller on a real arm, over ROS 2 topics.
 
-``mpcshare run --model MODEL --config ARM.toml [--duration S]`` loads the bundle and the
+``mpcshare run --model MODEL --config ARM.toml [--duration S] [--sim-time]`` loads the bundle and the
 configuration (:mod:`mpcshare.runtime.config`), checks them against each other, then runs
 :class:`mpcshare.runtime.loop.RunLoop` at the model's rate until SIGINT or SIGTERM (or ``--duration``
-seconds): a stop command is published, then the exit status is 0. A bad bundle or configuration is one
-line on stderr, exit status 1, and nothing is sent. Prints one line when it starts and one summary
-line at the end.
+seconds of the wall clock): a stop command is published, then the exit status is 0. ``--sim-time``
+ticks on the ``/clock`` topic instead (``use_sim_time``; ``mpcshare sim --serve`` publishes it). A bad
+bundle or configuration is one line on stderr, exit status 1, and nothing is sent. Prints the arm's
+caps (another arm than the SuperLimb), one line when it starts and one summary line at the end.
 """
 
 from __future__ import annotations
@@ -28,6 +29,9 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
                         "examples/ros2/panda.toml)")
     p.add_argument("--duration", type=positive_float, default=None,
                    help="stop after this many seconds (default: run until SIGINT or SIGTERM)")
+    p.add_argument("--sim-time", action="store_true",
+                   help="tick on the /clock topic (rosgraph_msgs/Clock) instead of the wall clock, as a ROS 2 node "
+                        "with use_sim_time: for `mpcshare sim --serve`")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -38,24 +42,28 @@ def _run(args: argparse.Namespace) -> int:
     from mpcshare.bundle import BundleError, load_bundle
     from mpcshare.runtime.config import RunConfigError, load_run_config
     from mpcshare.runtime.loop import RunLoop
-    from mpcshare.runtime.setup import make_controller
+    from mpcshare.runtime.setup import configured_arm, make_controller
 
     try:
         config = load_run_config(args.config)
         bundle = load_bundle(args.model)
-        controller = make_controller(config, bundle)
+        arm = configured_arm(config)
+        controller = make_controller(config, bundle, arm)
     except (RunConfigError, BundleError) as exc:
         raise CommandError(str(exc)) from None
+    if arm is not None:
+        print(f"arm caps: {arm.summary}", flush=True)
     stop = threading.Event()
     previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         transport = Transport(config.network)
         loop = RunLoop(config, controller, transport, obs_names=list(bundle.obs_names),
-                       vol_names=list(bundle.vol_names))
+                       vol_names=list(bundle.vol_names), sim_time=args.sim_time)
         net = "CYCLONEDDS_URI" if transport.user_config else \
             f"interface {config.network.interface}, peers {', '.join(config.network.peers)}"
+        clock = "; ticks on /clock (sim time)" if args.sim_time else ""
         print(f"mpcshare run: {config.name} at {config.rate_hz:g} Hz, command on {config.command.topic} "
-              f"({config.command.type}), status on {config.status_topic}; network: {net}", flush=True)
+              f"({config.command.type}), status on {config.status_topic}; network: {net}{clock}", flush=True)
         summary = loop.run(args.duration, stop.is_set)
     finally:
         for s, h in previous.items():
@@ -64,8 +72,8 @@ def _run(args: argparse.Namespace) -> int:
     timing = f"step median {np.median(steps):.2f} ms, p99 {np.percentile(steps, 99):.2f} ms" if steps.size else \
         "no step"
     print(f"mpcshare run: stopped after {summary.ticks} ticks ({summary.commands} commands, {summary.late_ticks} "
-          f"late ticks skipped; {timing})" + (f"; protective stop: {summary.stop_reason}" if summary.stop_reason
-                                               else ""), flush=True)
+          f"late ticks skipped, {summary.resumes} resumes after a stop; {timing})"
+          + (f"; protective stop: {summary.stop_reason}" if summary.stop_reason else ""), flush=True)
     return 0
 
 

@@ -8,7 +8,8 @@ upper bound, the placebo ``random_handover`` and the upper bound ``oracle_handov
 trial in MuJoCo
 beside the simulated wearer, and writes ``comparison.json``, ``comparison.md``,
 ``comparison.png``, the run files (``runs/*.npz``; with ``--mcap`` also as ``runs/*.mcap``
-for Foxglove) and, with ``--video``, a video of the gate on the first trial. ``--robot PRESET``
+for Foxglove) and, with ``--video``, a video of the gate on the first trial. ``--serve``: the controller is
+``mpcshare run`` in another process, over ROS 2 topics (:mod:`mpcshare.commands.sim_serve`). ``--robot PRESET``
 (or ``FILE --tip-frame NAME --mount X Y Z``) simulates another arm (:mod:`mpcshare.commands.robot_options`).
 ``--map NAME=CHANNEL`` renames the data's channels (:mod:`mpcshare.channel_map`; on top of the map the
 bundle was trained with); data or a bundle that cannot drive the simulator is one line, exit status 1.
@@ -33,6 +34,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.robot_options import add_robot_arguments, scene_from_args
+from mpcshare.commands.sim_serve import add_serve_arguments, check_serve_arguments, serve_controller
 from mpcshare.conflicts import SCENARIOS
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.run_table import RUN_NAMES
@@ -96,6 +98,7 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
                         "100 makes them about 3x smaller)")
     add_sim_arguments(p)
     add_robot_arguments(p)
+    add_serve_arguments(p)
 
 
 def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str, str] | None = None) -> Demonstrations:
@@ -148,8 +151,9 @@ def cutting_steps(demos: Demonstrations, trial_id: int) -> Any:
 
 
 def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
-                   trial_ids: list[int]) -> dict[str, Any]:
-    """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object."""
+                   trial_ids: list[int], make_controller: Any = None) -> dict[str, Any]:
+    """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object.
+    ``make_controller``: the controllers' factory (default: the bundle's ``SharedController``)."""
     from mpcshare.conflicts import Scenario
     from mpcshare.control.keepout import KeepOutSettings
     from mpcshare.control.types import ControllerConfig
@@ -186,7 +190,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
                               seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
                               mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene,
                               mcap_rate_hz=getattr(args, "mcap_rate", None), scenario=scenario,
-                              controller_options=options)
+                              controller_options=options, make_controller=make_controller)
     shown = next((r for r in runs if r.name == "gate"), next((r for r in runs if r.schedule is None), None))
     if args.video and shown is None:
         print("no video: only replayed schedules were run (add --runs gate)")
@@ -204,6 +208,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
 def _run(args: argparse.Namespace) -> int:
     from mpcshare.bundle import BundleError, load_bundle
 
+    check_serve_arguments(args)
     out = prepare_output_folder(args.out)
     try:
         given = parse_map(args.map)
@@ -229,7 +234,12 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(f"none of the bundle's held-out trials {bundle.heldout_trials} is in {data}")
     trial_ids = trial_ids[:args.trials] if args.trials else trial_ids
     t0 = time.perf_counter()
-    obj = run_comparison(bundle, demos, out, args, trial_ids)
+    make = remote = None
+    if args.serve:
+        make, remote, args.runs = serve_controller(args, bundle)
+    obj = run_comparison(bundle, demos, out, args, trial_ids, make)
+    if remote is not None:
+        print(f"mpcshare sim --serve: {remote.missing} control steps without a command from `mpcshare run`")
     from mpcshare.reports.comparison import comparison_findings
     from mpcshare.reports.headline import headline_lines, trials_words
 

@@ -4,13 +4,15 @@ Tables (examples: ``examples/ros2/superlimb.toml``, ``examples/ros2/panda.toml``
 
     name = "superlimb"            # the status's hardware_id
     rate_hz = 100.0               # the control rate: the model's rate
+    resume_after_s = 1.0          # after a protective stop for a silent input: resume once every required
+                                  #   input has been fresh this long [s]
     [network]                     # optional; default loopback: interface 127.0.0.1, peers [127.0.0.1],
     interface = "192.168.1.10"    #   multicast off, domain_id 0 (ROS_DOMAIN_ID). CYCLONEDDS_URI, when set,
     peers = ["192.168.1.2"]       #   replaces the whole table.
     [robot]                       # optional; absent: the SuperLimb
     file = "panda.urdf"           # URDF/MJCF (relative to this file), or "example-robot-data:PATH"
-    tip_frame = "panda_hand_tcp"; mount = [x, y, z]  # mount: the base in the plate frame [m]
-    mount_rpy, locked_joints, velocity_limit [rad/s], acceleration_limit [rad/s²]
+    tip_frame = "panda_hand_tcp"; mount = [x, y, z]  # mount: the base in the plate frame [m], torso at rest
+    mount_rpy, locked_joints, velocity_limit [rad/s], acceleration_limit [rad/s²]  # caps: chosen when absent
     [controller]                  # optional: strategy ("gate"), beta (0.5), mpc (false)
     [inputs.arm]                  # required: the arm's sensor_msgs/msg/JointState
     topic = "/joint_states"; joints = ["j1", ...]    # the model's joints, in the model's order
@@ -67,7 +69,7 @@ COMMAND_TYPES: tuple[str, ...] = ("trajectory_msgs/msg/JointTrajectory", "std_ms
 INTERFACES: tuple[str, ...] = ("position", "velocity", "effort")
 #: Messages the status can be.
 STATUS_TYPES: tuple[str, ...] = ("diagnostic_msgs/msg/DiagnosticArray",)
-_TOP = ("name", "rate_hz", "network", "robot", "controller", "inputs", "obs", "voluntary", "outputs")
+_TOP = ("name", "rate_hz", "resume_after_s", "network", "robot", "controller", "inputs", "obs", "voluntary", "outputs")
 _INPUT_KEYS = ("topic", "type", "optional", "deadline_s", "stop_after_s", "frame", "reliability", "depth",
                "joints")
 _ERD = "example-robot-data:"
@@ -111,7 +113,8 @@ class CommandSpec:
 
 @dataclass(frozen=True)
 class RobotSpec:
-    """The arm's description (None file: the SuperLimb); mount in the plate frame [m], rpy [rad]."""
+    """The arm's description (None file: the SuperLimb); mount in the plate frame [m] with the torso at rest,
+    rpy [rad]; caps [rad/s, rad/s²] (None: chosen, :mod:`mpcshare.runtime.setup`)."""
 
     file: str | None = None
     tip_frame: str = ""
@@ -119,7 +122,7 @@ class RobotSpec:
     mount_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
     locked_joints: tuple[str, ...] = ()
     velocity_limit: float | None = None
-    acceleration_limit: float = 10.0
+    acceleration_limit: float | None = None
 
 
 @dataclass(frozen=True)
@@ -146,6 +149,7 @@ class RunConfig:
     command: CommandSpec
     status_topic: str
     status_qos: QosSettings
+    resume_after_s: float = 1.0
 
     @property
     def arm(self) -> InputSpec:
@@ -236,7 +240,7 @@ def _robot(d: TableReader, doc: dict, folder: Path) -> RobotSpec:
         raise d.fail("[robot] mount", "missing: the arm's base in the plate frame [m]")
     return RobotSpec(file, d.text(t, "tip_frame", "[robot]"), mount, d.triple(t, "mount_rpy", "[robot]") or
                      (0.0, 0.0, 0.0), d.strings(t, "locked_joints", "[robot]"),
-                     d.number(t, "velocity_limit", "[robot]"), d.number(t, "acceleration_limit", "[robot]", 10.0))
+                     d.number(t, "velocity_limit", "[robot]"), d.number(t, "acceleration_limit", "[robot]"))
 
 
 def _network(d: TableReader, doc: dict) -> NetworkSettings:
@@ -285,7 +289,8 @@ def parse_run_config(doc: dict[str, Any], source: str, folder: Path | None = Non
         command=CommandSpec(d.topic(cmd, "[outputs.command]"), ctype, interface,
                             d.qos(cmd, "[outputs.command]", QosSettings("reliable", 1))),
         status_topic=d.topic(status, "[outputs.status]") if "topic" in status else "/mpcshare/status",
-        status_qos=d.qos(status, "[outputs.status]", QosSettings("reliable", 1)))
+        status_qos=d.qos(status, "[outputs.status]", QosSettings("reliable", 1)),
+        resume_after_s=float(d.number(doc, "resume_after_s", "top level", 1.0)))
 
 
 def load_run_config(path: str | Path) -> RunConfig:

@@ -1,6 +1,7 @@
 """The loop of ``mpcshare run``: the shared controller at the control rate over ROS 2 topics.
 
-Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz):
+Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz; with ``sim_time``, t_k is each
+new ``/clock`` message's time instead):
 
 1. take every new message of every input (arrival times feed the :class:`~mpcshare.runtime.watchdog.Watchdog`;
    a message whose header frame_id differs from the input's ``frame`` is dropped and counted);
@@ -9,16 +10,21 @@ Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz):
    ``stale_fork_sensor``; the shoulder → ``invalid_shoulder``; the torso → ``invalid_base_pose``, last
    pose kept); the status names the stale inputs;
 3. ``SharedController.step(t_k, obs, voluntary, q, v, base_pose)``, then the command (stamped with the
-   wall clock, ROS time) and the status are published;
-4. sleep until t_{k+1}; a tick that is already past is skipped (counted as ``late_ticks``).
+   wall clock, ROS time; with ``sim_time`` the clock's time) and the status are published;
+4. sleep until t_{k+1}; a tick that is already past is skipped (counted as ``late_ticks``). With
+   ``sim_time``: wait for the next ``/clock`` message (``rosgraph_msgs/msg/Clock``, as a ROS 2 node with
+   ``use_sim_time``); a clock that jumps back (a new episode of the simulator) resets the controller,
+   the watchdog and the latest inputs.
 
 **Protective stop** (a required input older than its ``stop_after_s``, a non-finite command, or the end
-of the run): the controller is no longer called; every tick publishes the stop command (hold the last
+of the run): the controller is not called; every tick publishes the stop command (hold the last
 measured joint positions q_stop, fixed at the first stop command: a trajectory point at q_stop with zero
 velocities and accelerations; a Float64MultiArray of q_stop, zero velocities or zero efforts) and the
-status ``protective_stop``; latched until the process restarts. Before the arm's first joint state no
-command can be formed: only the status is published (``waiting``). :meth:`RunLoop.shutdown` publishes
-the stop command once more and waits (≤ 0.2 s) for reliable readers to acknowledge it.
+status ``protective_stop``. A stop for a silent input ends once every required input has been fresh
+(not stale) for ``resume_after_s``: the controller is reset and called again (counted as ``resumes``);
+a stop for a non-finite command is latched until the process restarts. Before the arm's first joint
+state no command can be formed: only the status is published (``waiting``). :meth:`RunLoop.shutdown`
+publishes the stop command once more and waits (≤ 0.2 s) for reliable readers to acknowledge it.
 """
 
 from __future__ import annotations
@@ -42,11 +48,14 @@ from mpcshare.runtime.convert import (
     read_path,
     status_message,
 )
-from mpcshare.runtime.messages import MESSAGE_TYPES, DiagnosticArray, ros_time
-from mpcshare.runtime.transport import Transport
+from mpcshare.runtime.messages import MESSAGE_TYPES, Clock, DiagnosticArray, ros_time, seconds
+from mpcshare.runtime.transport import QosSettings, Transport
 from mpcshare.runtime.watchdog import Deadline, Watchdog
 
-__all__ = ["WARN_STATUSES", "RunLoop", "RunSummary"]
+__all__ = ["CLOCK_TOPIC", "WARN_STATUSES", "RunLoop", "RunSummary"]
+
+#: The simulated clock's topic (ROS 2's ``/clock``).
+CLOCK_TOPIC = "/clock"
 
 #: Controller statuses reported as WARN (the step still tracks); any other non-ok status is ERROR.
 WARN_STATUSES: frozenset[str] = frozenset({"reference_unreachable", "invalid_base_pose", "keepout_stale_zone",
@@ -56,12 +65,15 @@ WARN_STATUSES: frozenset[str] = frozenset({"reference_unreachable", "invalid_bas
 
 @dataclass
 class RunSummary:
-    """What a run did: ticks, commands and stops published, late ticks, step times [s], the stop's reason."""
+    """What a run did: ticks, commands and stops published, late ticks, resumes after a stop, clock jumps
+    back (``sim_time``), step times [s], the (last) stop's reason."""
 
     ticks: int = 0
     commands: int = 0
     stops: int = 0
     late_ticks: int = 0
+    resumes: int = 0
+    clock_resets: int = 0
     step_times: list[float] = field(default_factory=list)
     stop_reason: str | None = None
     statuses: dict[str, int] = field(default_factory=dict)
@@ -69,11 +81,18 @@ class RunSummary:
 
 class RunLoop:
     """The loop (module docstring) of ``controller`` (``SharedController.step``'s interface) over ``transport``;
-    ``obs_names``, ``vol_names``: the controller's channel order; ``clock`` monotonic [s], ``wall`` ROS time [s]."""
+    ``obs_names``, ``vol_names``: the controller's channel order; ``clock`` monotonic [s], ``wall`` ROS time [s];
+    ``sim_time``: both are the ``/clock`` topic's time instead (module docstring)."""
 
     def __init__(self, config: RunConfig, controller: Any, transport: Transport, *, obs_names: list[str],
                  vol_names: list[str], clock: Callable[[], float] = time.monotonic,
-                 wall: Callable[[], float] = time.time) -> None:
+                 wall: Callable[[], float] = time.time, sim_time: bool = False) -> None:
+        self.sim_time = sim_time
+        self._sim_now = 0.0
+        self._sim_stamp = ros_time(0.0)
+        if sim_time:
+            clock = wall = self._sim_clock
+            self.clock_reader = transport.reader(CLOCK_TOPIC, Clock, QosSettings("reliable", 64))
         self.config, self.controller, self.clock, self.wall = config, controller, clock, wall
         self.joints = list(config.arm.joints)
         self.readers = {n: transport.reader(s.topic, MESSAGE_TYPES[s.type], s.qos) for n, s in config.inputs.items()}
@@ -85,13 +104,27 @@ class RunLoop:
         self._vol = [by_name[("voluntary", n)] for n in vol_names]
         self.latest: dict[str, Any] = {}
         self.wrong_frame: dict[str, int] = {n: 0 for n in config.inputs}
-        self.start = clock()
+        self.summary = RunSummary()
+        self._restart(clock())
+
+    def _sim_clock(self) -> float:
+        return self._sim_now
+
+    def _stamp(self) -> Any:
+        """Now as ROS time: the wall clock, or with ``sim_time`` the last clock message's stamp itself."""
+        return self._sim_stamp if self.sim_time else ros_time(self.wall())
+
+    def _restart(self, start: float) -> None:
+        """Start afresh at ``start``: the watchdog, no input seen, no stop (the constructor; a clock jump back)."""
+        self.start = start
         self.watchdog = Watchdog([Deadline(n, s.deadline_s, s.stop_after_s, s.optional)
-                                  for n, s in config.inputs.items()], self.start)
+                                  for n, s in self.config.inputs.items()], start)
+        self.latest.clear()
         self._q_last: np.ndarray | None = None  # last finite measured joint positions
         self._q_stop: np.ndarray | None = None  # the positions the stop holds, latched at the stop
         self._stop_reason: str | None = None
-        self.summary = RunSummary()
+        self._stop_latched = False  # a stop that no input's return ends (a non-finite command)
+        self._fresh_since: float | None = None  # since when every required input is fresh
 
     # ------------------------------------------------------------------ inputs
     def poll(self) -> None:
@@ -127,7 +160,7 @@ class RunLoop:
             self._q_stop = self._q_last.copy()
         q = self._q_stop if self._q_stop is not None else zeros
         return command_message(self.config.command.type, self.config.command.interface, self.joints,
-                               ros_time(self.wall()), self.config.period_s, q, zeros, zeros, zeros)
+                               self._stamp(), self.config.period_s, q, zeros, zeros, zeros)
 
     def _publish_stop(self) -> bool:
         msg = self.stop_command()
@@ -136,26 +169,46 @@ class RunLoop:
             self.summary.stops += 1
         return msg is not None
 
-    def tick(self, k: int) -> str:
-        """Control tick k (module docstring, 1–3); returns the published status."""
-        t_k = k * self.config.period_s
+    def _resume_due(self, watch: Any, now: float) -> bool:
+        """Track since when every required input is fresh; True when a stop for a silent input may end."""
+        required = [n for n, s in self.config.inputs.items() if not s.optional]
+        if any(n in watch.stale for n in required):
+            self._fresh_since = None
+        elif self._fresh_since is None:
+            self._fresh_since = now
+        return (self._stop_reason is not None and not self._stop_latched and self._fresh_since is not None
+                and now - self._fresh_since >= self.config.resume_after_s)
+
+    def tick(self, k: int, t: float | None = None) -> str:
+        """Control tick k at time ``t`` (default k·T; module docstring, 1–3); returns the published status."""
+        t_k = k * self.config.period_s if t is None else t
         self.poll()
-        watch = self.watchdog.check(self.clock())
+        now = self.clock()
+        watch = self.watchdog.check(now)
         values: dict[str, object] = {"tick": k, "t": t_k}
         values.update({f"age_{n}": a for n, a in watch.ages.items()})
         values["stale_inputs"] = ",".join(watch.stale)
         values.update({f"wrong_frame_{n}": c for n, c in self.wrong_frame.items() if c})
         if watch.stopped and self._stop_reason is None:
             self._stop_reason = watch.stop_reason
+        if self._resume_due(watch, now):
+            values["resumed_after"] = self._stop_reason
+            self.watchdog.resume()
+            self._stop_reason, self._q_stop = None, None
+            self.summary.resumes += 1
+            if callable(getattr(self.controller, "reset", None)):
+                self.controller.reset()
         if self._stop_reason is not None:
             sent = self._publish_stop()
-            stamp = ros_time(self.wall())
+            stamp = self._stamp()
             values.update(protective_stop=self._stop_reason, stop_command=int(sent))
             return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
         if "arm" not in self.latest:
-            stamp = ros_time(self.wall())
+            stamp = self._stamp()
             return self._status(stamp, STALE, "waiting", f"waiting for the arm's joint states on "
                                                          f"{self.config.arm.topic}", values)
+        arm_stamp = self.latest["arm"].header.stamp
+        values["input_stamp"] = f"{arm_stamp.sec}.{arm_stamp.nanosec:09d}"
         q, v = joint_state(self.latest["arm"], self.joints)
         if "arm" in watch.stale:
             q, v = np.full_like(q, np.nan), np.full_like(v, np.nan)
@@ -167,9 +220,10 @@ class RunLoop:
                                    q, v, base)
         self.summary.step_times.append(time.perf_counter() - t0)
         arrays = [np.asarray(getattr(cmd, a, np.nan), dtype=float) for a in ("q_cmd", "v_cmd", "a_cmd", "tau")]
-        stamp = ros_time(self.wall())
+        stamp = self._stamp()
         if not all(x.shape == (len(self.joints),) and np.isfinite(x).all() for x in arrays):
             self._stop_reason = f"the controller gave a non-finite command (status {getattr(cmd, 'status', '?')})"
+            self._stop_latched = True
             self._publish_stop()
             values["protective_stop"] = self._stop_reason
             return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
@@ -192,7 +246,8 @@ class RunLoop:
                                   "mode": int(np.argmax(proba)) if proba.size and np.isfinite(proba).all() else -1,
                                   "mode_proba": proba, "novelty": float(cmd.novelty),
                                   "reasons": " | ".join(cmd.reasons),
-                                  "step_s": float(cmd.timings.get("total", math.nan))}
+                                  "step_s": float(cmd.timings.get("total", math.nan)),
+                                  "tip_reference": np.asarray(getattr(cmd, "tip_reference", (math.nan,) * 3), dtype=float)}
         keepout = getattr(self.controller, "keepout", None)
         if keepout is not None and keepout.limit.clearances:
             dist = [float(c.distance) for c in keepout.limit.clearances]
@@ -209,8 +264,11 @@ class RunLoop:
 
     # ------------------------------------------------------------------ the schedule
     def run(self, duration_s: float | None = None, should_stop: Callable[[], bool] = lambda: False) -> RunSummary:
-        """Tick on the monotonic schedule until ``duration_s`` [s] (None: no end) or ``should_stop()``;
-        then :meth:`shutdown`. Returns the summary."""
+        """Tick on the monotonic schedule (``sim_time``: on each new clock message) until ``duration_s`` [s]
+        (None: no end; ``sim_time``: seconds of the wall clock) or ``should_stop()``; then :meth:`shutdown`.
+        Returns the summary."""
+        if self.sim_time:
+            return self._run_sim_time(duration_s, should_stop)
         T, k = self.config.period_s, 0
         try:
             while not should_stop():
@@ -232,10 +290,39 @@ class RunLoop:
         self.summary.stop_reason = self._stop_reason
         return self.summary
 
+    def _run_sim_time(self, duration_s: float | None, should_stop: Callable[[], bool]) -> RunSummary:
+        end = math.inf if duration_s is None else time.monotonic() + duration_s
+        last, k = -math.inf, 0
+        try:
+            while not should_stop() and time.monotonic() < end:
+                if not self.clock_reader.wait(0.05):
+                    continue
+                for msg in self.clock_reader.take():
+                    t = seconds(msg.clock)
+                    if t < last:  # a new episode: start afresh
+                        self._sim_now = t
+                        self._restart(t)
+                        self.summary.clock_resets += 1
+                        if callable(getattr(self.controller, "reset", None)):
+                            self.controller.reset()
+                    elif t == last:
+                        continue
+                    elif last == -math.inf:
+                        self._sim_now = t
+                        self._restart(t)
+                    self._sim_now, self._sim_stamp, last = t, msg.clock, t
+                    k = int(round((t - self.start) / self.config.period_s))
+                    self.tick(k, t)
+                    self.summary.ticks += 1
+        finally:
+            self.shutdown()
+        self.summary.stop_reason = self._stop_reason
+        return self.summary
+
     def shutdown(self) -> None:
         """Publish the stop command and wait up to 0.2 s for reliable readers to acknowledge it."""
         sent = self._publish_stop()
-        self._status(ros_time(self.wall()), ERROR if self._stop_reason else OK, "stopped",
+        self._status(self._stamp(), ERROR if self._stop_reason else OK, "stopped",
                      "stopped: " + (self._stop_reason or "end of the run"), {"stop_command": int(sent)})
         if sent:
             self.command_writer.flush(0.2)

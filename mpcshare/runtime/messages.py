@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.types import byte, float64, int32, sequence, uint32
 
-__all__ = ["MESSAGE_TYPES", "DiagnosticArray", "DiagnosticStatus", "Duration", "Float64MultiArray", "Header",
+__all__ = ["MESSAGE_TYPES", "Clock", "DiagnosticArray", "DiagnosticStatus", "Duration", "Float64MultiArray", "Header",
            "JointState", "JointTrajectory", "JointTrajectoryPoint", "KeyValue", "MultiArrayDimension",
            "MultiArrayLayout", "Point", "Pose", "PoseStamped", "Quaternion", "Time", "Vector3", "Wrench",
            "WrenchStamped", "dds_topic", "dds_type_name", "ros_time", "seconds"]
@@ -220,6 +220,13 @@ class DiagnosticArray(IdlStruct, typename="diagnostic_msgs::msg::dds_::Diagnosti
     status: sequence[DiagnosticStatus] = field(default_factory=list)
 
 
+@dataclass
+class Clock(IdlStruct, typename="rosgraph_msgs::msg::dds_::Clock_"):
+    """rosgraph_msgs/msg/Clock: the simulated time (ROS 2's ``/clock``, followed with ``use_sim_time``)."""
+
+    clock: Time = field(default_factory=Time)
+
+
 #: The messages ``mpcshare run`` speaks, by ROS 2 name.
 MESSAGE_TYPES: dict[str, type[IdlStruct]] = {
     "builtin_interfaces/msg/Time": Time,
@@ -241,4 +248,5 @@ MESSAGE_TYPES: dict[str, type[IdlStruct]] = {
     "diagnostic_msgs/msg/KeyValue": KeyValue,
     "diagnostic_msgs/msg/DiagnosticStatus": DiagnosticStatus,
     "diagnostic_msgs/msg/DiagnosticArray": DiagnosticArray,
+    "rosgraph_msgs/msg/Clock": Clock,
 }

@@ -1,10 +1,12 @@
 """The arm and the shared controller of ``mpcshare run`` from its configuration, checked before anything is sent.
 
-The ``[robot]`` mount is given in the plate frame with the controller's default base pose
-(``mpcshare.control.workspace.DEFAULT_BASE_POSE``, the pose used without a torso input) and turned into
-the torso frame of the description: ``p_torso = Rᵀ·(p_plate − t)``. A file ``example-robot-data:PATH`` is
-``PATH`` in the ``example-robot-data`` package's models (e.g. ``panda_description/urdf/panda.urdf``).
-Every failure is a :class:`~mpcshare.runtime.config.RunConfigError` naming the file, table and key.
+The ``[robot]`` arm is set up exactly as ``mpcshare sim --robot FILE`` sets it up
+(:func:`mpcshare.arms.task_arm`): the mount is in the plate frame with the wearer's torso at rest
+(the simulator's convention), and the speed and acceleration caps not given are chosen so that
+braking is torque-feasible over the task's workspace (both given: only checked). A file
+``example-robot-data:PATH`` is ``PATH`` in the ``example-robot-data`` package's models (e.g.
+``panda_description/urdf/panda.urdf``). Every failure is a :class:`~mpcshare.runtime.config.RunConfigError`
+naming the file, table and key.
 """
 
 from __future__ import annotations
@@ -12,16 +14,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from mpcshare.arms import TaskArm, task_arm
 from mpcshare.control.controller import SharedController
-from mpcshare.control.workspace import DEFAULT_BASE_POSE
 from mpcshare.errors import ControllerSetupError
 from mpcshare.runtime.config import RunConfig, RunConfigError, check_against_model
-from robot.description import RobotDescription, as_description, braking_torque_ratio
+from robot.description import RobotDescription, as_description
 from robot.errors import ControllerConfigError
 
-__all__ = ["make_controller", "robot_description"]
+__all__ = ["configured_arm", "make_controller", "robot_description"]
 
 _ERD = "example-robot-data:"
 
@@ -42,32 +42,30 @@ def _robot_file(config: RunConfig) -> Path:
         raise RunConfigError(f"{config.source}, [robot] file: {rel!r} is not in example-robot-data ({exc})") from None
 
 
-def robot_description(config: RunConfig) -> RobotDescription:
-    """The arm of ``config.robot`` (module docstring); the SuperLimb when no file is given."""
+def configured_arm(config: RunConfig) -> TaskArm | None:
+    """The arm of ``config.robot`` with its caps (module docstring); None: the SuperLimb (no ``[robot]`` file)."""
     spec = config.robot
     if spec.file is None:
-        return as_description(None)
-    assert spec.mount is not None  # parse_run_config requires it with a file
-    R, t = DEFAULT_BASE_POSE[:3, :3], DEFAULT_BASE_POSE[:3, 3]
-    mount = tuple(float(x) for x in R.T @ (np.asarray(spec.mount) - t))
+        return None
     try:
-        robot = RobotDescription.from_file(_robot_file(config), spec.tip_frame, locked_joints=spec.locked_joints,
-                                           mount_xyz=mount, mount_rpy=spec.mount_rpy,
-                                           velocity_limit=spec.velocity_limit,
-                                           acceleration_limit=spec.acceleration_limit)
+        return task_arm(str(_robot_file(config)), tip_frame=spec.tip_frame, mount=spec.mount, mount_rpy=spec.mount_rpy,
+                        lock_joints=spec.locked_joints, velocity_limit=spec.velocity_limit,
+                        acceleration_limit=spec.acceleration_limit)
     except (ControllerConfigError, ValueError, RuntimeError) as exc:
         raise RunConfigError(f"{config.source}, [robot]: {exc}") from None
-    ratio = braking_torque_ratio(robot)
-    if ratio > 1.0:
-        raise RunConfigError(f"{config.source}, [robot] acceleration_limit: braking at "
-                             f"{spec.acceleration_limit / 2:g} rad/s² needs {ratio:.2f}× the torque limit at some "
-                             "states; lower acceleration_limit or velocity_limit")
-    return robot
 
 
-def make_controller(config: RunConfig, bundle: Any) -> SharedController:
-    """The shared controller of ``bundle`` on the configured arm, after :func:`check_against_model`."""
-    robot = robot_description(config)
+def robot_description(config: RunConfig) -> RobotDescription:
+    """The arm of ``config.robot`` (:func:`configured_arm`; the SuperLimb when no file is given)."""
+    arm = configured_arm(config)
+    return as_description(None) if arm is None else arm.scene.robot
+
+
+def make_controller(config: RunConfig, bundle: Any, arm: TaskArm | None = None) -> SharedController:
+    """The shared controller of ``bundle`` on the configured arm (``arm``: :func:`configured_arm`'s, when
+    already built), after :func:`check_against_model`."""
+    arm = arm or configured_arm(config)
+    robot = as_description(None) if arm is None else arm.scene.robot
     check_against_model(config, obs_names=list(bundle.obs_names), vol_names=list(bundle.vol_names),
                         rate_hz=float(bundle.rate_hz), joint_names=robot.joint_names)
     c = config.controller

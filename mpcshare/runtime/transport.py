@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import Generic, TypeVar
 from xml.sax.saxutils import quoteattr
 
-from cyclonedds.core import Policy, Qos
+from cyclonedds.core import InstanceState, Policy, Qos, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.domain import Domain, DomainParticipant
 from cyclonedds.idl import IdlStruct
 from cyclonedds.internal import InvalidSample
@@ -77,30 +77,50 @@ class Reader(Generic[M]):
 
     def __init__(self, reader: DataReader, topic: str) -> None:
         self._reader, self.topic = reader, topic
+        self._waitset: WaitSet | None = None
 
     def take(self, limit: int = 64) -> list[M]:
         """Up to ``limit`` new samples, oldest first (disposals and other non-data samples skipped)."""
         return [s for s in self._reader.take(N=limit) if not isinstance(s, InvalidSample)]
+
+    def wait(self, timeout_s: float) -> bool:
+        """Block up to ``timeout_s`` until a sample is ready to take; True when one is."""
+        if self._waitset is None:
+            self._waitset = WaitSet(self._reader.participant)
+            self._waitset.attach(ReadCondition(self._reader, SampleState.Any | ViewState.Any | InstanceState.Any))
+        return self._waitset.wait(max(0, int(timeout_s * 1e9))) > 0
+
+    @property
+    def matched(self) -> int:
+        """How many writers are matched now."""
+        return len(self._reader.get_matched_publications())
 
 
 class Writer(Generic[M]):
     """Publishes one topic."""
 
     def __init__(self, writer: DataWriter, topic: str) -> None:
-        self._writer, self.topic = writer, topic
+        self._writer: DataWriter | None = writer
+        self.topic = topic
 
     def write(self, message: M) -> None:
-        """Send ``message``."""
+        """Send ``message``; RuntimeError after :meth:`close`."""
+        if self._writer is None:
+            raise RuntimeError(f"the writer of {self.topic} is closed")
         self._writer.write(message)
+
+    def close(self) -> None:
+        """Delete the DDS writer (its readers see it leave; as a publisher whose process ended)."""
+        self._writer = None  # the only reference: Cyclone deletes the entity when it is freed
 
     def flush(self, timeout_s: float = 0.1) -> bool:
         """Wait up to ``timeout_s`` for the reliable readers to acknowledge; True when they all did."""
-        return bool(self._writer.wait_for_acks(int(timeout_s * 1e9)))
+        return self._writer is not None and bool(self._writer.wait_for_acks(int(timeout_s * 1e9)))
 
     @property
     def matched(self) -> int:
         """How many readers are matched now."""
-        return len(self._writer.get_matched_subscriptions())
+        return 0 if self._writer is None else len(self._writer.get_matched_subscriptions())
 
 
 class Transport:

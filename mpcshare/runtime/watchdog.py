@@ -4,7 +4,7 @@ An input's age at time ``now`` is ``now − (its last message's arrival)``, or `
 first message (times on one monotonic clock [s]; header stamps are not used: the sender's clock may
 differ). Age > ``deadline_s``: the input is **stale** (its values are withheld from the controller,
 which takes its fault path). Age > ``stop_after_s`` for a required input: **protective stop**, latched
-until the process restarts. An optional input that never sent is neither stale nor a stop.
+until :meth:`Watchdog.resume`. An optional input that never sent is neither stale nor a stop.
 """
 
 from __future__ import annotations
@@ -84,3 +84,7 @@ class Watchdog:
                     self._stop = f"{n}: no message for {ages[n]:.3f} s{never}, stop after {d.stop_after_s:g} s"
                     break
         return WatchState(stale, self._stop, ages)
+
+    def resume(self) -> None:
+        """Clear the latched protective stop (the caller decides when the inputs are back)."""
+        self._stop = None

@@ -53,6 +53,7 @@ SAMPLES = {
     "diagnostic_msgs/msg/DiagnosticArray": m.DiagnosticArray(
         m.Header(_time(11, 12), ""), [m.DiagnosticStatus(1, "n", "msg", "hw", [m.KeyValue("k", "v")]),
                                       m.DiagnosticStatus(0, "", "", "", [])]),
+    "rosgraph_msgs/msg/Clock": m.Clock(m.Time(12, 340_000_000)),
 }
 
 

@@ -1,0 +1,339 @@
+"""The controller in another process, behind the controller's ``step`` interface: the robot stand-in's side.
+
+:class:`RemoteController` is what ``mpcshare sim --serve`` gives the closed-loop runner
+(:func:`sim.closed_loop.run_episode`): each ``step(t, obs, voluntary, q, v, base_pose)`` publishes the
+configuration's inputs (the arm's joint states by joint name; every other input built from the ``[obs]``
+and ``[voluntary]`` channels' field paths, a quaternion from its ZYX angles; the torso's pose when the
+configuration has that input) and returns the joint command that ``mpcshare run`` sends back, with α,
+β, the mode, novelty, the tip reference and the status read from its status message.
+
+Two clocks:
+
+- **sim time** (default): the inputs are stamped with t, then ``/clock`` is published at t; ``run --sim-time``
+  ticks on it, and the step waits for the command stamped t (up to ``first_timeout_s`` before the first
+  command, ``timeout_s`` after a step that got one, ``lost_timeout_s`` after one that did not). The loop is
+  then in lockstep: the same inputs at the same times as in one process.
+- **wall clock**: the step sleeps until the episode's start + t, publishes the inputs stamped with the wall
+  clock and takes the newest command that arrives within 0.8 periods.
+
+No command for a step: ``None`` (the runner holds the arm, as ros2_control's trajectory controller holds
+once its ``cmd_timeout`` passes). An :class:`Outage` silences an input over a time window: ``drop`` stops
+writing, ``restart`` deletes its DDS writer at the start and creates a new one at the end (a publisher
+restarted). The command must be a ``JointTrajectory``: a ``Float64MultiArray`` lacks the velocities and
+accelerations the runner's servo follows.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from learning.data.mapping import FieldPath
+from mpcshare.runtime.config import RunConfig, RunConfigError
+from mpcshare.runtime.loop import CLOCK_TOPIC
+from mpcshare.runtime.messages import (
+    MESSAGE_TYPES,
+    Clock,
+    DiagnosticArray,
+    Header,
+    JointState,
+    JointTrajectory,
+    Point,
+    Pose,
+    PoseStamped,
+    Quaternion,
+    Time,
+    ros_time,
+    seconds,
+)
+from mpcshare.runtime.transport import QosSettings, Transport, Writer
+
+__all__ = ["Outage", "RemoteCommand", "RemoteController", "parse_outage"]
+
+
+@dataclass(frozen=True)
+class Outage:
+    """Input ``input`` silent over [start, end) [s] of each episode; ``restart``: its writer deleted, then new."""
+
+    input: str
+    start: float
+    end: float
+    restart: bool = False
+
+
+def parse_outage(text: str, restart: bool = False) -> Outage:
+    """``INPUT:START:END`` (seconds) → :class:`Outage`; ValueError naming what is wrong."""
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise ValueError(f"{text!r}: expected INPUT:START:END (e.g. fork:5:7)")
+    try:
+        start, end = float(parts[1]), float(parts[2])
+    except ValueError:
+        raise ValueError(f"{text!r}: START and END must be numbers of seconds") from None
+    if not (math.isfinite(start) and math.isfinite(end) and 0.0 <= start < end):
+        raise ValueError(f"{text!r}: need 0 <= START < END")
+    return Outage(parts[0], start, end, restart)
+
+
+@dataclass
+class RemoteCommand:
+    """One command of ``mpcshare run`` as the runner reads it (the fields of ``ControlCommand`` it logs)."""
+
+    q_cmd: np.ndarray
+    v_cmd: np.ndarray
+    a_cmd: np.ndarray
+    status: str = "ok"
+    alpha: float = math.nan
+    beta: float = math.nan
+    novelty: float = math.nan
+    tip_reference: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    mode_proba: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def _floats(text: str) -> np.ndarray:
+    try:
+        return np.array([float(x) for x in text.split(",") if x], dtype=float)
+    except ValueError:
+        return np.zeros(0)
+
+
+def _set(message: Any, path: FieldPath, value: float) -> None:
+    """Set the number at ``path`` (attributes and list indexes; a list grows with zeros) in ``message``."""
+    x = message
+    steps = path.steps
+    for i, step in enumerate(steps):
+        last = i == len(steps) - 1
+        if isinstance(step, int):
+            while len(x) <= step:
+                x.append(0.0)
+            if last:
+                x[step] = float(value)
+            else:
+                x = x[step]
+        elif last:
+            setattr(x, step, float(value))
+        else:
+            x = getattr(x, step)
+
+
+class _InputWriter:
+    """One input's writer and how its message is built from the step's values."""
+
+    def __init__(self, transport: Transport, config: RunConfig, name: str,
+                 channels: Sequence[tuple[str, str, FieldPath]]) -> None:
+        self.transport, self.name, self.spec = transport, name, config.inputs[name]
+        self.channels = list(channels)  # (kind, channel, path)
+        self.writer: Writer | None = None
+        self.open()
+
+    def open(self) -> None:
+        self.writer = self.transport.writer(self.spec.topic, MESSAGE_TYPES[self.spec.type],
+                                            QosSettings("reliable", self.spec.qos.depth))
+
+    def close(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+        self.writer = None
+
+    def message(self, stamp: Time, values: dict[tuple[str, str], float]) -> Any:
+        msg = MESSAGE_TYPES[self.spec.type](header=Header(stamp, self.spec.frame))
+        angles: dict[tuple, dict[str, float]] = {}
+        for kind, channel, path in self.channels:
+            v = values[(kind, channel)]
+            if path.angle is not None:
+                angles.setdefault(tuple(path.steps), {})[path.angle] = v
+            else:
+                _set(msg, path, v)
+        for steps, rpy in angles.items():
+            q = Rotation.from_euler("ZYX", [rpy.get("yaw", 0.0), rpy.get("pitch", 0.0), rpy.get("roll", 0.0)])
+            x, y, z, w = (float(c) for c in q.as_quat())
+            target = msg
+            for step in steps:
+                target = getattr(target, step) if isinstance(step, str) else target[step]
+            target.x, target.y, target.z, target.w = x, y, z, w
+        if isinstance(msg, JointState) and not msg.name:
+            msg.name = [f"{self.name}_{i}" for i in range(len(msg.position))]
+        return msg
+
+
+class RemoteController:
+    """The controller's ``step`` interface, answered by ``mpcshare run`` over ``transport`` (module docstring).
+
+    ``obs_names``, ``vol_names``: the order of the runner's obs and voluntary vectors; ``outages``: inputs
+    silenced over windows; ``sim_time``: publish ``/clock`` and wait for each step's command (lockstep).
+    ``missing`` counts the steps without a command.
+    """
+
+    def __init__(self, config: RunConfig, transport: Transport, *, obs_names: Sequence[str],
+                 vol_names: Sequence[str], sim_time: bool = True, outages: Sequence[Outage] = (),
+                 first_timeout_s: float = 60.0, timeout_s: float = 2.0, lost_timeout_s: float = 0.05) -> None:
+        if config.command.type != "trajectory_msgs/msg/JointTrajectory":
+            raise RunConfigError(f"{config.source}, [outputs.command] type: the stand-in follows a "
+                                 f"trajectory_msgs/msg/JointTrajectory command, not {config.command.type}")
+        names = {"obs": list(obs_names), "voluntary": list(vol_names)}
+        by_input: dict[str, list[tuple[str, str, FieldPath]]] = {}
+        for c in config.channels:
+            if c.name not in names[c.kind]:
+                raise RunConfigError(f"{config.source}, [{c.kind}] {c.name}: the simulator has no such channel "
+                                     f"(its {c.kind} channels: {', '.join(names[c.kind])})")
+            by_input.setdefault(c.input, []).append((c.kind, c.name, c.path))
+        known = set(config.inputs)
+        for o in outages:
+            if o.input not in known:
+                raise RunConfigError(f"{config.source}: no input {o.input!r} to silence (inputs: {', '.join(known)})")
+        self.config, self.transport, self.sim_time = config, transport, sim_time
+        self.obs_index = {n: i for i, n in enumerate(obs_names)}
+        self.vol_index = {n: i for i, n in enumerate(vol_names)}
+        self.outages = list(outages)
+        self.first_timeout_s, self.timeout_s, self.lost_timeout_s = first_timeout_s, timeout_s, lost_timeout_s
+        self.arm = _InputWriter(transport, config, "arm", [])
+        self.torso = _InputWriter(transport, config, "torso", []) if "torso" in config.inputs else None
+        self.inputs = [_InputWriter(transport, config, n, ch) for n, ch in by_input.items()]
+        self.clock = transport.writer(CLOCK_TOPIC, Clock, QosSettings("reliable", 64))
+        self.commands = transport.reader(config.command.topic, JointTrajectory, QosSettings("reliable", 64))
+        self.status = transport.reader(config.status_topic, DiagnosticArray, QosSettings("reliable", 64))
+        self.missing = 0
+        self._got_any, self._last_ok = False, False
+        self._last: JointTrajectory | None = None
+        self._t0: float | None = None
+        self._statuses: dict[str, dict[str, str]] = {}
+
+    def wait_for_run(self, timeout_s: float) -> bool:
+        """Wait up to ``timeout_s`` [s] until ``mpcshare run`` listens (reads the arm, with sim time the clock)
+        and publishes the command; True when it does."""
+        end = time.monotonic() + timeout_s
+        while time.monotonic() < end:
+            if self.arm.writer is not None and self.arm.writer.matched > 0 and self.commands.matched and \
+                    (not self.sim_time or self.clock.matched):
+                return True
+            time.sleep(0.02)
+        return False
+
+    def reset(self) -> None:
+        """A new episode: its time starts again (with sim time, ``run`` resets when the clock jumps back)."""
+        self._t0, self._last, self._last_ok = None, None, self._got_any
+
+    # ------------------------------------------------------------------ publishing
+    def _live(self, w: _InputWriter, t: float) -> Writer | None:
+        """``w``'s writer at ``t``, None while an outage silences it (a restart: deleted, then created anew)."""
+        windows = [o for o in self.outages if o.input == w.name and o.start <= t < o.end]
+        if any(o.restart for o in windows):
+            w.close()
+        elif w.writer is None:
+            w.open()
+            writer = w.writer
+            end = time.monotonic() + 1.0  # a new writer: let discovery match it before its first message
+            while writer is not None and not writer.matched and time.monotonic() < end:
+                time.sleep(0.002)
+        return None if windows else w.writer
+
+    def _publish(self, t: float, stamp: Time, obs: np.ndarray, voluntary: np.ndarray, q: np.ndarray,
+                 v: np.ndarray, base_pose: np.ndarray | None) -> None:
+        values: dict[tuple[str, str], float] = {}
+        for (kind, index), row in (("obs", self.obs_index), obs), (("voluntary", self.vol_index), voluntary):
+            values.update({(kind, n): float(row[i]) for n, i in index.items()})
+        if (writer := self._live(self.arm, t)) is not None:
+            writer.write(JointState(Header(stamp, self.arm.spec.frame), list(self.config.arm.joints),
+                                    [float(x) for x in q], [float(x) for x in v], []))
+        for w in self.inputs:
+            if (writer := self._live(w, t)) is not None:
+                writer.write(w.message(stamp, values))
+        if self.torso is not None and base_pose is not None and (writer := self._live(self.torso, t)) is not None:
+            T = np.asarray(base_pose, dtype=float)
+            x, y, z, w_ = (float(c) for c in Rotation.from_matrix(T[:3, :3]).as_quat())
+            writer.write(PoseStamped(Header(stamp, self.torso.spec.frame),
+                                     Pose(Point(*(float(c) for c in T[:3, 3])), Quaternion(x, y, z, w_))))
+
+    # ------------------------------------------------------------------ the step
+    def _take_statuses(self) -> None:
+        for msg in self.status.take():
+            if msg.status:
+                values = {kv.key: kv.value for kv in msg.status[0].values}
+                if "stamp" in values:
+                    self._statuses[values["stamp"]] = values
+        if len(self._statuses) > 256:
+            for key in list(self._statuses)[:-64]:
+                del self._statuses[key]
+
+    def _command(self, msg: JointTrajectory) -> RemoteCommand | None:
+        if len(msg.points) != 1:
+            return None
+        p = msg.points[0]
+        index = {n: i for i, n in enumerate(msg.joint_names)}
+        try:
+            order = [index[j] for j in self.config.arm.joints]
+            arrays = [np.array([seq[i] for i in order], dtype=float) for seq in (p.positions, p.velocities,
+                                                                                   p.accelerations)]
+        except (KeyError, IndexError):
+            return None
+        stamp = msg.header.stamp
+        self._take_statuses()
+        values = self._statuses.get(f"{stamp.sec}.{stamp.nanosec:09d}", {})
+
+        def num(key: str) -> float:
+            try:
+                return float(values[key])
+            except (KeyError, ValueError):
+                return math.nan
+
+        tip = _floats(values.get("tip_reference", ""))
+        return RemoteCommand(*arrays, status=values.get("status", "ok"), alpha=num("alpha"), beta=num("beta"),
+                             novelty=num("novelty"), tip_reference=tip if tip.size == 3 else np.full(3, np.nan),
+                             mode_proba=_floats(values.get("mode_proba", "")))
+
+    def step(self, t: float, obs: Any, voluntary: Any, q: Any, v: Any, base_pose: Any = None) -> RemoteCommand | None:
+        """Publish the inputs at ``t`` [s] and return ``run``'s command for them (None: none came)."""
+        obs, voluntary = np.asarray(obs, dtype=float).reshape(-1), np.asarray(voluntary, dtype=float).reshape(-1)
+        if self.sim_time:
+            stamp = ros_time(t + 1e-10)  # the nearest nanosecond below t + 0.1 ns: k·T exactly
+            self._publish(t, stamp, obs, voluntary, q, v, base_pose)
+            self.clock.write(Clock(stamp))
+            wait = self.timeout_s if self._last_ok else self.first_timeout_s if not self._got_any else \
+                self.lost_timeout_s
+            msg = self._wait(time.monotonic() + wait, lambda c: c.header.stamp == stamp)
+        else:
+            if self._t0 is None:
+                self._t0 = time.monotonic() - t
+            while (pause := self._t0 + t - time.monotonic()) > 0:
+                time.sleep(min(pause, 0.002))
+            stamp = ros_time(time.time())
+            self._publish(t, stamp, obs, voluntary, q, v, base_pose)
+            after = -math.inf if self._last is None else seconds(self._last.header.stamp)
+            msg = self._wait(self._t0 + t + 0.8 * self.config.period_s,
+                             lambda c: seconds(c.header.stamp) > after) or self._fresh_last(stamp)
+        self._last_ok = msg is not None
+        if msg is None:
+            self.missing += 1
+            return None
+        self._got_any, self._last = True, msg
+        if self.sim_time:  # the status follows its command: let it arrive
+            end = time.monotonic() + 0.05
+            while f"{stamp.sec}.{stamp.nanosec:09d}" not in self._statuses and time.monotonic() < end:
+                self.status.wait(0.005)
+                self._take_statuses()
+        return self._command(msg)
+
+    def _fresh_last(self, stamp: Time) -> JointTrajectory | None:
+        """The last command while its trajectory point is not yet a period old (wall clock)."""
+        last = self._last
+        if last is None or seconds(stamp) - seconds(last.header.stamp) > 2 * self.config.period_s:
+            return None
+        return last
+
+    def _wait(self, end: float, wanted: Any) -> JointTrajectory | None:
+        found = None
+        while True:
+            for c in self.commands.take():
+                if wanted(c):
+                    found = c
+            if found is not None:
+                return found
+            remaining = end - time.monotonic()
+            if remaining <= 0:
+                return None
+            self.commands.wait(min(remaining, 0.01))
