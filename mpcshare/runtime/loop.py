@@ -247,7 +247,8 @@ class RunLoop:
                                   "mode_proba": proba, "novelty": float(cmd.novelty),
                                   "reasons": " | ".join(cmd.reasons),
                                   "step_s": float(cmd.timings.get("total", math.nan)),
-                                  "tip_reference": np.asarray(getattr(cmd, "tip_reference", (math.nan,) * 3), dtype=float)}
+                                  "tip_reference": np.asarray(getattr(cmd, "tip_reference", (math.nan,) * 3),
+                                                              dtype=float)}
         keepout = getattr(self.controller, "keepout", None)
         if keepout is not None and keepout.limit.clearances:
             dist = [float(c.distance) for c in keepout.limit.clearances]

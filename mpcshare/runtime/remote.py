@@ -171,7 +171,7 @@ class RemoteController:
 
     def __init__(self, config: RunConfig, transport: Transport, *, obs_names: Sequence[str],
                  vol_names: Sequence[str], sim_time: bool = True, outages: Sequence[Outage] = (),
-                 first_timeout_s: float = 60.0, timeout_s: float = 2.0, lost_timeout_s: float = 0.05) -> None:
+                 first_timeout_s: float = 60.0, timeout_s: float = 2.0, lost_timeout_s: float = 0.02) -> None:
         if config.command.type != "trajectory_msgs/msg/JointTrajectory":
             raise RunConfigError(f"{config.source}, [outputs.command] type: the stand-in follows a "
                                  f"trajectory_msgs/msg/JointTrajectory command, not {config.command.type}")

@@ -1,0 +1,197 @@
+"""The robot stand-in (`mpcshare.runtime.remote` behind `mpcshare sim --serve`) and `mpcshare run --sim-time`
+as two processes on loopback.
+
+One pair of processes, one trial of 5 s: it tracks as the in-process `mpcshare sim` does until the first
+outage, then meets the faults of ``FAULTS`` (the fork and the arm's joint states silenced, the shoulder's
+publisher restarted), then `run` is killed (the stand-in holds the arm); each is checked in its own test.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("cyclonedds", reason="mpcshare run needs the cyclonedds package (pip install 'mpcshare[ros]')")
+
+from learning.data import save  # noqa: E402
+from mpcshare.cli import main  # noqa: E402
+from mpcshare.runtime.messages import Clock, DiagnosticArray, JointTrajectory, seconds  # noqa: E402
+from mpcshare.runtime.transport import NetworkSettings, QosSettings, Transport  # noqa: E402
+from tests.mpcshare.runtime.ros_helpers import DOMAIN, ROOT, write_config  # noqa: E402
+
+T = 0.01  # the control period [s]
+RESUME_S = 0.3  # the test configuration's resume_after_s
+CLEAN_S = 1.0  # seconds before the first outage
+DURATION_S = 5.0
+FAULTS = ["--drop", "fork:1.0:1.7", "--drop", "arm:2.5:2.8", "--restart", "shoulder:3.5:3.7"]
+
+
+def _start(argv: list[str], cwd: Path) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("CYCLONEDDS_URI", None)
+    return subprocess.Popen([sys.executable, "-m", "mpcshare", *argv], cwd=cwd, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def _end(*procs: subprocess.Popen) -> None:
+    for p in procs:
+        if p.poll() is None:
+            p.kill()
+            p.communicate()
+
+
+@pytest.fixture(scope="module")
+def served(ros_model, tmp_path_factory):
+    """The model and its data saved, a configuration of this test's DDS domain."""
+    model, demos = ros_model
+    root = tmp_path_factory.mktemp("serve")
+    data = root / "demos.npz"
+    save(demos, data)
+    cfg = write_config(root, replace={r"^rate_hz = 100.0": f"rate_hz = 100.0\nresume_after_s = {RESUME_S}"})
+    return root, model, data, cfg
+
+
+class _Listener:
+    """The test's own participant: the clock, the commands and the statuses of the pair, kept by time."""
+
+    def __init__(self) -> None:
+        t = Transport(NetworkSettings(domain_id=DOMAIN))
+        self.clock = t.reader("/clock", Clock, QosSettings("reliable", 1000))
+        self.cmd = t.reader("/joint_trajectory_controller/joint_trajectory", JointTrajectory,
+                            QosSettings("reliable", 1000))
+        self.st = t.reader("/mpcshare/status", DiagnosticArray, QosSettings("reliable", 1000))
+        self.times: list[float] = []
+        self.commands: list[tuple[float, JointTrajectory]] = []
+        self.statuses: list[tuple[float, str, dict[str, str]]] = []
+
+    def poll(self) -> None:
+        self.times += [seconds(c.clock) for c in self.clock.take(1000)]
+        self.commands += [(seconds(c.header.stamp), c) for c in self.cmd.take(1000)]
+        for s in self.st.take(1000):
+            v = {kv.key: kv.value for kv in s.status[0].values}
+            self.statuses.append((seconds(s.header.stamp), s.status[0].message, v))
+
+
+def _pair(served, out: Path, extra: list[str], trials: int, duration: float,
+          kill_at: tuple[int, float] | None = None) -> tuple[str, str, _Listener, bool]:
+    """Run ``run --sim-time`` and ``sim --serve`` to the stand-in's end (``kill_at`` (episode, t): SIGKILL
+    ``run`` when the clock reaches t in that episode); then SIGTERM ``run``. (run's stdout, the stand-in's
+    stdout, what was heard, whether run was killed)."""
+    root, model, data, cfg = served
+    listen = _Listener()
+    run = _start(["run", "--model", str(model), "--config", str(cfg), "--sim-time"], root)
+    stand = _start(["sim", "--model", str(model), "--data", str(data), "--out", str(out), "--serve", "--config",
+                    str(cfg), "--trials", str(trials), "--duration", str(duration), "--serve-wait", "90", *extra],
+                   root)
+    killed = False
+    try:
+        episode, last, end = 0, -1.0, time.monotonic() + 180
+        while stand.poll() is None and time.monotonic() < end:
+            n = len(listen.times)
+            listen.poll()
+            for t in listen.times[n:]:
+                episode, last = episode + (t < last), t
+                if kill_at is not None and not killed and (episode, t) >= kill_at:
+                    run.kill()
+                    killed = True
+            time.sleep(0.005)
+        s_out, s_err = stand.communicate(timeout=60)
+        assert stand.returncode == 0, s_out + s_err
+        time.sleep(0.1)
+        listen.poll()
+        if not killed:
+            run.send_signal(signal.SIGTERM)
+        r_out, r_err = run.communicate(timeout=30)
+        assert killed or run.returncode == 0, r_err
+    finally:
+        _end(stand, run)
+    return r_out, s_out, listen, killed
+
+
+@pytest.fixture(scope="module")
+def pair(served):
+    """One trial of 5 s across processes with the outages of ``FAULTS``, ``run`` killed at t = 4.7 s."""
+    root = served[0]
+    r_out, s_out, listen, killed = _pair(served, root / "across", FAULTS, 1, DURATION_S, kill_at=(0, 4.7))
+    assert killed, s_out
+    return root / "across", s_out, listen, json.loads((root / "across" / "comparison.json").read_text())
+
+
+def _episode(folder: Path):
+    return np.load(next((folder / "runs").glob("gate_trial*.npz")))
+
+
+def test_across_processes_tracks_as_in_one_process(served, pair):
+    root, model, data, _ = served
+    across, _, _, comp = pair
+    assert main(["sim", "--model", str(model), "--data", str(data), "--out", str(root / "inproc"), "--runs", "gate",
+                 "--trials", "1", "--duration", str(DURATION_S)]) == 0
+    a, b = _episode(across), _episode(root / "inproc")
+    n = round(CLEAN_S / T)  # the steps before the first outage: the same inputs in both loops
+    assert np.array_equal(a["t"], b["t"]) and np.array_equal(a["tip_intent"], b["tip_intent"])
+    rms = [float(np.sqrt(np.mean(np.sum((e["tip"][:n] - e["tip_intent"][:n]) ** 2, axis=1)))) for e in (a, b)]
+    assert abs(rms[0] - rms[1]) <= 0.05 * rms[1], rms
+    assert np.abs(a["tip"][:n] - b["tip"][:n]).max() < 1e-6  # lockstep: the same loop, to the wire's rounding
+    m = comp["per_trial"]["gate"][next(iter(comp["per_trial"]["gate"]))]
+    assert m["limit_violations"] == 0 and m["keepout_steps_driven_in"] == 0  # the whole run, faults included
+
+
+def test_a_killed_run_leaves_the_arm_held_by_the_stand_in(pair):
+    across, s_out, listen, _ = pair
+    e = _episode(across)
+    status, t = e["status"], e["t"]
+    last_cmd = max(t for t, _ in listen.commands)
+    assert 4.6 <= last_cmd < 4.7 + 0.2, last_cmd
+    held = status == "invalid_command"
+    assert held.any() and not held[t <= last_cmd + 1e-9].any(), np.unique(status)
+    first = int(np.flatnonzero(held)[0])
+    assert t[first] <= last_cmd + T + 1e-9 and held[first:].all()  # held from the first period without a command
+    assert int(e["info_limit_violations"]) == 0
+    assert "control steps without a command" in s_out
+
+
+def _stop_check(listen: _Listener, name: str, last_msg: float, deadline: float, stop_after: float, back: float):
+    stale = [t for t, _, v in listen.statuses if name in v.get("stale_inputs", "").split(",") and t > last_msg]
+    assert stale and min(stale) <= last_msg + deadline + 2 * T + 1e-9, stale[:3]
+    stops = [(t, v["protective_stop"]) for t, _, v in listen.statuses
+             if "protective_stop" in v and last_msg < t < back + 1.0]
+    assert stops and stops[0][1].startswith(f"{name}: no message"), stops[:1]
+    t_stop = stops[0][0]
+    assert last_msg + stop_after - 1e-9 <= t_stop <= last_msg + stop_after + 2 * T + 1e-9, t_stop
+    held = [c for t, c in listen.commands if t_stop <= t < back]
+    assert held and all(np.allclose(c.points[0].velocities, 0.0) for c in held)
+    q_stop = held[0].points[0].positions
+    assert all(np.allclose(c.points[0].positions, q_stop) for c in held)
+    resumed = [t for t, _, v in listen.statuses if t > back and v.get("status") not in ("protective_stop",)
+               and "resumed_after" in v]
+    assert resumed and resumed[0] <= back + RESUME_S + 2 * T + 1e-9, resumed[:1]
+    moving = [c for t, c in listen.commands if resumed[0] <= t < resumed[0] + 0.5]
+    assert any(not np.allclose(c.points[0].velocities, 0.0) for c in moving)
+
+
+def test_the_fork_silenced_stops_the_arm_then_resumes(pair):
+    _stop_check(pair[2], "fork", 0.99, 0.05, 0.5, 1.7)
+
+
+def test_the_joint_states_silenced_stop_the_arm_then_resume(pair):
+    _stop_check(pair[2], "arm", 2.49, 0.03, 0.1, 2.8)
+    assert sum("resumed_after" in v for _, _, v in pair[2].statuses) == 2
+
+
+def test_a_restarted_publisher_is_heard_again_without_a_stop(pair):
+    _, _, listen, comp = pair
+    gap = [v for t, _, v in listen.statuses if 3.5 < t < 3.7]
+    assert any("shoulder" in v.get("stale_inputs", "") for v in gap)
+    assert not any("protective_stop" in v for v in gap)
+    after = [v for t, _, v in listen.statuses if 3.75 <= t < 4.4]
+    assert after and not any("shoulder" in v.get("stale_inputs", "") for v in after)
+    m = comp["per_trial"]["gate"][next(iter(comp["per_trial"]["gate"]))]
+    assert m["limit_violations"] == 0 and m["keepout_steps_driven_in"] == 0
