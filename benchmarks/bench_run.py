@@ -8,6 +8,9 @@ goes silent, then SIGTERM. Figures (wall clock; the machine may be shared):
 * ``period_ms``: median, p99, max of the commands' header-stamp differences (target 10 ms);
   ``jitter_p99_ms``: p99 of |period − 10 ms| (target ≤ 2 ms);
 * ``delivery_ms``: a command's arrival here minus its stamp (same wall clock): median, p99;
+* ``input_to_command_ms``: a command's stamp minus the stamp of the arm's joint state it was computed from
+  (the status's ``input_stamp``; target p99 ≤ 5 ms): median, p99, max; the loop takes its inputs once per
+  tick, so a joint state waits up to one period for its tick;
 * ``stop_after_silence_s``: the first ``protective_stop`` status after the fork's last message
   (its stop_after_s is 0.5 s; target ≤ 0.5 s + 2 periods);
 * ``run_summary``: the process's own last line (step median and p99, late ticks).
@@ -75,7 +78,7 @@ def main() -> None:
         stat = t.reader("/mpcshare/status", DiagnosticArray, QosSettings("reliable", 200))
         P = SuperLimbParams()
         q = 0.5 * (P.lower + P.upper)
-        got, stops, k, k0, silent = [], [], 0, None, None
+        got, stops, latency, k, k0, silent = [], [], [], 0, None, None
         nxt = time.monotonic()
         while proc.poll() is None:
             now = time.monotonic()
@@ -96,6 +99,9 @@ def main() -> None:
             for s in stat.take(200):
                 if s.status and s.status[0].message.startswith("protective stop") and silent is not None:
                     stops.append(now - silent)
+                values = {kv.key: kv.value for kv in s.status[0].values} if s.status else {}
+                if silent is None and "input_stamp" in values and "alpha" in values:
+                    latency.append((float(values["stamp"]) - float(values["input_stamp"])) * 1e3)
             if got and k0 is None:
                 k0 = k
             if k0 is not None:
@@ -117,6 +123,8 @@ def main() -> None:
                       "max": float(period.max())},
         "jitter_p99_ms": float(np.percentile(np.abs(period - 10.0), 99)),
         "delivery_ms": {"median": float(np.median(delivery)), "p99": float(np.percentile(delivery, 99))},
+        "input_to_command_ms": {"median": float(np.median(latency)), "p99": float(np.percentile(latency, 99)),
+                                "max": float(np.max(latency))} if latency else None,
         "stop_after_silence_s": float(stops[0]) if stops else None,
         "exit_status": proc.returncode,
         "run_summary": out.strip().splitlines()[-1] if out.strip() else err.strip()[-300:],

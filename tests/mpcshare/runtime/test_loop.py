@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import threading
 import time
 from types import SimpleNamespace
 
@@ -12,6 +14,7 @@ pytest.importorskip("cyclonedds", reason="mpcshare run needs the cyclonedds pack
 
 from mpcshare.runtime.config import load_run_config  # noqa: E402
 from mpcshare.runtime.loop import RunLoop  # noqa: E402
+from mpcshare.runtime.messages import Clock as ClockMsg  # noqa: E402
 from mpcshare.runtime.messages import (  # noqa: E402
     DiagnosticArray,
     Float64MultiArray,
@@ -135,3 +138,46 @@ def test_a_message_in_another_frame_is_dropped_and_counted(setup):
     assert np.isnan(ctl.calls[-1][1][:6]).all() and loop.wrong_frame["fork"] == 1
     values = {kv.key: kv.value for kv in _wait(status)[-1].status[0].values}
     assert values["wrong_frame_fork"] == "1"
+
+
+def test_a_stop_for_a_silent_input_ends_once_every_input_is_fresh_again(setup):
+    loop, ctl, clock, pubs, (commands, status) = setup
+    loop.config = dataclasses.replace(loop.config, resume_after_s=0.05)
+    _feed(pubs)
+    loop.tick(0)
+    clock.t += 0.2  # every input silent past its stop_after_s
+    assert loop.tick(20) == "protective_stop"
+    got = []
+    for k in range(21, 27):
+        _feed(pubs)
+        clock.t += 0.02
+        got.append(loop.tick(k))
+    # fresh from tick 21: stopped while fresh for < 0.05 s, then called again
+    assert got[:3] == ["protective_stop"] * 3 and got[3:] == ["ok"] * 3 and loop.summary.resumes == 1
+    values = [{kv.key: kv.value for kv in s.status[0].values} for s in _wait(status, 10)]
+    assert sum("resumed_after" in v for v in values) == 1
+
+
+def test_sim_time_ticks_on_the_clock_and_a_jump_back_starts_afresh(tmp_path):
+    cfg = load_run_config(write_config(tmp_path, replace={
+        r'^topic = "/joint_trajectory_controller/joint_trajectory"': 'topic = "/test_sim_time/commands"',
+        r'^topic = "/mpcshare/status"': 'topic = "/test_sim_time/status"'}))
+    t = Transport(NetworkSettings(domain_id=DOMAIN))
+    ctl = Recorder()
+    loop = RunLoop(cfg, ctl, t, obs_names=OBS, vol_names=VOL, sim_time=True)
+    clock = t.writer("/clock", ClockMsg, QosSettings("reliable", 10))
+    status = t.reader("/test_sim_time/status", DiagnosticArray, QosSettings("reliable", 100))
+    end = time.monotonic() + 5.0
+    while not clock.matched and time.monotonic() < end:
+        time.sleep(0.01)
+    done = threading.Thread(target=loop.run, args=(1.5,))
+    done.start()
+    for sec, ns in ((5, 0), (5, 10_000_000), (0, 0)):
+        clock.write(ClockMsg(Time(sec, ns)))
+        time.sleep(0.1)
+    done.join()
+    s = loop.summary
+    assert s.ticks == 3 and s.clock_resets == 1
+    stamps = [v for v in ({kv.key: kv.value for kv in m.status[0].values} for m in _wait(status, 4)) if "tick" in v]
+    assert [(v["stamp"], v["tick"]) for v in stamps] == [("5.000000000", "0"), ("5.010000000", "1"),
+                                                          ("0.000000000", "0")]

@@ -23,9 +23,12 @@ pytest.importorskip("cyclonedds", reason="mpcshare run needs the cyclonedds pack
 
 from learning.data import save  # noqa: E402
 from mpcshare.cli import main  # noqa: E402
-from mpcshare.runtime.messages import Clock, DiagnosticArray, JointTrajectory, seconds  # noqa: E402
+from mpcshare.runtime.config import RunConfigError, load_run_config  # noqa: E402
+from mpcshare.runtime.convert import read_path  # noqa: E402
+from mpcshare.runtime.messages import Clock, DiagnosticArray, JointTrajectory, Time, seconds  # noqa: E402
+from mpcshare.runtime.remote import Outage, RemoteController, parse_outage  # noqa: E402
 from mpcshare.runtime.transport import NetworkSettings, QosSettings, Transport  # noqa: E402
-from tests.mpcshare.runtime.ros_helpers import DOMAIN, ROOT, write_config  # noqa: E402
+from tests.mpcshare.runtime.ros_helpers import DOMAIN, PANDA, ROOT, write_config  # noqa: E402
 
 T = 0.01  # the control period [s]
 RESUME_S = 0.3  # the test configuration's resume_after_s
@@ -195,3 +198,39 @@ def test_a_restarted_publisher_is_heard_again_without_a_stop(pair):
     assert after and not any("shoulder" in v.get("stale_inputs", "") for v in after)
     m = comp["per_trial"]["gate"][next(iter(comp["per_trial"]["gate"]))]
     assert m["limit_violations"] == 0 and m["keepout_steps_driven_in"] == 0
+
+
+def test_each_input_is_built_from_its_channels_and_reads_back(tmp_path):
+    config = load_run_config(write_config(tmp_path))
+    obs = ["fork_x", "fork_y", "fork_z", "fork_roll", "fork_pitch", "fork_yaw", "fork_fx", "fork_fy", "fork_fz"]
+    vol = ["shoulder_elevation", "shoulder_protraction", "shoulder_abduction"]
+    remote = RemoteController(config, Transport(NetworkSettings(domain_id=DOMAIN)), obs_names=obs, vol_names=vol)
+    row = {("obs", n): v for n, v in zip(obs, [0.1, -0.2, 0.05, 0.3, -0.4, 2.9, 1.0, -2.0, 3.0])}
+    row.update({("voluntary", n): v for n, v in zip(vol, [0.5, -0.1, 0.2])})
+    for w in remote.inputs:
+        msg = w.message(Time(3, 4), row)
+        assert msg.header.stamp == Time(3, 4) and msg.header.frame_id == config.inputs[w.name].frame
+        for kind, name, path in w.channels:
+            assert read_path(msg, path) == pytest.approx(row[(kind, name)], abs=1e-12), (w.name, name)
+    assert {w.name for w in remote.inputs} == {"fork", "fork_wrench", "shoulder"}
+
+
+def test_bad_stand_in_requests_are_named():
+    with pytest.raises(ValueError, match="expected INPUT:START:END"):
+        parse_outage("fork:5")
+    with pytest.raises(ValueError, match="need 0 <= START < END"):
+        parse_outage("fork:7:5")
+    assert parse_outage("arm:1:2.5", restart=True) == Outage("arm", 1.0, 2.5, True)
+
+
+def test_the_stand_in_refuses_what_it_cannot_follow(tmp_path):
+    panda = load_run_config(write_config(tmp_path, PANDA))
+    t = Transport(NetworkSettings(domain_id=DOMAIN))
+    with pytest.raises(RunConfigError, match="follows a trajectory_msgs/msg/JointTrajectory command"):
+        RemoteController(panda, t, obs_names=[], vol_names=[])
+    config = load_run_config(write_config(tmp_path))
+    with pytest.raises(RunConfigError, match=r"\[obs\] fork_x: the simulator has no such channel"):
+        RemoteController(config, t, obs_names=["x"], vol_names=[])
+    with pytest.raises(RunConfigError, match="no input 'hand' to silence"):
+        RemoteController(config, t, obs_names=list(config.names("obs")), vol_names=list(config.names("voluntary")),
+                         outages=[Outage("hand", 0.0, 1.0)])
