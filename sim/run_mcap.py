@@ -46,7 +46,8 @@ from robot.shoulder import SHOULDER_CHANNELS
 
 from .closed_loop import FORK_CHANNELS, Episode, fork_pose_rows
 
-__all__ = ["JOINT_NAMES", "SCHEMAS", "TOPICS", "fork_poses", "mcap_bytes_estimate", "write_run_mcap"]
+__all__ = ["JOINT_NAMES", "SCHEMAS", "TOPICS", "fork_poses", "mcap_bytes_estimate", "status_log", "step_messages",
+           "write_run_mcap"]
 
 #: measured sizes (ZSTD, the default scene, 15 s of ``gate``): the control-rate topics of one
 #: control step, and one physics-rate joint state message [bytes]
@@ -203,6 +204,39 @@ def _checked_fork(episode: Episode, fork: np.ndarray | None) -> np.ndarray | Non
     return fork[:nc]
 
 
+def step_messages(ns: int, *, tip: np.ndarray, reference: np.ndarray | None, intent: np.ndarray | None,
+                  fork: np.ndarray | None, fork_quat: Sequence[float] | None, base: np.ndarray,
+                  base_quat: Sequence[float], shoulder_names: list[str], voluntary: np.ndarray, alpha: float,
+                  beta: float, mode: int, novelty: float, status: str,
+                  step_time_s: float) -> list[tuple[str, dict[str, Any]]]:
+    """The control-rate messages of one step at ``ns`` as (topic, message) (module docstring); a
+    reference, intent or fork that is None or not finite is left out."""
+    out: list[tuple[str, dict[str, Any]]] = [("/knife/tip", _pose(ns, tip))]
+    if reference is not None and np.isfinite(reference).all():
+        out.append(("/knife/reference", _pose(ns, reference)))
+    if intent is not None and np.isfinite(intent).all():
+        out.append(("/wearer/intent", _pose(ns, intent)))
+    if fork is not None and fork_quat is not None and np.isfinite(fork).all():
+        out.append(("/fork/pose", _pose(ns, fork[:3], fork_quat)))
+    p = base[:3, 3]
+    out += [("/tf", {"timestamp": _stamp(ns), "parent_frame_id": PLATE_FRAME, "child_frame_id": "torso",
+                     "translation": {"x": float(p[0]), "y": float(p[1]), "z": float(p[2])},
+                     "rotation": dict(zip("xyzw", (float(c) for c in base_quat)))}),
+            ("/wearer/shoulder", {"timestamp": _stamp(ns), "name": shoulder_names,
+                                  "position": [_num(x) for x in voluntary], "velocity": [], "effort": []}),
+            ("/control/arbitration", {"timestamp": _stamp(ns), "alpha": _num(alpha), "beta": _num(beta),
+                                      "mode": int(mode), "novelty": _num(novelty)}),
+            ("/control/status", {"timestamp": _stamp(ns), "status": status, "ok": _status_ok(status)}),
+            ("/control/timing", {"timestamp": _stamp(ns), "step_time_ms": float(step_time_s) * 1e3})]
+    return out
+
+
+def status_log(ns: int, status: str) -> tuple[str, dict[str, Any]]:
+    """The ``/control/log`` line of a status change at ``ns``."""
+    return "/control/log", {"timestamp": _stamp(ns), "level": 2 if _status_ok(status) else 3,
+                            "message": f"status: {status}", "name": "controller", "file": "", "line": 0}
+
+
 def _control_events(episode: Episode, fork: np.ndarray | None, ns_c: list[int], add: Any) -> None:
     """The control-rate messages (poses, frames, shoulder, arbitration, status, timing, log) via ``add``."""
     nc = len(episode.t)
@@ -217,28 +251,16 @@ def _control_events(episode: Episode, fork: np.ndarray | None, ns_c: list[int], 
     shoulder_names = episode.shoulder_names
     previous = None
     for k, ns in enumerate(ns_c):
-        add(ns, "/knife/tip", _pose(ns, episode.tip[k]))
-        if np.isfinite(episode.tip_reference[k]).all():
-            add(ns, "/knife/reference", _pose(ns, episode.tip_reference[k]))
-        add(ns, "/wearer/intent", _pose(ns, episode.tip_intent[k]))
-        if fork is not None and fork_q is not None and np.isfinite(fork[k]).all():
-            add(ns, "/fork/pose", _pose(ns, fork[k, :3], fork_q[k]))
-        p = base[k, :3, 3]
-        add(ns, "/tf", {"timestamp": _stamp(ns), "parent_frame_id": PLATE_FRAME, "child_frame_id": "torso",
-                        "translation": {"x": float(p[0]), "y": float(p[1]), "z": float(p[2])},
-                        "rotation": dict(zip("xyzw", (float(c) for c in base_q[k])))})
-        add(ns, "/wearer/shoulder", {"timestamp": _stamp(ns), "name": shoulder_names,
-                                     "position": [_num(x) for x in episode.voluntary[k]], "velocity": [],
-                                     "effort": []})
-        add(ns, "/control/arbitration", {"timestamp": _stamp(ns), "alpha": _num(episode.alpha[k]),
-                                         "beta": _num(episode.beta[k]), "mode": int(episode.mode[k]),
-                                         "novelty": _num(episode.novelty[k])})
         status = str(episode.status[k])
-        add(ns, "/control/status", {"timestamp": _stamp(ns), "status": status, "ok": _status_ok(status)})
-        add(ns, "/control/timing", {"timestamp": _stamp(ns), "step_time_ms": float(episode.step_time[k]) * 1e3})
+        for topic, msg in step_messages(
+                ns, tip=episode.tip[k], reference=episode.tip_reference[k], intent=episode.tip_intent[k],
+                fork=None if fork is None else fork[k], fork_quat=None if fork_q is None else fork_q[k],
+                base=base[k], base_quat=base_q[k], shoulder_names=shoulder_names, voluntary=episode.voluntary[k],
+                alpha=episode.alpha[k], beta=episode.beta[k], mode=episode.mode[k], novelty=episode.novelty[k],
+                status=status, step_time_s=episode.step_time[k]):
+            add(ns, topic, msg)
         if status != previous:
-            add(ns, "/control/log", {"timestamp": _stamp(ns), "level": 2 if _status_ok(status) else 3,
-                                     "message": f"status: {status}", "name": "controller", "file": "", "line": 0})
+            add(ns, *status_log(ns, status))
             previous = status
 
 

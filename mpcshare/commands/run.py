@@ -4,7 +4,8 @@
 configuration (:mod:`mpcshare.runtime.config`), checks them against each other, then runs
 :class:`mpcshare.runtime.loop.RunLoop` at the model's rate until SIGINT or SIGTERM (or ``--duration``
 seconds of the wall clock): a stop command is published, then the exit status is 0. ``--sim-time``
-ticks on the ``/clock`` topic instead (``use_sim_time``; ``mpcshare sim --serve`` publishes it). A bad
+ticks on the ``/clock`` topic instead (``use_sim_time``; ``mpcshare sim --serve`` publishes it). ``--live
+FILE.mcap`` streams every tick to Foxglove on 127.0.0.1 and records it (:mod:`mpcshare.runtime.live`). A bad
 bundle or configuration is one line on stderr, exit status 1, and nothing is sent. Prints the arm's
 caps (another arm than the SuperLimb), one line when it starts and one summary line at the end.
 """
@@ -32,6 +33,11 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sim-time", action="store_true",
                    help="tick on the /clock topic (rosgraph_msgs/Clock) instead of the wall clock, as a ROS 2 node "
                         "with use_sim_time: for `mpcshare sim --serve`")
+    p.add_argument("--live", default=None, metavar="FILE.mcap",
+                   help="stream the run to Foxglove (ws://127.0.0.1:PORT; needs foxglove-sdk: pip install "
+                        "'mpcshare[live]') and record the same channels in FILE.mcap")
+    p.add_argument("--live-port", type=int, default=8765, metavar="PORT",
+                   help="the live view's port on 127.0.0.1 (default 8765; 0: any free port)")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -53,12 +59,24 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(str(exc)) from None
     if arm is not None:
         print(f"arm caps: {arm.summary}", flush=True)
+    live = None
+    if args.live is not None:
+        from mpcshare.runtime.live import LiveView
+
+        if not args.live.endswith(".mcap"):
+            raise CommandError(f"--live {args.live}: the recording must be a .mcap file")
+        try:
+            live = LiveView(args.live, controller.robot,
+                            list(bundle.vol_names), port=args.live_port, name=f"mpcshare run {config.name}")
+        except RuntimeError as exc:
+            raise CommandError(f"--live: {exc}") from None
+        print(f"mpcshare run: live view on ws://127.0.0.1:{live.port}, recorded in {args.live}", flush=True)
     stop = threading.Event()
     previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         transport = Transport(config.network)
         loop = RunLoop(config, controller, transport, obs_names=list(bundle.obs_names),
-                       vol_names=list(bundle.vol_names), sim_time=args.sim_time)
+                       vol_names=list(bundle.vol_names), sim_time=args.sim_time, live=live)
         net = "CYCLONEDDS_URI" if transport.user_config else \
             f"interface {config.network.interface}, peers {', '.join(config.network.peers)}"
         clock = "; ticks on /clock (sim time)" if args.sim_time else ""
@@ -68,12 +86,16 @@ def _run(args: argparse.Namespace) -> int:
     finally:
         for s, h in previous.items():
             signal.signal(s, h)
+        if live is not None:
+            live.close()
     steps = np.array(summary.step_times) * 1e3
     timing = f"step median {np.median(steps):.2f} ms, p99 {np.percentile(steps, 99):.2f} ms" if steps.size else \
         "no step"
     print(f"mpcshare run: stopped after {summary.ticks} ticks ({summary.commands} commands, {summary.late_ticks} "
           f"late ticks skipped, {summary.resumes} resumes after a stop; {timing})"
           + (f"; protective stop: {summary.stop_reason}" if summary.stop_reason else ""), flush=True)
+    if loop.live_error:
+        print(f"mpcshare run: the live view stopped: {loop.live_error}", flush=True)
     return 0
 
 

@@ -237,9 +237,14 @@ def _run(args: argparse.Namespace) -> int:
     make = remote = None
     if args.serve:
         make, remote, args.runs = serve_controller(args, bundle)
-    obj = run_comparison(bundle, demos, out, args, trial_ids, make)
+    try:
+        obj = run_comparison(bundle, demos, out, args, trial_ids, make)
+    finally:
+        if remote is not None:
+            remote.close()
     if remote is not None:
-        print(f"mpcshare sim --serve: {remote.missing} control steps without a command from `mpcshare run`")
+        print(f"mpcshare sim --serve: {remote.missing} control steps without a command from `mpcshare run`"
+              + (f"; the live view stopped: {remote.live_error}" if remote.live_error else ""))
     from mpcshare.reports.comparison import comparison_findings
     from mpcshare.reports.headline import headline_lines, trials_words
 

@@ -7,8 +7,10 @@ fork, the shoulder and the torso on the topics of ``--config`` (default ``exampl
 and follows the joint command that comes back. By default it publishes ``/clock`` and steps in lockstep
 with ``mpcshare run --sim-time`` (reproducible); ``--realtime`` paces the physics with the wall clock for a
 ``run`` without ``--sim-time``. ``--drop INPUT:START:END`` silences an input over a window of each episode,
-``--restart INPUT:START:END`` deletes its publisher at START and creates a new one at END. The run is the
-configuration's ``[controller]`` strategy; the run files and the comparison are those of ``mpcshare sim``.
+``--restart INPUT:START:END`` deletes its publisher at START and creates a new one at END. ``--live`` streams
+the steps to Foxglove on 127.0.0.1 and records them in ``OUT/live.mcap`` (:mod:`mpcshare.runtime.live`). The
+run is the configuration's ``[controller]`` strategy; the run files and the comparison are those of
+``mpcshare sim``.
 """
 
 from __future__ import annotations
@@ -44,6 +46,11 @@ def add_serve_arguments(p: argparse.ArgumentParser) -> None:
                         "to END seconds of each trial")
     g.add_argument("--restart", action="append", default=[], metavar="INPUT:START:END",
                    help="with --serve: delete INPUT's publisher at START and create a new one at END seconds")
+    g.add_argument("--live", action="store_true",
+                   help="with --serve: stream the episodes to Foxglove (ws://127.0.0.1:PORT; needs foxglove-sdk: pip "
+                        "install 'mpcshare[live]') and record them in OUT/live.mcap")
+    g.add_argument("--live-port", type=int, default=8765, metavar="PORT",
+                   help="the live view's port on 127.0.0.1 (default 8765; 0: any free port)")
     g.add_argument("--serve-wait", type=positive_float, default=120.0, metavar="S",
                    help="with --serve: wait this long for `mpcshare run` to appear (default 120 s)")
 
@@ -51,8 +58,7 @@ def add_serve_arguments(p: argparse.ArgumentParser) -> None:
 def check_serve_arguments(args: argparse.Namespace) -> None:
     """CommandError for a stand-in option without ``--serve`` or a ``sim`` option the stand-in cannot honour."""
     if not args.serve:
-        given = [f"--{n}" for n in ("config", "drop", "restart") if getattr(args, n)] + \
-            (["--realtime"] if args.realtime else [])
+        given = [f"--{n}" for n in ("config", "drop", "restart", "realtime", "live") if getattr(args, n)]
         if given:
             raise CommandError(f"{', '.join(given)} need --serve")
         return
@@ -107,6 +113,16 @@ def serve_controller(args: argparse.Namespace, bundle: Any) -> tuple[Callable[..
         if list(robot.joint_names) != list(config.arm.joints):
             raise CommandError(f"{path}, [inputs.arm] joints: {list(config.arm.joints)} are not the simulated "
                                f"arm's {list(robot.joint_names)}")
+        if args.live and remote.live is None and remote.live_error is None:
+            from mpcshare.runtime.live import LiveView
+
+            try:
+                remote.live = LiveView(Path(args.out) / "live.mcap", robot, list(bundle.vol_names),
+                                       port=args.live_port, name="mpcshare sim --serve")
+            except RuntimeError as exc:
+                raise CommandError(f"--live: {exc}") from None
+            print(f"mpcshare sim --serve: live view on ws://127.0.0.1:{remote.live.port}, recorded in "
+                  f"{Path(args.out) / 'live.mcap'}", flush=True)
         return remote
 
     return make, remote, [run.name]

@@ -82,12 +82,15 @@ class RunSummary:
 class RunLoop:
     """The loop (module docstring) of ``controller`` (``SharedController.step``'s interface) over ``transport``;
     ``obs_names``, ``vol_names``: the controller's channel order; ``clock`` monotonic [s], ``wall`` ROS time [s];
-    ``sim_time``: both are the ``/clock`` topic's time instead (module docstring)."""
+    ``sim_time``: both are the ``/clock`` topic's time instead (module docstring); ``live``: a
+    :class:`mpcshare.runtime.live.LiveView` given every tick (its failure ends it, named in ``live_error``)."""
 
     def __init__(self, config: RunConfig, controller: Any, transport: Transport, *, obs_names: list[str],
                  vol_names: list[str], clock: Callable[[], float] = time.monotonic,
-                 wall: Callable[[], float] = time.time, sim_time: bool = False) -> None:
-        self.sim_time = sim_time
+                 wall: Callable[[], float] = time.time, sim_time: bool = False, live: Any = None) -> None:
+        self.sim_time, self.live = sim_time, live
+        self.live_error: str | None = None
+        self._live_in: tuple | None = None
         self._sim_now = 0.0
         self._sim_stamp = ros_time(0.0)
         if sim_time:
@@ -182,6 +185,7 @@ class RunLoop:
     def tick(self, k: int, t: float | None = None) -> str:
         """Control tick k at time ``t`` (default k·T; module docstring, 1–3); returns the published status."""
         t_k = k * self.config.period_s if t is None else t
+        self._live_in = None
         self.poll()
         now = self.clock()
         watch = self.watchdog.check(now)
@@ -215,10 +219,12 @@ class RunLoop:
         base = None
         if "torso" in self.config.inputs and "torso" in self.latest:
             base = pose_matrix(self.latest["torso"].pose) if "torso" not in watch.stale else np.full((4, 4), np.nan)
+        obs, vol = self._values(self._obs, watch.stale), self._values(self._vol, watch.stale)
         t0 = time.perf_counter()
-        cmd = self.controller.step(t_k, self._values(self._obs, watch.stale), self._values(self._vol, watch.stale),
-                                   q, v, base)
+        cmd = self.controller.step(t_k, obs, vol, q, v, base)
         self.summary.step_times.append(time.perf_counter() - t0)
+        self._live_in = (q, v, base, dict(zip((c.name for c in self._obs), obs)), vol, cmd,
+                         self.summary.step_times[-1])
         arrays = [np.asarray(getattr(cmd, a, np.nan), dtype=float) for a in ("q_cmd", "v_cmd", "a_cmd", "tau")]
         stamp = self._stamp()
         if not all(x.shape == (len(self.joints),) and np.isfinite(x).all() for x in arrays):
@@ -261,7 +267,20 @@ class RunLoop:
         self.status_writer.write(status_message(stamp, "mpcshare: shared controller", self.config.name, level,
                                                 message, values))
         self.summary.statuses[status] = self.summary.statuses.get(status, 0) + 1
+        if self.live is not None:
+            self._live_step(stamp, status)
         return status
+
+    def _live_step(self, stamp: Any, status: str) -> None:
+        n = len(self.joints)
+        q_last = self._q_last if self._q_last is not None else np.full(n, np.nan)
+        q, v, base, obs, vol, cmd, step_s = self._live_in or (q_last, np.full(n, np.nan), None, {},
+                                                               np.full(len(self._vol), np.nan), None, 0.0)
+        try:
+            self.live.step(stamp.sec * 1_000_000_000 + stamp.nanosec, q=q, v=v, base=base, obs=obs, voluntary=vol,
+                           command=cmd, status=status, step_time_s=step_s)
+        except Exception as exc:  # noqa: BLE001  (the view must never stop the loop: it ends, and says why)
+            self.live_error, self.live = f"{type(exc).__name__}: {exc}", None
 
     # ------------------------------------------------------------------ the schedule
     def run(self, duration_s: float | None = None, should_stop: Callable[[], bool] = lambda: False) -> RunSummary:

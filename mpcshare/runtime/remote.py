@@ -166,12 +166,14 @@ class RemoteController:
 
     ``obs_names``, ``vol_names``: the order of the runner's obs and voluntary vectors; ``outages``: inputs
     silenced over windows; ``sim_time``: publish ``/clock`` and wait for each step's command (lockstep).
-    ``missing`` counts the steps without a command.
+    ``missing`` counts the steps without a command. ``live``: a :class:`mpcshare.runtime.live.LiveView` given
+    every step (its failure ends it, named in ``live_error``); :meth:`close` closes it.
     """
 
     def __init__(self, config: RunConfig, transport: Transport, *, obs_names: Sequence[str],
                  vol_names: Sequence[str], sim_time: bool = True, outages: Sequence[Outage] = (),
-                 first_timeout_s: float = 60.0, timeout_s: float = 2.0, lost_timeout_s: float = 0.02) -> None:
+                 first_timeout_s: float = 60.0, timeout_s: float = 2.0, lost_timeout_s: float = 0.02,
+                 live: Any = None) -> None:
         if config.command.type != "trajectory_msgs/msg/JointTrajectory":
             raise RunConfigError(f"{config.source}, [outputs.command] type: the stand-in follows a "
                                  f"trajectory_msgs/msg/JointTrajectory command, not {config.command.type}")
@@ -202,6 +204,7 @@ class RemoteController:
         self._last: JointTrajectory | None = None
         self._t0: float | None = None
         self._statuses: dict[str, dict[str, str]] = {}
+        self.live, self.live_error = live, None
 
     def wait_for_run(self, timeout_s: float) -> bool:
         """Wait up to ``timeout_s`` [s] until ``mpcshare run`` listens (reads the arm, with sim time the clock)
@@ -288,6 +291,26 @@ class RemoteController:
 
     def step(self, t: float, obs: Any, voluntary: Any, q: Any, v: Any, base_pose: Any = None) -> RemoteCommand | None:
         """Publish the inputs at ``t`` [s] and return ``run``'s command for them (None: none came)."""
+        t0 = time.perf_counter()
+        cmd = self._step(t, obs, voluntary, q, v, base_pose)
+        if self.live is not None:
+            obs_row = np.asarray(obs, dtype=float).reshape(-1)
+            try:
+                self.live.step(int(round((t if self.sim_time else time.time()) * 1e9)), q=q, v=v, base=base_pose,
+                               obs={n: float(obs_row[i]) for n, i in self.obs_index.items()}, voluntary=voluntary,
+                               command=cmd, status="invalid_command" if cmd is None else cmd.status,
+                               step_time_s=time.perf_counter() - t0)
+            except Exception as exc:  # noqa: BLE001  (the view must never stop the loop: it ends, and says why)
+                self.live_error, self.live = f"{type(exc).__name__}: {exc}", None
+        return cmd
+
+    def close(self) -> None:
+        """Close the live view, if any."""
+        if self.live is not None:
+            self.live.close()
+            self.live = None
+
+    def _step(self, t: float, obs: Any, voluntary: Any, q: Any, v: Any, base_pose: Any) -> RemoteCommand | None:
         obs, voluntary = np.asarray(obs, dtype=float).reshape(-1), np.asarray(voluntary, dtype=float).reshape(-1)
         if self.sim_time:
             stamp = ros_time(t + 1e-10)  # the nearest nanosecond below t + 0.1 ns: k·T exactly

@@ -58,7 +58,7 @@ def served(ros_model, tmp_path_factory):
     root = tmp_path_factory.mktemp("serve")
     data = root / "demos.npz"
     save(demos, data)
-    cfg = write_config(root, replace={r"^rate_hz = 100.0": f"rate_hz = 100.0\nresume_after_s = {RESUME_S}"})
+    cfg = write_config(root, replace={r"^resume_after_s = 1.0": f"resume_after_s = {RESUME_S}"})
     return root, model, data, cfg
 
 
