@@ -15,7 +15,7 @@ goes silent, then SIGTERM. Figures (wall clock; the machine may be shared):
   (its stop_after_s is 0.5 s; target ≤ 0.5 s + 2 periods);
 * ``run_summary``: the process's own last line (step median and p99, late ticks).
 
-Usage: ``python benchmarks/bench_run.py --model MODEL [--seconds 10]``.
+Usage: ``python benchmarks/bench_run.py --model MODEL [--seconds 10] [--tick arm]``.
 """
 
 from __future__ import annotations
@@ -59,14 +59,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--model", required=True)
     ap.add_argument("--seconds", type=float, default=10.0)
+    ap.add_argument("--tick", choices=("schedule", "arm"), default="schedule",
+                    help="the configuration's tick: every period, or on the arm's joint states")
     args = ap.parse_args()
     domain = 200 + os.getpid() % 30
     trial = generate_demonstrations(1, max(0.2, args.seconds / 60 + 0.05), seed=11,
                                     config=GeneratorConfig(trial_minutes=max(0.2, args.seconds / 60 + 0.05))).trials[0]
     with tempfile.TemporaryDirectory() as tmp:
         cfg = Path(tmp) / "arm.toml"
-        cfg.write_text((ROOT / "examples/ros2/superlimb.toml").read_text().replace("domain_id = 0",
-                                                                                  f"domain_id = {domain}"))
+        text = (ROOT / "examples/ros2/superlimb.toml").read_text().replace("domain_id = 0", f"domain_id = {domain}")
+        cfg.write_text(text.replace('tick = "schedule"', f'tick = "{args.tick}"'))
         env = {k: v for k, v in os.environ.items() if k != "CYCLONEDDS_URI"}
         env["PYTHONPATH"] = str(ROOT)
         proc = subprocess.Popen([sys.executable, "-m", "mpcshare", "run", "--model", args.model, "--config",
@@ -126,6 +128,7 @@ def main() -> None:
         "input_to_command_ms": {"median": float(np.median(latency)), "p99": float(np.percentile(latency, 99)),
                                 "max": float(np.max(latency))} if latency else None,
         "stop_after_silence_s": float(stops[0]) if stops else None,
+        "tick": args.tick,
         "exit_status": proc.returncode,
         "run_summary": out.strip().splitlines()[-1] if out.strip() else err.strip()[-300:],
         "load_average": os.getloadavg(),

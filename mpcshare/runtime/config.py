@@ -6,6 +6,8 @@ Tables (examples: ``examples/ros2/superlimb.toml``, ``examples/ros2/panda.toml``
     rate_hz = 100.0               # the control rate: the model's rate
     resume_after_s = 1.0          # after a protective stop for a silent input: resume once every required
                                   #   input has been fresh this long [s]
+    tick = "schedule"             # "schedule": every period of the monotonic clock; "arm": on each arriving
+                                  #   joint state within half a period of its tick (mpcshare.runtime.loop)
     [network]                     # optional; default loopback: interface 127.0.0.1, peers [127.0.0.1],
     interface = "192.168.1.10"    #   multicast off, domain_id 0 (ROS_DOMAIN_ID). CYCLONEDDS_URI, when set,
     peers = ["192.168.1.2"]       #   replaces the whole table.
@@ -56,7 +58,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["COMMAND_TYPES", "INPUT_TYPES", "INTERFACES", "STATUS_TYPES", "ChannelSpec", "CommandSpec",
+__all__ = ["COMMAND_TYPES", "INPUT_TYPES", "INTERFACES", "STATUS_TYPES", "TICKS", "ChannelSpec", "CommandSpec",
            "ControllerSpec", "InputSpec", "RobotSpec", "RunConfig", "RunConfigError", "check_against_model",
            "load_run_config", "parse_run_config"]
 
@@ -67,9 +69,12 @@ INPUT_TYPES: tuple[str, ...] = ("sensor_msgs/msg/JointState", "geometry_msgs/msg
 COMMAND_TYPES: tuple[str, ...] = ("trajectory_msgs/msg/JointTrajectory", "std_msgs/msg/Float64MultiArray")
 #: What a Float64MultiArray command carries.
 INTERFACES: tuple[str, ...] = ("position", "velocity", "effort")
+#: When the loop ticks: on its schedule, or on the arm's joint states.
+TICKS: tuple[str, ...] = ("schedule", "arm")
 #: Messages the status can be.
 STATUS_TYPES: tuple[str, ...] = ("diagnostic_msgs/msg/DiagnosticArray",)
-_TOP = ("name", "rate_hz", "resume_after_s", "network", "robot", "controller", "inputs", "obs", "voluntary", "outputs")
+_TOP = ("name", "rate_hz", "resume_after_s", "tick", "network", "robot", "controller", "inputs", "obs", "voluntary",
+        "outputs")
 _INPUT_KEYS = ("topic", "type", "optional", "deadline_s", "stop_after_s", "frame", "reliability", "depth",
                "joints")
 _ERD = "example-robot-data:"
@@ -150,6 +155,7 @@ class RunConfig:
     status_topic: str
     status_qos: QosSettings
     resume_after_s: float = 1.0
+    tick: str = "schedule"
 
     @property
     def arm(self) -> InputSpec:
@@ -290,7 +296,8 @@ def parse_run_config(doc: dict[str, Any], source: str, folder: Path | None = Non
                             d.qos(cmd, "[outputs.command]", QosSettings("reliable", 1))),
         status_topic=d.topic(status, "[outputs.status]") if "topic" in status else "/mpcshare/status",
         status_qos=d.qos(status, "[outputs.status]", QosSettings("reliable", 1)),
-        resume_after_s=float(d.number(doc, "resume_after_s", "top level", 1.0)))
+        resume_after_s=float(d.number(doc, "resume_after_s", "top level", 1.0)),
+        tick=d.text(doc, "tick", "top level", "schedule", TICKS))
 
 
 def load_run_config(path: str | Path) -> RunConfig:

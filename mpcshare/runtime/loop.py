@@ -11,7 +11,11 @@ new ``/clock`` message's time instead):
    pose kept); the status names the stale inputs;
 3. ``SharedController.step(t_k, obs, voluntary, q, v, base_pose)``, then the command (stamped with the
    wall clock, ROS time; with ``sim_time`` the clock's time) and the status are published;
-4. sleep until t_{k+1}; a tick that is already past is skipped (counted as ``late_ticks``). With
+4. sleep until t_{k+1}; a tick that is already past is skipped (counted as ``late_ticks``). With the
+   configuration's ``tick = "arm"``, tick k+1 runs as soon as a joint state of the arm arrives after
+   t_{k+1} − T/2, and at t_{k+1} + T/2 at the latest; a tick on a joint state moves the schedule so that
+   t_k is that tick's time (phase-locked to the arm's publisher: a joint state waits for its tick only
+   as long as the loop takes to wake, not up to a period; the command period follows the arm's). With
    ``sim_time``: wait for the next ``/clock`` message (``rosgraph_msgs/msg/Clock``, as a ROS 2 node with
    ``use_sim_time``); a clock that jumps back (a new episode of the simulator) resets the controller,
    the watchdog and the latest inputs.
@@ -289,21 +293,33 @@ class RunLoop:
         Returns the summary."""
         if self.sim_time:
             return self._run_sim_time(duration_s, should_stop)
-        T, k = self.config.period_s, 0
+        T, k, origin, triggered = self.config.period_s, 0, self.start, False
+        slack = T / 2 if self.config.tick == "arm" else 0.0  # how far from its time a tick may run
         try:
             while not should_stop():
                 if duration_s is not None and k * T >= duration_s:
                     break
+                t_tick = self.clock()
                 self.tick(k)
                 self.summary.ticks += 1
-                now = self.clock() - self.start
+                if triggered:  # phase-locked to the arm: the next window is centred one period after this tick
+                    origin = t_tick - k * T
+                now = self.clock() - origin
                 nxt = k + 1
-                if now >= nxt * T:  # overran: skip to the next tick still ahead
-                    late = int(now // T) + 1
+                if now >= nxt * T + slack:  # overran: skip to the next tick still ahead
+                    late = int((now - slack) // T) + 1
                     self.summary.late_ticks += late - nxt
                     nxt = late
-                while (wait := self.start + nxt * T - self.clock()) > 0 and not should_stop():
+                opens = origin + nxt * T - slack
+                while (wait := opens - self.clock()) > 0 and not should_stop():
                     time.sleep(min(wait, 0.005))
+                triggered = False
+                if slack:  # then on the arm's next joint state, or at the window's end
+                    arm = self.readers["arm"]
+                    while (left := opens + 2 * slack - self.clock()) > 0 and not should_stop():
+                        if arm.wait(min(left, 0.005)):
+                            triggered = True
+                            break
                 k = nxt
         finally:
             self.shutdown()

@@ -181,3 +181,17 @@ def test_sim_time_ticks_on_the_clock_and_a_jump_back_starts_afresh(tmp_path):
     stamps = [v for v in ({kv.key: kv.value for kv in m.status[0].values} for m in _wait(status, 4)) if "tick" in v]
     assert [(v["stamp"], v["tick"]) for v in stamps] == [("5.000000000", "0"), ("5.010000000", "1"),
                                                           ("0.000000000", "0")]
+
+
+def test_ticking_on_the_arm_keeps_its_period_while_the_arm_is_silent(tmp_path):
+    cfg = load_run_config(write_config(tmp_path, replace={
+        r'^tick = "schedule"': 'tick = "arm"',
+        r'^topic = "/joint_trajectory_controller/joint_trajectory"': 'topic = "/test_tick_arm/commands"',
+        r'^topic = "/mpcshare/status"': 'topic = "/test_tick_arm/status"'}))
+    loop = RunLoop(cfg, Recorder(), Transport(NetworkSettings(domain_id=DOMAIN)), obs_names=OBS, vol_names=VOL)
+    t0 = time.monotonic()
+    s = loop.run(0.3)
+    wall = time.monotonic() - t0
+    # no joint state: every tick at its window's end (half a period late), and the watchdog still stops
+    assert s.ticks + s.late_ticks == 30 and wall < 3.0
+    assert s.stop_reason.startswith("arm: no message") and s.statuses["protective_stop"] >= 10
