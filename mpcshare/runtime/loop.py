@@ -155,9 +155,9 @@ class RunLoop:
                          else math.nan for c in channels])
 
     # ------------------------------------------------------------------ one tick
-    def stop_command(self) -> Any | None:
-        """The stop command (module docstring); None when no joint position was ever measured and the
-        command carries positions."""
+    def stop_command(self, stamp: Any = None) -> Any | None:
+        """The stop command stamped ``stamp`` (default now; module docstring); None when no joint position was
+        ever measured and the command carries positions."""
         n = len(self.joints)
         zeros = np.zeros(n)
         if self._q_last is None and not (self.config.command.type.endswith("Float64MultiArray")
@@ -167,10 +167,10 @@ class RunLoop:
             self._q_stop = self._q_last.copy()
         q = self._q_stop if self._q_stop is not None else zeros
         return command_message(self.config.command.type, self.config.command.interface, self.joints,
-                               self._stamp(), self.config.period_s, q, zeros, zeros, zeros)
+                               self._stamp() if stamp is None else stamp, self.config.period_s, q, zeros, zeros, zeros)
 
-    def _publish_stop(self) -> bool:
-        msg = self.stop_command()
+    def _publish_stop(self, stamp: Any = None) -> bool:
+        msg = self.stop_command(stamp)
         if msg is not None:
             self.command_writer.write(msg)
             self.summary.stops += 1
@@ -207,8 +207,8 @@ class RunLoop:
             if callable(getattr(self.controller, "reset", None)):
                 self.controller.reset()
         if self._stop_reason is not None:
-            sent = self._publish_stop()
-            stamp = self._stamp()
+            stamp = self._stamp()  # the stop command's and its status's
+            sent = self._publish_stop(stamp)
             values.update(protective_stop=self._stop_reason, stop_command=int(sent))
             return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
         if "arm" not in self.latest:
@@ -234,7 +234,7 @@ class RunLoop:
         if not all(x.shape == (len(self.joints),) and np.isfinite(x).all() for x in arrays):
             self._stop_reason = f"the controller gave a non-finite command (status {getattr(cmd, 'status', '?')})"
             self._stop_latched = True
-            self._publish_stop()
+            self._publish_stop(stamp)
             values["protective_stop"] = self._stop_reason
             return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
         self.command_writer.write(command_message(self.config.command.type, self.config.command.interface,
@@ -357,8 +357,9 @@ class RunLoop:
 
     def shutdown(self) -> None:
         """Publish the stop command and wait up to 0.2 s for reliable readers to acknowledge it."""
-        sent = self._publish_stop()
-        self._status(self._stamp(), ERROR if self._stop_reason else OK, "stopped",
+        stamp = self._stamp()
+        sent = self._publish_stop(stamp)
+        self._status(stamp, ERROR if self._stop_reason else OK, "stopped",
                      "stopped: " + (self._stop_reason or "end of the run"), {"stop_command": int(sent)})
         if sent:
             self.command_writer.flush(0.2)

@@ -82,7 +82,8 @@ def parse_outage(text: str, restart: bool = False) -> Outage:
 
 @dataclass
 class RemoteCommand:
-    """One command of ``mpcshare run`` as the runner reads it (the fields of ``ControlCommand`` it logs)."""
+    """One command of ``mpcshare run`` as the runner reads it (the fields of ``ControlCommand`` it logs; from
+    the status of the same stamp: ``no_status`` and NaN when that status did not arrive)."""
 
     q_cmd: np.ndarray
     v_cmd: np.ndarray
@@ -285,7 +286,7 @@ class RemoteController:
                 return math.nan
 
         tip = _floats(values.get("tip_reference", ""))
-        return RemoteCommand(*arrays, status=values.get("status", "ok"), alpha=num("alpha"), beta=num("beta"),
+        return RemoteCommand(*arrays, status=values.get("status", "no_status"), alpha=num("alpha"), beta=num("beta"),
                              novelty=num("novelty"), tip_reference=tip if tip.size == 3 else np.full(3, np.nan),
                              mode_proba=_floats(values.get("mode_proba", "")))
 
@@ -334,11 +335,11 @@ class RemoteController:
             self.missing += 1
             return None
         self._got_any, self._last = True, msg
-        if self.sim_time:  # the status follows its command: let it arrive
-            end = time.monotonic() + 0.05
-            while f"{stamp.sec}.{stamp.nanosec:09d}" not in self._statuses and time.monotonic() < end:
-                self.status.wait(0.005)
-                self._take_statuses()
+        key = f"{msg.header.stamp.sec}.{msg.header.stamp.nanosec:09d}"
+        end = time.monotonic() + (0.05 if self.sim_time else 0.2 * self.config.period_s)
+        while key not in self._statuses and time.monotonic() < end:  # the status follows its command
+            self.status.wait(0.002)
+            self._take_statuses()
         return self._command(msg)
 
     def _fresh_last(self, stamp: Time) -> JointTrajectory | None:

@@ -154,7 +154,8 @@ def test_a_killed_run_leaves_the_arm_held_by_the_stand_in(pair):
     last_cmd = max(t for t, _ in listen.commands)
     assert 4.6 <= last_cmd < 4.7 + 0.2, last_cmd
     held = status == "invalid_command"
-    assert held.any() and not held[t <= last_cmd + 1e-9].any(), np.unique(status)
+    # the command run was sending as it died may not reach the stand-in (no retransmission from a dead writer)
+    assert held.any() and not held[t < last_cmd - 1e-9].any(), np.unique(status)
     first = int(np.flatnonzero(held)[0])
     assert t[first] <= last_cmd + T + 1e-9 and held[first:].all()  # held from the first period without a command
     assert int(e["info_limit_violations"]) == 0

@@ -57,7 +57,8 @@ def test_run_publishes_stamped_commands_at_100_hz_and_stops_when_an_input_goes_s
     model, _ = ros_model
     held_out = generate_demonstrations(n_subjects=1, minutes=0.1, seed=11,
                                        config=GeneratorConfig(trial_minutes=0.1)).trials[0]
-    cfg = write_config(tmp_path)
+    # the arm's stop after 0.5 s, not 0.1 s: this test's Python publisher stalls on a loaded machine
+    cfg = write_config(tmp_path, replace={r"^stop_after_s = 0.1": "stop_after_s = 0.5"})
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("CYCLONEDDS_URI", None)
     proc = subprocess.Popen([sys.executable, "-m", "mpcshare", "run", "--model", str(model), "--config", str(cfg),
