@@ -60,7 +60,7 @@ def check_serve_arguments(args: argparse.Namespace) -> None:
     if not args.serve:
         given = [f"--{n}" for n in ("config", "drop", "restart", "realtime", "live") if getattr(args, n)]
         if given:
-            raise CommandError(f"{', '.join(given)} need --serve")
+            raise CommandError(f"{', '.join(given)} {'needs' if len(given) == 1 else 'need'} --serve")
         return
     bad = [f"--{n.replace('_', '-')}" for n in _NOT_WITH_SERVE if getattr(args, n, None)]
     if bad:

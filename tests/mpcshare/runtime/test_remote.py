@@ -235,3 +235,15 @@ def test_the_stand_in_refuses_what_it_cannot_follow(tmp_path):
     with pytest.raises(RunConfigError, match="no input 'hand' to silence"):
         RemoteController(config, t, obs_names=list(config.names("obs")), vol_names=list(config.names("voluntary")),
                          outages=[Outage("hand", 0.0, 1.0)])
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--drop", "fork:1:2"], "--drop needs --serve"),
+    (["--realtime", "--live"], "--realtime, --live need --serve"),
+    (["--serve", "--video"], "--serve runs the controller of `mpcshare run`: --video cannot apply to it"),
+    (["--serve", "--no-keepout", "--scenario", "push"], "--scenario, --no-keepout cannot apply"),
+])
+def test_stand_in_options_that_cannot_apply_are_one_line(tmp_path, capsys, argv, words):
+    assert main(["sim", "--model", str(tmp_path / "none"), "--out", str(tmp_path / "out"), *argv]) == 1
+    err = capsys.readouterr().err.strip()
+    assert words in err and len(err.splitlines()) == 1, err
