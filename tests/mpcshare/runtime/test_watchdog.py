@@ -37,6 +37,10 @@ def test_stale_after_the_deadline_then_a_latched_stop():
     assert s.stopped and s.stop_reason.startswith("fork: no message for 0.510 s, stop after 0.5 s")
     w.seen("fork", 10.52)
     assert w.check(10.53).stopped  # latched
+    w.resume()  # the caller's decision: the stop ends, a new silence stops again
+    w.seen("arm", 10.53)
+    assert not w.check(10.54).stopped
+    assert w.check(10.64).stop_reason.startswith("arm: no message for 0.110 s")
 
 
 def test_before_the_first_message_ages_count_from_the_start_and_optional_inputs_never_stop():
