@@ -48,7 +48,7 @@ def _run(args: argparse.Namespace) -> int:
     from mpcshare.bundle import BundleError, load_bundle
     from mpcshare.runtime.config import RunConfigError, load_run_config
     from mpcshare.runtime.loop import RunLoop
-    from mpcshare.runtime.setup import configured_arm, make_controller
+    from mpcshare.runtime.setup import configured_arm, make_controller, rest_base_pose
 
     try:
         config = load_run_config(args.config)
@@ -76,7 +76,8 @@ def _run(args: argparse.Namespace) -> int:
     try:
         transport = Transport(config.network)
         loop = RunLoop(config, controller, transport, obs_names=list(bundle.obs_names),
-                       vol_names=list(bundle.vol_names), sim_time=args.sim_time, live=live)
+                       vol_names=list(bundle.vol_names), sim_time=args.sim_time, live=live,
+                       rest_base_pose=rest_base_pose())
         net = "CYCLONEDDS_URI" if transport.user_config else \
             f"interface {config.network.interface}, peers {', '.join(config.network.peers)}"
         clock = "; ticks on /clock (sim time)" if args.sim_time else ""

@@ -86,13 +86,17 @@ class RunSummary:
 class RunLoop:
     """The loop (module docstring) of ``controller`` (``SharedController.step``'s interface) over ``transport``;
     ``obs_names``, ``vol_names``: the controller's channel order; ``clock`` monotonic [s], ``wall`` ROS time [s];
-    ``sim_time``: both are the ``/clock`` topic's time instead (module docstring); ``live``: a
+    ``sim_time``: both are the ``/clock`` topic's time instead (module docstring); ``rest_base_pose``: the
+    base pose (T_plate_torso) given to the controller while no torso pose is configured or has arrived
+    (None: none, the controller's own default); ``live``: a
     :class:`mpcshare.runtime.live.LiveView` given every tick (its failure ends it, named in ``live_error``)."""
 
     def __init__(self, config: RunConfig, controller: Any, transport: Transport, *, obs_names: list[str],
                  vol_names: list[str], clock: Callable[[], float] = time.monotonic,
-                 wall: Callable[[], float] = time.time, sim_time: bool = False, live: Any = None) -> None:
+                 wall: Callable[[], float] = time.time, sim_time: bool = False, live: Any = None,
+                 rest_base_pose: np.ndarray | None = None) -> None:
         self.sim_time, self.live = sim_time, live
+        self.rest_base_pose = None if rest_base_pose is None else np.array(rest_base_pose, dtype=float)
         self.live_error: str | None = None
         self._live_in: tuple | None = None
         self._sim_now = 0.0
@@ -220,7 +224,7 @@ class RunLoop:
         q, v = joint_state(self.latest["arm"], self.joints)
         if "arm" in watch.stale:
             q, v = np.full_like(q, np.nan), np.full_like(v, np.nan)
-        base = None
+        base = self.rest_base_pose
         if "torso" in self.config.inputs and "torso" in self.latest:
             base = pose_matrix(self.latest["torso"].pose) if "torso" not in watch.stale else np.full((4, 4), np.nan)
         obs, vol = self._values(self._obs, watch.stale), self._values(self._vol, watch.stale)

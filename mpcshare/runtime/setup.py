@@ -6,7 +6,8 @@ The ``[robot]`` arm is set up exactly as ``mpcshare sim --robot FILE`` sets it u
 braking is torque-feasible over the task's workspace (both given: only checked). A file
 ``example-robot-data:PATH`` is ``PATH`` in the ``example-robot-data`` package's models (e.g.
 ``panda_description/urdf/panda.urdf``). Every failure is a :class:`~mpcshare.runtime.config.RunConfigError`
-naming the file, table and key.
+naming the file, table and key. :func:`rest_base_pose` is that convention's torso at rest, T_plate_torso,
+the base pose ``run`` gives the controller without a torso input.
 """
 
 from __future__ import annotations
@@ -14,14 +15,17 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from mpcshare.arms import TaskArm, task_arm
 from mpcshare.control.controller import SharedController
 from mpcshare.errors import ControllerSetupError
 from mpcshare.runtime.config import RunConfig, RunConfigError, check_against_model
 from robot.description import RobotDescription, as_description
 from robot.errors import ControllerConfigError
+from sim.scene import SceneConfig
 
-__all__ = ["configured_arm", "make_controller", "robot_description"]
+__all__ = ["configured_arm", "make_controller", "rest_base_pose", "robot_description"]
 
 _ERD = "example-robot-data:"
 
@@ -40,6 +44,14 @@ def _robot_file(config: RunConfig) -> Path:
         return Path(erd.getModelPath(rel)) / rel
     except Exception as exc:  # noqa: BLE001 - the package raises plain Exceptions for unknown paths
         raise RunConfigError(f"{config.source}, [robot] file: {rel!r} is not in example-robot-data ({exc})") from None
+
+
+def rest_base_pose() -> np.ndarray:
+    """T_plate_torso (4×4) with the wearer's torso at rest, as the simulator places it: the plate at
+    ``SceneConfig.plate_position`` in the torso frame, axes aligned (the mounts' convention)."""
+    T = np.eye(4)
+    T[:3, 3] = -np.asarray(SceneConfig().plate_position, dtype=float)
+    return T
 
 
 def configured_arm(config: RunConfig) -> TaskArm | None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
 import pytest
 
 pytest.importorskip("cyclonedds", reason="mpcshare run needs the cyclonedds package (pip install 'mpcshare[ros]')")
@@ -100,3 +101,12 @@ def test_usage_errors_exit_2(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["run", "--config", str(SUPERLIMB)])
     assert exc.value.code == 2 and "--model" in capsys.readouterr().err
+
+
+def test_the_rest_base_pose_is_the_mounts_convention():
+    from mpcshare.runtime.setup import rest_base_pose
+    from sim.scene import SceneConfig
+
+    m = (0.0, -0.45, 0.0)  # a mount in the plate frame, the torso at rest
+    p_torso = SceneConfig().mount_in_torso(m)
+    np.testing.assert_allclose((rest_base_pose() @ np.append(p_torso, 1.0))[:3], m, atol=1e-12)

@@ -195,3 +195,20 @@ def test_ticking_on_the_arm_keeps_its_period_while_the_arm_is_silent(tmp_path):
     # no joint state: every tick at its window's end (half a period late), and the watchdog still stops
     assert s.ticks + s.late_ticks == 30 and wall < 3.0
     assert s.stop_reason.startswith("arm: no message") and s.statuses["protective_stop"] >= 10
+
+
+def test_without_a_torso_pose_the_controller_is_given_the_rest_pose(setup):
+    loop, ctl, clock, pubs, _ = setup
+    rest = np.eye(4)
+    rest[:3, 3] = [-0.4, 0.1, -0.21]
+    loop.rest_base_pose = rest
+    pubs["arm"].write(JointState(Header(Time(1, 0), ""), ["shoulder", "elbow", "base_yaw"], [0.2, 0.3, 0.1],
+                                 [0.0, 0.0, 0.0], []))
+    time.sleep(0.05)
+    clock.t += 0.01
+    loop.tick(1)
+    np.testing.assert_array_equal(ctl.calls[-1][5], rest)
+    _feed(pubs)  # then the torso's own pose
+    clock.t += 0.01
+    loop.tick(2)
+    np.testing.assert_allclose(ctl.calls[-1][5][:3, 3], [-0.2, 0.1, 0.0])
