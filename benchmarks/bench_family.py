@@ -104,7 +104,7 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     import torch
 
     torch.set_num_threads(1)
-    from mpcshare.experiments import compare_strategies
+    from mpcshare.evaluation import compare_strategies
     from mpcshare.run_table import BOUND_RUNS, DEFAULT_RUNS
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig

@@ -10,7 +10,7 @@ swept strategies (``tunable``), the Pareto set, the plots' colours and the bench
 * :data:`EXTRA_RUNS`: ``gate_mpc`` (the default strategy with the MPC), ``oracle_preview`` (the
   robot given the true intent as its preview), ``random_handover`` (the placebo, the mean over
   :data:`RANDOM_DRAWS` draws) and ``oracle_handover`` (the upper bound), see
-  :mod:`mpcshare.experiments.handover`;
+  :mod:`mpcshare.evaluation.handover`;
 * :data:`BOUND_RUNS`: ``oracle_line`` (the effort-aware hand-over oracle), for the benchmarks only.
 """
 
@@ -34,7 +34,7 @@ class StrategyRun:
     and ``oracle``: the controller is given the wearer's true intent as its preview instead of
     the predictor's forecast (an upper bound, not realisable). ``schedule``: ``"random"`` or
     ``"oracle"``: the run replays a hand-over schedule computed from the default strategy's, or
-    the pure runs', episodes on the same trial (:mod:`mpcshare.experiments.handover`), ``draws`` times."""
+    the pure runs', episodes on the same trial (:mod:`mpcshare.evaluation.handover`), ``draws`` times."""
 
     name: str
     strategy: str
@@ -53,7 +53,7 @@ EXTRA_RUNS: tuple[StrategyRun, ...] = (
 DEFAULT_RUNS: tuple[StrategyRun, ...] = tuple(StrategyRun(n, n) for n in user_strategies()) + EXTRA_RUNS
 RUN_NAMES: tuple[str, ...] = tuple(r.name for r in DEFAULT_RUNS)
 #: Runs too costly for every comparison (6 replays a trial), asked for by name (``bench_family.py``):
-#: ``oracle_line``, the effort-aware hand-over oracle (:mod:`mpcshare.experiments.handover`).
+#: ``oracle_line``, the effort-aware hand-over oracle (:mod:`mpcshare.evaluation.handover`).
 BOUND_RUNS: tuple[StrategyRun, ...] = (StrategyRun("oracle_line", "schedule", schedule="oracle_line"),)
 #: The strategies ``tune`` sweeps over K and β (each gets a matched ``random_handover``).
 TUNABLE: tuple[str, ...] = tuple(n for n, s in REGISTRY.items() if s.tunable and s.user)

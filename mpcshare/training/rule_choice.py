@@ -5,7 +5,7 @@ begin. Which modes those should be depends on how well the robot and the wearer 
 mode and what leading costs the wearer, which the data alone do not say (the wearer's error is
 not recorded), so :func:`choose_rule` measures it:
 
-1. it simulates the closed loop (:func:`mpcshare.experiments.simulate_episode`, the default
+1. it simulates the closed loop (:func:`mpcshare.evaluation.simulate_episode`, the default
    wearer) on the given held-out trials with ``voluntary`` and ``reactive``, and reads what each
    mode costs under each party (:func:`mpcshare.training.mode_cost.mode_costs`: the squared
    error the wearer saves per unit of effort, the *price* ρ_j);
@@ -46,8 +46,8 @@ import numpy as np
 from learning.data import Demonstrations
 from mpcshare.control.strategies.gate import DEFAULTS as GATE_DEFAULTS
 from mpcshare.control.types import ControllerConfig
-from mpcshare.experiments import StrategyRun, pool_metrics, simulate_episode
-from mpcshare.experiments.episode_pool import EpisodeJob, EpisodePool, default_workers
+from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
+from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
 from mpcshare.training.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
@@ -320,7 +320,7 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     ``mode_names`` (for the cutting modes), recorded in
     ``bundle.metrics`` (``rule_settings``, ``rule_choice``) so that the saved bundle's ``gate`` uses it;
     returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
-    :func:`mpcshare.experiments.episode_pool.default_workers`) closed afterwards; the choice is the same
+    :func:`mpcshare.evaluation.episode_pool.default_workers`) closed afterwards; the choice is the same
     whatever the number. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
     from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
 

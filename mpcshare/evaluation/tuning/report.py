@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from learning.atomic import atomic_open, write_json
-from mpcshare.experiments.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
+from mpcshare.evaluation.tuning.stats import ALPHA_LEVEL, gate_vs_random, pareto, recommend, summarise
 from mpcshare.reports.style import number
 
 __all__ = ["baseline_sentence", "build_result", "chance_sentences", "recommendation_line", "tune_markdown",
@@ -27,7 +27,7 @@ __all__ = ["baseline_sentence", "build_result", "chance_sentences", "recommendat
 
 def build_result(rows: list[dict[str, Any]], **info: Any) -> dict[str, Any]:
     """``tune.json``'s object from the rows (module docstring); ``info``: the run's other fields."""
-    from mpcshare.experiments.tuning.episodes import TIMING_KEYS
+    from mpcshare.evaluation.tuning.episodes import TIMING_KEYS
 
     summary = summarise(rows)
     tests = gate_vs_random(rows)

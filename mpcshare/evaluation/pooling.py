@@ -1,4 +1,4 @@
-"""Pooling per-episode metrics over the trials of a closed-loop run (:mod:`mpcshare.experiments`):
+"""Pooling per-episode metrics over the trials of a closed-loop run (:mod:`mpcshare.evaluation`):
 the tracking and effort figures of :func:`sim.metrics.episode_metrics` (:func:`pool_metrics`), the task
 figures of :mod:`sim.task_metrics` (:func:`pool_task_metrics`) and the keep-out figures of
 :mod:`sim.keepout_metrics` (:func:`pool_keepout_metrics`)."""

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from mpcshare.control.types import ControllerConfig
-from mpcshare.experiments.handover import line_oracle_schedules
-from mpcshare.experiments.runs import best_on_line
+from mpcshare.evaluation.handover import line_oracle_schedules
+from mpcshare.evaluation.runs import best_on_line
 
 DT = 0.01
 
@@ -81,7 +81,7 @@ def test_the_run_keeps_the_lowest_line_ratio_within_the_effort_cap():
 def test_compare_strategies_runs_the_line_oracle_by_name():
     """``oracle_line`` (asked for by name: it is not a default run) replays its schedules beside the pure runs
     and keeps one episode a trial, never above the line (the pure runs are among its candidates)."""
-    from mpcshare.experiments import StrategyRun, compare_strategies
+    from mpcshare.evaluation import StrategyRun, compare_strategies
     from mpcshare.run_table import BOUND_RUNS, DEFAULT_RUNS
     from sim.demonstrator import generate_demonstrations
     from tests.sim.controllers import IdleController
@@ -99,7 +99,7 @@ def test_the_placebo_replays_the_gates_share_while_the_robot_leads():
     """A gate whose robot leads at α = 0.5 (``robot_alphas``): the placebo counts those steps as the robot's
     (α ≥ 0.5, not > 0.5) and replays them at 0.5, the convex mixture, not at 1 and not as the wearer's."""
     from mpcshare.control.arbitration import Arbiter
-    from mpcshare.experiments.handover import random_schedules_from, schedule_record
+    from mpcshare.evaluation.handover import random_schedules_from, schedule_record
 
     alpha = np.r_[np.zeros(50), np.full(150, 0.5)]
     rec = schedule_record(SimpleNamespace(t=DT * np.arange(200), alpha=alpha))

@@ -7,10 +7,10 @@ import itertools
 import numpy as np
 import pytest
 
-from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front, stroke_terms
-from mpcshare.experiments.splice_bound import best_line_ratio, group_sums, splice_front
+from mpcshare.evaluation.sawing_bound import best_line_ratios, sawing_front, stroke_terms
+from mpcshare.evaluation.splice_bound import best_line_ratio, group_sums, splice_front
 from mpcshare.line_ratio import line_ratio
-from tests.mpcshare.experiments.stroke_worlds import stroke_world as _world
+from tests.mpcshare.evaluation.stroke_worlds import stroke_world as _world
 
 
 def _brute(e2, effort, labels, dot, power, y):

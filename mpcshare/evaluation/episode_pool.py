@@ -1,7 +1,7 @@
 """Closed-loop episodes of one data set, run in this process or spread over worker processes.
 
 :class:`EpisodePool` runs batches of calls ``simulate(bundle, demos, trial, run, options, **settings)``
-(:func:`mpcshare.experiments.runs.simulate_episode`; one :class:`EpisodeJob` each: a trial, a run, the
+(:func:`mpcshare.evaluation.runs.simulate_episode`; one :class:`EpisodeJob` each: a trial, a run, the
 controller's options) for a bundle and shared settings.
 With ``workers`` = 1 they run here, one after the other; with more, in a spawned process pool kept until
 :meth:`EpisodePool.close` (the data are sent once per worker, the bundle once per worker and bundle).

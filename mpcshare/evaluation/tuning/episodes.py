@@ -10,9 +10,9 @@ and wearer noise: ``run_episode(seed=seed)``):
   ``reactive`` (per K: the predictor differs), what the line ratio needs; with ``oracle``, also
   ``oracle_preview`` (once: the true intent; an upper bound no test needs);
 * phase 2 — ``random_handover`` matched to each setting (``matched_to`` = S), from the
-  setting's schedule on the same trial and seed (:func:`mpcshare.experiments.handover.schedule_record`),
+  setting's schedule on the same trial and seed (:func:`mpcshare.evaluation.handover.schedule_record`),
   ``draws`` draws (default :data:`mpcshare.run_table.RANDOM_DRAWS`), draw j seeded by (seed, trial,
-  p, β, S, j); the pair's placebo figure is the mean over its draws (:mod:`mpcshare.experiments.tuning.stats`).
+  p, β, S, j); the pair's placebo figure is the mean over its draws (:mod:`mpcshare.evaluation.tuning.stats`).
 
 A row is a JSON-able dict: ``percentile``, ``beta``, ``strategy``, ``matched_to``, ``trial``,
 ``seed``, ``draw`` (0 but for the placebo's draws), the metrics of :mod:`sim.metrics` and
@@ -120,8 +120,8 @@ def run_task(task: EpisodeTask) -> dict[str, Any]:
     """Simulate one episode (any process: the bundle and data are loaded once per process) → its row."""
     import torch
 
-    from mpcshare.experiments import StrategyRun, simulate_episode
-    from mpcshare.experiments.handover import random_schedules_from, schedule_record
+    from mpcshare.evaluation import StrategyRun, simulate_episode
+    from mpcshare.evaluation.handover import random_schedules_from, schedule_record
     from sim.wearer_presets import wearer_preset
 
     threads = torch.get_num_threads()

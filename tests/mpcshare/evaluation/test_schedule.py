@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from mpcshare.control.arbitration import Arbiter
-from mpcshare.experiments.schedule import LevelSchedule, StepSchedule, oracle_schedule, random_schedule, schedule_stats
+from mpcshare.evaluation.schedule import LevelSchedule, StepSchedule, oracle_schedule, random_schedule, schedule_stats
 
 
 def _gate_like() -> np.ndarray:

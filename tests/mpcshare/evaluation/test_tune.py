@@ -10,9 +10,9 @@ from scipy import stats as st
 
 from learning.data import save
 from mpcshare.cli import main
-from mpcshare.experiments.tuning.episodes import TIMING_KEYS, plan_tasks, random_tasks, task_key
-from mpcshare.experiments.tuning.runner import run_tune
-from mpcshare.experiments.tuning.stats import gate_vs_random, pareto, recommend, summarise
+from mpcshare.evaluation.tuning.episodes import TIMING_KEYS, plan_tasks, random_tasks, task_key
+from mpcshare.evaluation.tuning.runner import run_tune
+from mpcshare.evaluation.tuning.stats import gate_vs_random, pareto, recommend, summarise
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 SWEEP = ["--percentiles", "90", "70", "--betas", "0", "1", "--strategies", "gate", "--trials", "1",
@@ -141,7 +141,7 @@ def test_gate_against_random_is_a_paired_one_sided_test():
 
 
 def test_holm_and_the_placebo_as_the_mean_of_its_draws():
-    from mpcshare.experiments.tuning.stats import holm
+    from mpcshare.evaluation.tuning.stats import holm
 
     assert holm([0.01, 0.04, 0.03, None]) == pytest.approx([0.03, 0.06, 0.06, None], nan_ok=True)
     rng = np.random.default_rng(2)
@@ -216,7 +216,7 @@ def test_ray_gives_the_same_rows_as_the_local_pool(data, swept, tmp_path):
 
 
 def test_chance_sentence_says_when_the_pairs_cannot_reach_significance():
-    from mpcshare.experiments.tuning.report import chance_sentences
+    from mpcshare.evaluation.tuning.report import chance_sentences
 
     def result(p, n):
         return {"tests": {"gate p90 b0": {"vs_random_handover": {
@@ -239,7 +239,7 @@ def test_default_sweep_has_at_least_ten_pairs():
 
 
 def test_the_recommendation_says_when_it_loses_to_the_wearer_alone():
-    from mpcshare.experiments.tuning.report import build_result, recommendation_line, tune_markdown
+    from mpcshare.evaluation.tuning.report import build_result, recommendation_line, tune_markdown
 
     rows = []
     for i in range(4):

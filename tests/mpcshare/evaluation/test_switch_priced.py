@@ -7,8 +7,8 @@ import itertools
 import numpy as np
 import pytest
 
-from mpcshare.experiments.splice_bound import group_sums
-from mpcshare.experiments.switch_priced import (
+from mpcshare.evaluation.splice_bound import group_sums
+from mpcshare.evaluation.switch_priced import (
     SwitchPrices,
     chain_knapsack,
     estimate_prices,
@@ -16,7 +16,7 @@ from mpcshare.experiments.switch_priced import (
     switch_class,
 )
 from mpcshare.line_ratio import line_ratio
-from tests.mpcshare.experiments.stroke_worlds import stroke_world as _world
+from tests.mpcshare.evaluation.stroke_worlds import stroke_world as _world
 
 
 def _brute_chain(cost, shift, price, price_shift, first):

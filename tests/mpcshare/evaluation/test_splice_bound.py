@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-from mpcshare.experiments.splice_bound import best_line_ratio, group_sums, splice_front
+from mpcshare.evaluation.splice_bound import best_line_ratio, group_sums, splice_front
 from mpcshare.line_ratio import line_ratio
 
 

@@ -2,12 +2,12 @@
 
 * ``random_handover`` (the placebo): from the gate's episode on the trial, the schedule
   ``on[k] = α_k ≥ 0.5`` (the robot leads), replayed at the gate's mean α over those steps (its
-  share while it leads, ``robot_alphas``); each draw is :func:`mpcshare.experiments.schedule.random_schedule` with the
+  share while it leads, ``robot_alphas``); each draw is :func:`mpcshare.evaluation.schedule.random_schedule` with the
   same steps on, hand-overs and first state, and interior segments ≥ the dwell
   d = ⌈``min_dwell_s`` / Δ⌉ steps (or the gate's own shortest interior segment, if shorter:
   the gate's overrides switch without dwell), seeded by (seed, trial, draw).
 * ``oracle_handover`` (the upper bound, never worse than the better party): the candidates of
-  :func:`oracle_handover_schedules` — :func:`mpcshare.experiments.schedule.oracle_schedule` on the
+  :func:`oracle_handover_schedules` — :func:`mpcshare.evaluation.schedule.oracle_schedule` on the
   per-step tracking errors e_k = ‖p_k − p*_k‖ of the ``voluntary`` and ``reactive`` episodes on
   the trial, with dwell d, at the switch costs λ_c = c · (1/Δ) · mean(e_v² + e_r²)/2 for c in
   :data:`ORACLE_SWITCH_COSTS_S` (a hand-over costs c seconds of the parties' mean squared error:
@@ -26,7 +26,7 @@
   search prices the pure runs' errors, not the replay's), but every figure is a replayed closed loop.
 
 Both are replayed by the controller's ``schedule`` strategy, read ``handover_s``/2 ahead so
-that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.experiments.schedule.StepSchedule`).
+that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.evaluation.schedule.StepSchedule`).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ import numpy as np
 
 from mpcshare.control.strategies import DEFAULT_STRATEGY
 from mpcshare.control.types import ControllerConfig
-from mpcshare.experiments.schedule import ScheduleStats, StepSchedule, oracle_schedule, random_schedule, schedule_stats
+from mpcshare.evaluation.schedule import ScheduleStats, StepSchedule, oracle_schedule, random_schedule, schedule_stats
 
 __all__ = ["LINE_ORACLE_MAX_EFFORT", "LINE_ORACLE_SWITCH_COSTS_S", "LINE_ORACLE_WEIGHTS", "ORACLE_SWITCH_COSTS_S",
            "SCHEDULE_SOURCES", "dwell_steps", "oracle_handover_schedule",
@@ -75,7 +75,7 @@ def tracking_error(episode: Any) -> np.ndarray:
 
 def schedule_record(episode: Any) -> dict[str, Any]:
     """What a matched-random schedule needs of an episode (JSON-able): the
-    :class:`~mpcshare.experiments.schedule.ScheduleStats` of ``α ≥ 0.5`` (the robot leads), ``on_alpha`` (the
+    :class:`~mpcshare.evaluation.schedule.ScheduleStats` of ``α ≥ 0.5`` (the robot leads), ``on_alpha`` (the
     mean α over those steps, its share while it leads) and the step times
     ``t0_s + k·dt_s``."""
     alpha = np.nan_to_num(np.asarray(episode.alpha, dtype=float), nan=0.0)

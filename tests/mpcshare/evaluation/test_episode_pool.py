@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from learning.data import Demonstrations
-from mpcshare.experiments import compare_strategies
-from mpcshare.experiments.episode_pool import MAX_DEFAULT_WORKERS, EpisodeJob, EpisodePool, default_workers
+from mpcshare.evaluation import compare_strategies
+from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, EpisodeJob, EpisodePool, default_workers
 from mpcshare.run_table import StrategyRun
 from mpcshare.training import train_bundle
 from mpcshare.training.config import TrainConfig

@@ -1,6 +1,6 @@
 """One closed-loop episode of a strategy on a held-out trial, with its metrics: :func:`simulate_episode`.
 
-What :func:`mpcshare.experiments.runs.compare_strategies`, the rule choice and ``tune`` run per episode:
+What :func:`mpcshare.evaluation.runs.compare_strategies`, the rule choice and ``tune`` run per episode:
 the controller built from the bundle (:meth:`SharedController.from_bundle` by default), the trial
 simulated by :func:`sim.closed_loop.run_episode`, and the metrics of :mod:`sim.metrics`,
 :mod:`sim.task_metrics` and :mod:`sim.keepout_metrics`.

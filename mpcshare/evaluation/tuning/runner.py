@@ -2,7 +2,7 @@
 
 :func:`run_tune` trains one bundle per percentile on one data preparation
 (:func:`mpcshare.training.train.train_bundles`: the HMM and quotients are fitted once) into
-``out/bundles/p<P>``, runs phase 1 and then phase 2 of :mod:`mpcshare.experiments.tuning.episodes` on a
+``out/bundles/p<P>``, runs phase 1 and then phase 2 of :mod:`mpcshare.evaluation.tuning.episodes` on a
 backend, and appends each finished row at once to ``out/episodes.jsonl``. Started again with
 the same arguments (``out/sweep_args.json``) it reuses the bundles and the rows already there
 and runs only the rest; with other arguments it starts over.
@@ -11,7 +11,7 @@ Backends (:func:`open_backend`, one for the whole sweep): ``local`` — in this 
 ``concurrent.futures`` process pool (spawned workers); ``ray`` — one Ray task per episode on
 the cluster at ``address`` (None: a local Ray). Each episode is deterministic given its task,
 so the rows are the same whatever the backend and the number of workers (but
-:data:`~mpcshare.experiments.tuning.episodes.TIMING_KEYS`).
+:data:`~mpcshare.evaluation.tuning.episodes.TIMING_KEYS`).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 from learning.atomic import write_json
 from mpcshare.errors import MpcshareError
-from mpcshare.experiments.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
+from mpcshare.evaluation.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
 from mpcshare.run_table import RANDOM_DRAWS
 
 __all__ = ["BACKENDS", "RayMissing", "estimate_line", "open_backend", "run_tune"]

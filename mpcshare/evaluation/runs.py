@@ -12,7 +12,7 @@ run's metrics, pooled and per trial. Each is simulated on the
 same held-out trials, with the same wearer (a :class:`sim.wearer.WearerConfig`, by
 default the preset ``hemiparetic_mild``) and the same seed, by
 :func:`sim.closed_loop.run_episode`. Per run the episode metrics of
-:func:`sim.metrics.episode_metrics` are pooled over trials (:func:`mpcshare.experiments.pooling.pool_metrics`) and
+:func:`sim.metrics.episode_metrics` are pooled over trials (:func:`mpcshare.evaluation.pooling.pool_metrics`) and
 written to ``comparison.json`` (top-level ``strategies``: name → metrics; ``trials``;
 ``duration_s``; ``run_files``; ``wearer``: the preset's name, or None, and the
 settings), ``comparison.md`` and ``comparison.png``.
@@ -31,16 +31,16 @@ import numpy as np
 from learning.data import Demonstrations
 from mpcshare.channel_map import bundle_wearer
 from mpcshare.control.types import DEFAULT_BETA
-from mpcshare.experiments.episode import _from_bundle, intent_preview, simulate_episode
-from mpcshare.experiments.episode_pool import EpisodeJob, EpisodePool
-from mpcshare.experiments.handover import (
+from mpcshare.evaluation.episode import _from_bundle, intent_preview, simulate_episode
+from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool
+from mpcshare.evaluation.handover import (
     LINE_ORACLE_MAX_EFFORT,
     SCHEDULE_SOURCES,
     line_oracle_schedules,
     oracle_handover_schedules,
     random_handover_schedules,
 )
-from mpcshare.experiments.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
+from mpcshare.evaluation.pooling import pool_keepout_metrics, pool_metrics, pool_task_metrics
 from mpcshare.line_ratio import add_line_ratios
 from mpcshare.run_table import DEFAULT_RUNS, StrategyRun
 from sim.closed_loop import run_episode
@@ -112,7 +112,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     ``mcap_rate_hz``: the MCAP's joint states at about this rate (default: every physics step).
     ``scenario``: a conflict scenario (:class:`mpcshare.conflicts.Scenario`) applied to every trial;
     ``controller_options``: added to every controller's options (e.g. ``config``). ``pool``: where the
-    episodes run (:class:`mpcshare.experiments.episode_pool.EpisodePool`; default: this process, one torch
+    episodes run (:class:`mpcshare.evaluation.episode_pool.EpisodePool`; default: this process, one torch
     thread); the figures are the same whatever its number of workers.
     """
     make_controller = make_controller or _from_bundle
@@ -309,7 +309,7 @@ _BEST_ONLY = ("oracle", "oracle_line")  # schedules whose best replay alone is k
 def _draw_options(run: StrategyRun, tid: int, seed: int,
                   source: Callable[[str, int], tuple[Any, Any]]) -> list[dict[str, Any]]:
     """The controller options of each episode of ``run`` on trial ``tid``: one empty dict, or one
-    ``{"schedule": ...}`` per draw of a scheduled run (:mod:`mpcshare.experiments.handover`)."""
+    ``{"schedule": ...}`` per draw of a scheduled run (:mod:`mpcshare.evaluation.handover`)."""
     if run.schedule is None:
         return [{}]
     if run.schedule == "random":
