@@ -2,10 +2,10 @@
 
 The part of ``bench_splice_bound.py --priced`` that runs schedules: :func:`replay_alpha` replays an authority
 level per step with :class:`mpcshare.evaluation.schedule.LevelSchedule`; :func:`priced` searches
-switch-priced schedules (:mod:`mpcshare.evaluation.switch_priced`) round by round, each round's switch
+switch-priced schedules (:mod:`research.switch_priced`) round by round, each round's switch
 prices measured from the earlier replays; :func:`polish` then searches around the best one in the closed
 loop itself, each candidate replayed; :func:`table_rules` fits causal tables in hindsight
-(:mod:`mpcshare.evaluation.table_rule`).
+(:mod:`research.table_rule`).
 """
 
 from __future__ import annotations
@@ -61,15 +61,15 @@ def replay_alpha(ctx: dict[str, Any], alpha: np.ndarray) -> tuple[dict[str, Any]
 
 
 def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: int = 0) -> dict[str, Any]:
-    """Switch-priced schedules (:mod:`mpcshare.evaluation.switch_priced`), replayed round by round: round 0
+    """Switch-priced schedules (:mod:`research.switch_priced`), replayed round by round: round 0
     pays nothing for a switch (the splice); each later round prices the switches by the excess of every
     earlier replay over its splice and searches again. Where a replay saws below the target (the reports
     average the trials' correlations, the search pools them, and a switch moves the stroke), the next
     round asks the search for that much more correlation; where it costs more than the effort cap, for that
     much less effort. With ``polish_budget`` > 0, :func:`polish` then
     searches around the best schedule replayed."""
-    from mpcshare.evaluation.splice_bound import group_sums
-    from mpcshare.evaluation.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
+    from research.splice_bound import group_sums
+    from research.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
 
     idx = [list(ctx["levels"]).index(name) for name in REPLAYABLE]
     e2, ef = ctx["e2"][idx], ctx["ef"][idx]
@@ -197,12 +197,12 @@ ANTICIPATION_S = 0.5  # issue 28's anticipating hand-over: the wearer leads from
 def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tuple], prices: Any,
                  target: float, replay_tables: bool = True) -> dict[str, Any]:
     """Causal tables fitted in hindsight on the same steps, with the last round's switch prices
-    (:mod:`mpcshare.evaluation.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
+    (:mod:`research.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
     time in it; the same with the true task phase in place of the estimate (what a perfect mode filter adds), and
     with the true phase :data:`ANTICIPATION_S` ahead (what a filter that foresaw each phase change could add).
     Each fitted table's schedule is then replayed in the closed loop (the priced splice only estimates what its
     switches cost)."""
-    from mpcshare.evaluation.table_rule import fit_table, score_schedule, time_in_cell
+    from research.table_rule import fit_table, score_schedule, time_in_cell
 
     dot, pw = np.stack([s[0] for s in st]), np.stack([s[1] for s in st])
 

@@ -38,7 +38,7 @@ lead, and keeps it for ``hold_s`` after the evidence fades (off when ``push_mps`
 **A bounded lead.** With ``wearer_max_s`` finite, the wearer leads a wearer mode for at most that long:
 then the robot takes back (at its share, below) until the score has fallen below ``share_off``, so the
 next entry into a wearer mode is handed over afresh. The splice bound under the task's own measure
-(:mod:`mpcshare.evaluation.sawing_bound`) found, on some worlds, the best sawing schedules giving the
+(``research/sawing_bound.py``) found, on some worlds, the best sawing schedules giving the
 wearer the first one or two seconds of each cutting stretch, where the robot cannot predict the intent's
 jump, and the robot the rest at a shared α; the hand-back costs little (the robot's P-gain takes up at
 once). Default: inf (the wearer keeps the mode).

@@ -82,13 +82,14 @@ def test_compare_strategies_runs_the_line_oracle_by_name():
     """``oracle_line`` (asked for by name: it is not a default run) replays its schedules beside the pure runs
     and keeps one episode a trial, never above the line (the pure runs are among its candidates)."""
     from mpcshare.evaluation import StrategyRun, compare_strategies
-    from mpcshare.run_table import BOUND_RUNS, DEFAULT_RUNS
+    from mpcshare.run_table import DEFAULT_RUNS
     from sim.demonstrator import generate_demonstrations
     from tests.sim.controllers import IdleController
 
     assert "oracle_line" not in {r.name for r in DEFAULT_RUNS}
     demos = generate_demonstrations(n_subjects=1, minutes=0.1, seed=5)
-    runs = [StrategyRun("voluntary", "voluntary"), StrategyRun("reactive", "reactive"), *BOUND_RUNS]
+    runs = [StrategyRun("voluntary", "voluntary"), StrategyRun("reactive", "reactive"),
+            StrategyRun("oracle_line", "schedule", schedule="oracle_line")]
     comp = compare_strategies(None, demos, [0], runs=runs, duration_s=1.0,
                               make_controller=lambda bundle, **options: IdleController(), log=None)
     m = comp.strategies["oracle_line"]

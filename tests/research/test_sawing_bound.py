@@ -7,10 +7,10 @@ import itertools
 import numpy as np
 import pytest
 
-from mpcshare.evaluation.sawing_bound import best_line_ratios, sawing_front, stroke_terms
-from mpcshare.evaluation.splice_bound import best_line_ratio, group_sums, splice_front
 from mpcshare.line_ratio import line_ratio
-from tests.mpcshare.evaluation.stroke_worlds import stroke_world as _world
+from research.sawing_bound import best_line_ratios, sawing_front, stroke_terms
+from research.splice_bound import best_line_ratio, group_sums, splice_front
+from tests.research.stroke_worlds import stroke_world as _world
 
 
 def _brute(e2, effort, labels, dot, power, y):

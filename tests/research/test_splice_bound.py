@@ -7,8 +7,8 @@ import itertools
 import numpy as np
 import pytest
 
-from mpcshare.evaluation.splice_bound import best_line_ratio, group_sums, splice_front
 from mpcshare.line_ratio import line_ratio
+from research.splice_bound import best_line_ratio, group_sums, splice_front
 
 
 def _runs(seed: int, runs: int = 3, steps: int = 40, groups: int = 5):

@@ -15,7 +15,7 @@ does better in the closed loop than the spliced figure: it is an optimistic boun
 multiple-choice knapsack, solved exactly by dynamic programming over effort bins; efforts are
 rounded *down* to their bin, so the front stays optimistic). :func:`best_line_ratio` reads off the
 lowest line ratio RMS/RMS_line(E) (:mod:`mpcshare.line_ratio`) within an effort cap. Both are
-checked against brute force over every assignment in ``tests/mpcshare/evaluation``. No library
+checked against brute force over every assignment in ``tests/research``. No library
 solves this small exact knapsack with the assignment recovered, so it is written here.
 """
 

@@ -8,9 +8,9 @@ import itertools
 import numpy as np
 import pytest
 
-from mpcshare.evaluation.switch_priced import SwitchPrices, priced_search
-from mpcshare.evaluation.table_rule import fit_table, score_schedule, time_in_cell
-from tests.mpcshare.evaluation.stroke_worlds import stroke_world
+from research.switch_priced import SwitchPrices, priced_search
+from research.table_rule import fit_table, score_schedule, time_in_cell
+from tests.research.stroke_worlds import stroke_world
 
 
 def _parties(e2, effort):

@@ -1,6 +1,6 @@
 """Schedules that pay for their switches: the splice search with a price per switch (issue 28).
 
-The splice bounds (:mod:`~mpcshare.evaluation.splice_bound`, :mod:`~mpcshare.evaluation.sawing_bound`)
+The splice bounds (:mod:`~research.splice_bound`, :mod:`~research.sawing_bound`)
 leave out what a switch of authority costs, and replayed in the closed loop their schedules lose 0.06–0.26
 of the line to their switches. Here a switch from level a to level b at the start of a group (not the first
 of a trial) adds a price: P_e[a, b] to the summed squared error [m²·steps] and P_θ[a, b] to the summed
@@ -9,7 +9,7 @@ effort [rad·steps]. With l(g) the level of group g in time order,
     N·M(a) = Σ_g E_g(l(g)) + Σ_{g: l(g) ≠ l(g−1)} P_e[l(g−1), l(g)],   N·Θ(a) likewise with θ and P_θ,
 
 and the knife must still saw: ρ(a) = Σ_g X_g / √(Y·Σ_g S_g) ≥ c (the terms of
-:mod:`~mpcshare.evaluation.sawing_bound`; a switch's effect on the stroke is left out). :func:`priced_search`
+:mod:`~research.sawing_bound`; a switch's effect on the stroke is left out). :func:`priced_search`
 finds schedules by the same Lagrangian relaxation as the sawing bound, each DP now a chain over the groups
 with the level of the previous group in its state (:func:`chain_knapsack`, exact for its integer effort
 bins, checked against brute force), scores every schedule found exactly and returns the lowest line ratio
@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mpcshare.evaluation.splice_bound import group_sums
 from mpcshare.line_ratio import line_ratio
+from research.splice_bound import group_sums
 
 __all__ = ["SWITCH_CLASSES", "PricedSchedule", "SwitchPrices", "chain_knapsack", "estimate_prices",
            "priced_search", "switch_class"]
@@ -165,7 +165,7 @@ def priced_search(sq_error: np.ndarray, effort: np.ndarray, groups: np.ndarray, 
     pays its switches (module docstring); None where none was found.
 
     sq_error, effort, band_dot, band_power: (L, N) per level and step, as in
-    :func:`~mpcshare.evaluation.sawing_bound.sawing_front`; groups: (N,) labels whose sorted order is time
+    :func:`~research.sawing_bound.sawing_front`; groups: (N,) labels whose sorted order is time
     order; first: (G,) per sorted group whether it begins a trial; voluntary, reactive: (effort [rad], RMS
     [m]) of the two parties. ValueError on bad input."""
     e2, ef = np.asarray(sq_error, dtype=float), np.asarray(effort, dtype=float)

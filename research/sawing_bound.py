@@ -1,6 +1,6 @@
 """The splice bound with the task's own measure: the lowest error of any schedule whose knife still saws.
 
-:mod:`~mpcshare.evaluation.splice_bound` splices constant-authority runs per group of steps. Here the
+:mod:`~research.splice_bound` splices constant-authority runs per group of steps. Here the
 spliced knife must also saw: with b_{l,k} the stroke-band tip of run l and b*_k the intent's at cutting
 step k (:func:`sim.task_metrics.bandpass`), per group g
 
@@ -16,13 +16,13 @@ and for every λ ≥ 0 an assignment a in effort bin b that meets the constraint
 
     N·M(a) ≥ Σ_g [E_g − λ·w_g] ≥ DP_{t,λ}[b] + λ·c√Y·t/2,
 
-DP the multiple-choice knapsack of :func:`~mpcshare.evaluation.splice_bound.knapsack` with the cost
+DP the multiple-choice knapsack of :func:`~research.splice_bound.knapsack` with the cost
 E − λ·w (Lagrangian relaxation). So LB[b] = min_t max_λ (DP_{t,λ}[b] + λ·c√Y·t/2)/N bounds from below
 the MSE of every assignment in bin b that saws; a bin whose bound exceeds the largest error any
 assignment has holds none that saws (it is left out). t runs over a geometric grid of ratio q: the nearest t
 meets (S/t + t)/2 ≤ κ√S, κ = (√q + 1/√q)/2, so the grid uses c/κ and the bound stays optimistic.
 Each DP's assignments are also scored exactly; those that saw (ρ ≥ c) are schedules found, an upper
-bound: the truth lies between. Checked against brute force in ``tests/mpcshare/evaluation``.
+bound: the truth lies between. Checked against brute force in ``tests/research``.
 No library solves this relaxation with the knapsack, so it is written here.
 """
 
@@ -32,8 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mpcshare.evaluation.splice_bound import assignments, effort_bins, group_sums, knapsack
 from mpcshare.line_ratio import line_ratio, line_rms
+from research.splice_bound import assignments, effort_bins, group_sums, knapsack
 
 __all__ = ["SawingFront", "best_line_ratios", "sawing_front", "stroke_terms"]
 
@@ -89,7 +89,7 @@ def sawing_front(sq_error: np.ndarray, effort: np.ndarray, groups: np.ndarray, b
 
     sq_error, effort, band_dot, band_power: (L, N) per run and control step, e² [m²], θ [rad], b·b* and
     ‖b‖² [m²] (zero outside cutting); groups: (N,); intent_power: Y [m²]; min_correlation: c in (0, 1];
-    allowed: (L, G) as in :func:`~mpcshare.evaluation.splice_bound.splice_front`. ValueError on bad input.
+    allowed: (L, G) as in :func:`~research.splice_bound.splice_front`. ValueError on bad input.
     """
     e2, ef = np.asarray(sq_error, dtype=float), np.asarray(effort, dtype=float)
     dot, pw = np.asarray(band_dot, dtype=float), np.asarray(band_power, dtype=float)

@@ -1,11 +1,11 @@
 """What a causal rule could reach, fitted in hindsight: an authority level per cell of what it observes (issue 28).
 
-The splice searches (:mod:`~mpcshare.evaluation.switch_priced`) choose an authority per second knowing
+The splice searches (:mod:`~research.switch_priced`) choose an authority per second knowing
 the future. A causal rule sees only the present: here a *table* T that gives every cell of an observed
 feature (the controller's mode estimate; with it, the time in that mode, or the wearer's recent effort)
 one level, the step's level l_k = T[cell_k]. Its figures are spliced from constant-level runs, with each
 switch between consecutive steps of a trial priced (:func:`score_schedule`, the equations of
-:mod:`~mpcshare.evaluation.switch_priced` with a group per step). :func:`fit_table` finds the table with
+:mod:`~research.switch_priced` with a group per step). :func:`fit_table` finds the table with
 the lowest line ratio within the effort cap whose knife saws, on the very steps it is scored on: first
 every table constant over the second feature (whole modes, exhaustively), then single-cell changes
 until none helps (coordinate descent). Fitted and scored on the same steps, it flatters the rule: if
@@ -21,8 +21,8 @@ from typing import Callable
 
 import numpy as np
 
-from mpcshare.evaluation.switch_priced import SwitchPrices
 from mpcshare.line_ratio import line_ratio
+from research.switch_priced import SwitchPrices
 
 __all__ = ["ScheduleScore", "TableFit", "fit_table", "score_schedule", "time_in_cell"]
 
@@ -44,7 +44,7 @@ def score_schedule(level: np.ndarray, sq_error: np.ndarray, effort: np.ndarray, 
                    voluntary: tuple[float, float], reactive: tuple[float, float], wearer: int = 0) -> ScheduleScore:
     """The spliced figures of the level per step (N,) with a price per switch between consecutive steps of
     one trial (``trial`` (N,) its label per step); the other arrays (L, N) as in
-    :func:`~mpcshare.evaluation.switch_priced.priced_search`."""
+    :func:`~research.switch_priced.priced_search`."""
     lv = np.asarray(level, dtype=int)
     trial = np.asarray(trial)
     if lv.ndim != 1 or lv.size != np.shape(sq_error)[1] or trial.shape != lv.shape:

@@ -7,16 +7,16 @@ import itertools
 import numpy as np
 import pytest
 
-from mpcshare.evaluation.splice_bound import group_sums
-from mpcshare.evaluation.switch_priced import (
+from mpcshare.line_ratio import line_ratio
+from research.splice_bound import group_sums
+from research.switch_priced import (
     SwitchPrices,
     chain_knapsack,
     estimate_prices,
     priced_search,
     switch_class,
 )
-from mpcshare.line_ratio import line_ratio
-from tests.mpcshare.evaluation.stroke_worlds import stroke_world as _world
+from tests.research.stroke_worlds import stroke_world as _world
 
 
 def _brute_chain(cost, shift, price, price_shift, first):
