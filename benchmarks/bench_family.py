@@ -69,7 +69,7 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
                         pooled: dict[str, dict[str, Any]], mode_names: Any, quick: bool) -> list[dict[str, Any]]:
     """Every candidate of the rule's choice run on the *evaluation* trials (sim seed 0): which wearer-mode
     set would have been best had the choice known the future (an upper bound on the choice, not a rule)."""
-    from mpcshare.training.rule_choice import line_ratio, pooled_run, saws
+    from mpcshare.calibration.rule_choice import line_ratio, pooled_run, saws
 
     vol, rea = pooled["voluntary"], pooled["reactive"]
     rows = []
@@ -90,11 +90,11 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     import torch
 
     torch.set_num_threads(1)
+    from mpcshare.calibration.rule_choice import choose_for_bundle
     from mpcshare.evaluation import compare_strategies
     from mpcshare.run_table import DEFAULT_RUNS
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
-    from mpcshare.training.rule_choice import choose_for_bundle
     from research.bound_runs import BOUND_RUNS
 
     t0 = time.perf_counter()

@@ -110,7 +110,7 @@ def _start_choice(bundle: Any, demos: Demonstrations, wearer_name: str, rule_dur
     held-out trials, ``rule_duration_s`` each, beside the wearer ``wearer_name``; recorded in
     ``bundle.metrics``), its episodes in ``pool``: with workers, in a thread that waits for them while this
     process goes on (its lines printed at the end); else at once. Returns what ends it and prints it."""
-    from mpcshare.training.rule_choice import choose_for_bundle
+    from mpcshare.calibration.rule_choice import choose_for_bundle
 
     lines: list[str] = []
     choose = partial(choose_for_bundle, bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,

@@ -168,8 +168,8 @@ def _run(args: argparse.Namespace) -> int:
         save_bundle(bundle, out)
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
+    from mpcshare.calibration.rule_choice import rule_markdown
     from mpcshare.reports.training import write_training_md
-    from mpcshare.training.rule_choice import rule_markdown
 
     extra = rule_markdown(choice) if choice is not None else \
         f"## Hand-over rule\n\nThe {skipped}.\n" if skipped else ""
@@ -184,7 +184,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _choose_rule(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, str | None]:
-    """(the gate's settings chosen in the closed loop (:mod:`mpcshare.training.rule_choice`), recorded in
+    """(the gate's settings chosen in the closed loop (:mod:`mpcshare.calibration.rule_choice`), recorded in
     ``bundle.metrics`` (``rule_settings``, ``rule_choice``), or None; why the choice was skipped, or None).
     Skipped with ``--no-rule-choice`` (no reason given) and where the data cannot drive the simulator."""
     if args.no_rule_choice:
@@ -196,7 +196,7 @@ def _choose_rule(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, 
                "simulator: " + "; ".join(gaps))
         bundle.metrics["rule_choice_skipped"] = why
         return None, why
-    from mpcshare.training.rule_choice import choose_for_bundle
+    from mpcshare.calibration.rule_choice import choose_for_bundle
     from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,

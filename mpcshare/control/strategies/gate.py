@@ -44,7 +44,7 @@ jump, and the robot the rest at a shared α; the hand-back costs little (the rob
 once). Default: inf (the wearer keeps the mode).
 
 **Measured wearer modes.** Where ``mpcshare train`` chose the wearer's modes in the closed loop
-(:mod:`mpcshare.training.rule_choice`, by what each mode costs under each party), the setting
+(:mod:`mpcshare.calibration.rule_choice`, by what each mode costs under each party), the setting
 ``wearer_modes`` lists them and v is their indicator (v_j = 1 for a wearer mode, else 0): s_t is
 then the forecast probability of being in a wearer mode within ``lead_s``.
 

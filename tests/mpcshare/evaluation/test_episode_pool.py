@@ -5,12 +5,12 @@ from __future__ import annotations
 import pytest
 
 from learning.data import Demonstrations
+from mpcshare.calibration.rule_choice import choose_rule
 from mpcshare.evaluation import compare_strategies
 from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, EpisodeJob, EpisodePool, default_workers
 from mpcshare.run_table import StrategyRun
 from mpcshare.training import train_bundle
 from mpcshare.training.config import TrainConfig
-from mpcshare.training.rule_choice import choose_rule
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 
 TIMING = ("step_p50_ms", "step_p99_ms", "realtime_factor")

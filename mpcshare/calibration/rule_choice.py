@@ -7,7 +7,7 @@ not recorded), so :func:`choose_rule` measures it:
 
 1. it simulates the closed loop (:func:`mpcshare.evaluation.simulate_episode`, the default
    wearer) on the given held-out trials with ``voluntary`` and ``reactive``, and reads what each
-   mode costs under each party (:func:`mpcshare.training.mode_cost.mode_costs`: the squared
+   mode costs under each party (:func:`mpcshare.calibration.mode_cost.mode_costs`: the squared
    error the wearer saves per unit of effort, the *price* ρ_j);
 2. candidates (:func:`candidate_sets`): the wearer leads the top 1, 2, … modes by price (the
    lower hull of effort against error over whole-mode assignments); each of them together
@@ -44,13 +44,13 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
+from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
 from mpcshare.control.strategies.gate import DEFAULTS as GATE_DEFAULTS
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
-from mpcshare.training.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
 from sim.task_metrics import saws as task_saws
 from sim.wearer import WearerConfig
 
@@ -243,7 +243,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
     stage's episodes are one batch). Returns ``{"settings", "wearer_modes", "why",
     "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
-    "cutting_effort_vs_voluntary" (:func:`mpcshare.training.mode_cost.cutting_effort`), "trials", "duration_s",
+    "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
     "seconds"}``. Raises ValueError when the bundle has no mode model or no
     trial is given.
     """
@@ -364,7 +364,7 @@ def _f(row: dict[str, Any]) -> str:
 
 
 def _costs_markdown(choice: dict[str, Any]) -> list[str]:
-    """The per-mode costs table (:mod:`mpcshare.training.mode_cost`) and the order and cutting modes."""
+    """The per-mode costs table (:mod:`mpcshare.calibration.mode_cost`) and the order and cutting modes."""
     c = choice["mode_costs"]
     rows = ["What each mode costs (the controller's own mode estimate; price: squared error the wearer saves per "
             "rad of effort):", "",

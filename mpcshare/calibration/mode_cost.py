@@ -17,7 +17,7 @@ and the *price* of handing mode j to the wearer, the squared error saved per uni
 
 Handing the wearer the modes in decreasing ρ_j traces the lower hull of (effort, mean squared
 error) over whole-mode assignments (the greedy order of a fractional knapsack, hand-over costs
-left out: the closed-loop check of :mod:`mpcshare.training.rule_choice` puts them back).
+left out: the closed-loop check of :mod:`mpcshare.calibration.rule_choice` puts them back).
 :func:`price_order` gives that order; :func:`cutting_modes` the modes that carry the labelled
 cutting (the task the wearer must lead wherever only they saw).
 """

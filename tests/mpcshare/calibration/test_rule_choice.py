@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mpcshare.calibration import rule_choice
+from mpcshare.calibration.rule_choice import candidate_sets, choice_trials, choose_rule, line_ratio, rule_markdown
 from mpcshare.control.strategies.gate import check_settings, wearer_indicator
-from mpcshare.training import rule_choice
-from mpcshare.training.rule_choice import candidate_sets, choice_trials, choose_rule, line_ratio, rule_markdown
 
 
 def test_candidates_are_price_prefixes_with_and_without_the_cutting_modes():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mpcshare.training.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
+from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
 
 
 class _Episode:
