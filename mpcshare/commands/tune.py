@@ -113,8 +113,8 @@ def _usage_error(message: str) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from learning.data import split_by_trial
-    from mpcshare.evaluation.tuning.report import build_result, chance_sentences, recommendation_line, write_tune
     from mpcshare.evaluation.tuning.runner import RayMissing, run_tune
+    from mpcshare.reports.tune import build_result, chance_sentences, recommendation_line, write_tune
     from mpcshare.training.config import TrainConfig
 
     if args.backend == "ray":

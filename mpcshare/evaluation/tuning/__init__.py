@@ -3,5 +3,6 @@
 - :mod:`mpcshare.evaluation.tuning.episodes` — the episodes of a sweep and one episode in any process;
 - :mod:`mpcshare.evaluation.tuning.runner` — bundles per K, the local pool or Ray, resumable rows;
 - :mod:`mpcshare.evaluation.tuning.stats` — summaries with bootstrap CIs, the gate against chance, Pareto set;
-- :mod:`mpcshare.evaluation.tuning.report` — ``tune.json``, ``tune.md``, ``pareto.png``.
+
+its files (``tune.json``, ``tune.md``, ``pareto.png``) are written by :mod:`mpcshare.reports.tune`.
 """

@@ -14,6 +14,7 @@ from mpcshare.evaluation.tuning.episodes import TIMING_KEYS, plan_tasks, random_
 from mpcshare.evaluation.tuning.runner import run_tune
 from mpcshare.evaluation.tuning.stats import gate_vs_random, pareto, recommend, summarise
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
+from tests.mpcshare.evaluation.tune_rows import tune_row as _row
 
 SWEEP = ["--percentiles", "90", "70", "--betas", "0", "1", "--strategies", "gate", "--trials", "1",
          "--duration", "2", "--seeds", "2", "--draws", "2", "--epochs", "3", "--quiet", "--workers", "1"]
@@ -106,11 +107,6 @@ def test_the_plan_and_its_time_are_said_before_the_episodes_run(data, swept, tmp
                        "draws (2 per setting episode), on 1 local worker(s)")
     assert said[1].startswith("the first episode took ") and said[1].endswith(" for the 4 left on 1 worker(s)")
     assert len(run["rows"]) == 5
-
-
-def _row(strategy, seed, trial, rmse, matched_to=None, effort=0.1):
-    return {"strategy": strategy, "matched_to": matched_to, "percentile": 90.0, "beta": 0.5, "trial": trial,
-            "seed": seed, "tracking_rmse_m": rmse, "voluntary_effort": effort, "handovers": 1 + seed}
 
 
 def test_gate_against_random_is_a_paired_one_sided_test():
@@ -215,19 +211,6 @@ def test_ray_gives_the_same_rows_as_the_local_pool(data, swept, tmp_path):
     assert _comparable(local) == _comparable(remote)
 
 
-def test_chance_sentence_says_when_the_pairs_cannot_reach_significance():
-    from mpcshare.evaluation.tuning.report import chance_sentences
-
-    def result(p, n):
-        return {"tests": {"gate p90 b0": {"vs_random_handover": {
-            "effect_ci95_m": [0.001, 0.003], "beats_random": False, "p_value": p, "n_pairs": n,
-            "effect_m": 0.002, "n_forced": 0}}}}
-
-    floor = chance_sentences(result(0.0625, 4))[0]
-    assert "smallest p that 4 pairs allow" in floor and "2.0 mm worse" in floor
-    assert "smallest p" not in chance_sentences(result(0.2, 4))[0]
-
-
 def test_default_sweep_has_at_least_ten_pairs():
     from mpcshare.commands.tune import default_trials_and_seeds
 
@@ -236,23 +219,3 @@ def test_default_sweep_has_at_least_ten_pairs():
         assert t == min(5, n_heldout) and t * s >= 10 and 0.5 ** (t * s) * 6 < 0.01  # Holm over 6 settings
     assert default_trials_and_seeds(4, None, None) == (4, 3)  # the default data: 4 held-out trials
     assert default_trials_and_seeds(4, 2, None) == (2, 5) and default_trials_and_seeds(4, 2, 1) == (2, 1)
-
-
-def test_the_recommendation_says_when_it_loses_to_the_wearer_alone():
-    from mpcshare.evaluation.tuning.report import build_result, recommendation_line, tune_markdown
-
-    rows = []
-    for i in range(4):
-        rows += [_row("voluntary", 0, i, 0.0132, effort=0.05), _row("reactive", 0, i, 0.020, effort=0.0),
-                 _row("gate", 0, i, 0.0153, effort=0.045),
-                 _row("random_handover", 0, i, 0.0153 + (1e-4 if i % 2 else -1e-4), "gate", effort=0.045)]
-    for r in rows:
-        if r["strategy"] == "voluntary":
-            r["percentile"], r["beta"] = None, None
-    result = build_result(rows)
-    line = recommendation_line(result)
-    assert line.startswith("recommended: gate p90 b0.5") and "LOSES to the wearer alone" in line
-    assert "13.2 mm" in line and "15.3 mm" in line
-    md = tune_markdown(result)
-    assert md.index("LOSES to the wearer alone") < md.index("| setting |")  # said first, before the table
-    assert "-0.0" not in md  # an effect that rounds to zero has no sign
