@@ -18,7 +18,8 @@ from mpcshare.control.controller import SharedController
 from mpcshare.control.workspace import DEFAULT_BASE_POSE
 from mpcshare.errors import ControllerSetupError
 from mpcshare.runtime.config import RunConfig, RunConfigError, check_against_model
-from robot.description import RobotDescription, as_description, braking_torque_ratio
+from robot.default_arm import as_description
+from robot.description import RobotDescription, braking_torque_ratio
 from robot.errors import ControllerConfigError
 
 __all__ = ["make_controller", "robot_description"]
