@@ -46,6 +46,9 @@ import numpy as np
 from scipy import stats as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from worlds import world_data  # noqa: E402
 
 MIXES = ("mix25", "mix50", "mix75")
 RUNS = ("voluntary", "reactive", *MIXES, "paper_gate", "gate", "blend", "random_handover", "oracle_handover")
@@ -53,23 +56,6 @@ FIGURES = {"tracking_rmse_m": ("rms_mm", 1e3), "voluntary_effort": ("effort_rad"
            "line_ratio": ("line_ratio", 1.0), "saw_correlation": ("stroke_correlation", 1.0),
            "reactive_share": ("robot_share", 1.0), "limit_violations": ("limit_violations", 1),
            "pickup_rms_m": ("pickup_rms_mm", 1e3), "pickup_error_share": ("pickup_error_share", 1.0)}
-
-
-def _data(world: str, quick: bool) -> tuple[Any, tuple[str, ...], dict[str, Any]]:
-    """(demonstrations, mode names, description) of ``family:<seed>`` or a bench_task data kind."""
-    if world.startswith("family:"):
-        from sim.world_family import world_demonstrations
-
-        demos, spec = world_demonstrations(int(world.split(":")[1]), n_trials=12 if quick else 16,
-                                           trial_s=40.0 if quick else 60.0)
-        info = {"kinds": list(spec.kinds), "stroke_hz": spec.stroke_hz, "stroke_amp_mm": 1e3 * spec.stroke_amp_m,
-                "knife_delay_s": spec.knife_delay_s, "act_noise_mm": 1e3 * spec.act_noise_m}
-        return demos, spec.mode_names, info
-    from bench_task import make_data
-
-    from sim.demonstrator import MODE_NAMES
-
-    return make_data(world), MODE_NAMES, {}
 
 
 def _one_sided(a: list[float], b: list[float]) -> dict[str, Any]:
@@ -83,7 +69,7 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
                         pooled: dict[str, dict[str, Any]], mode_names: Any, quick: bool) -> list[dict[str, Any]]:
     """Every candidate of the rule's choice run on the *evaluation* trials (sim seed 0): which wearer-mode
     set would have been best had the choice known the future (an upper bound on the choice, not a rule)."""
-    from mpcshare.training.rule_choice import line_ratio, pooled_run, saws
+    from mpcshare.calibration.rule_choice import line_ratio, pooled_run, saws
 
     vol, rea = pooled["voluntary"], pooled["reactive"]
     rows = []
@@ -104,14 +90,15 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     import torch
 
     torch.set_num_threads(1)
-    from mpcshare.experiments import compare_strategies
-    from mpcshare.run_table import BOUND_RUNS, DEFAULT_RUNS
+    from mpcshare.calibration.rule_choice import choose_for_bundle
+    from mpcshare.evaluation import compare_strategies
+    from mpcshare.run_table import DEFAULT_RUNS
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
-    from mpcshare.training.rule_choice import choose_for_bundle
+    from research.bound_runs import BOUND_RUNS
 
     t0 = time.perf_counter()
-    demos, mode_names, info = _data(world, quick)
+    demos, mode_names, info = world_data(world, quick)
     bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
     # the gate's rule chosen in the closed loop as `mpcshare train` does, on the last held-out trials;
     # the runs below are evaluated on the other held-out trials only

@@ -1,7 +1,7 @@
 """Who leads, measured in the closed loop: the default ``gate`` against the paper's gate and the line (issue 28).
 
 Prints one JSON object: per wearer preset, per run, the pooled figures of
-:func:`mpcshare.experiments.simulate_episode` on the held-out trials (the same trials, seed and
+:func:`mpcshare.evaluation.simulate_episode` on the held-out trials (the same trials, seed and
 wearer for every run) and the **line ratio** RMS_s / RMS_line(e_s), where the line runs from
 (effort_reactive, RMS_reactive) to (effort_voluntary, RMS_voluntary) and is evaluated at the run's
 effort e_s (below 1: better than mixing the two parties). Runs: ``voluntary``, ``reactive``,
@@ -26,10 +26,10 @@ import numpy as np
 
 from learning.data import Demonstrations, load
 from mpcshare.bundle import load_bundle
+from mpcshare.calibration.rule_choice import line_ratio as _line
 from mpcshare.control.types import ControllerConfig
-from mpcshare.experiments import StrategyRun, pool_metrics, pool_task_metrics, simulate_episode
-from mpcshare.experiments.schedule import StepSchedule
-from mpcshare.training.rule_choice import line_ratio as _line
+from mpcshare.evaluation import StrategyRun, pool_metrics, pool_task_metrics, simulate_episode
+from mpcshare.evaluation.schedule import StepSchedule
 from sim.demonstrator import CUTTING, MODE_NAMES
 from sim.wearer_presets import WEARER_PRESETS, wearer_preset
 
@@ -49,7 +49,7 @@ def true_mode_schedule(trial: Any, margin_s: float) -> StepSchedule:
 
 
 def line_ratio(run: dict[str, float], vol: dict[str, float], rea: dict[str, float]) -> float | None:
-    """RMS_s / RMS_line(e_s) (module docstring; :func:`mpcshare.training.rule_choice.line_ratio`)."""
+    """RMS_s / RMS_line(e_s) (module docstring; :func:`mpcshare.calibration.rule_choice.line_ratio`)."""
     return _line(run["tracking_rmse_m"], run["voluntary_effort"], vol, rea)
 
 

@@ -39,7 +39,7 @@ from bench_task import bundle_and_data  # noqa: E402
 
 from mpcshare.arms import task_arm  # noqa: E402
 from mpcshare.bundle import save_bundle  # noqa: E402
-from mpcshare.experiments import DEFAULT_RUNS, compare_strategies  # noqa: E402
+from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies  # noqa: E402
 from robot.presets import ARM_PRESETS  # noqa: E402
 from sim.demonstrator import MODE_NAMES  # noqa: E402
 from sim.scene import SceneConfig  # noqa: E402

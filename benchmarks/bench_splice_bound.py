@@ -4,7 +4,7 @@ For each world of ``bench_family.py`` (``family:<seed>`` and the data kinds ``de
 ``other_structure``): train a bundle as ``bench_family.py --quick`` does, run the constant authorities
 ``voluntary``, ``reactive``, ``mix25``, ``mix50`` and ``mix75`` (sim seed 0) on the same evaluation
 trials (the held-out trials the rule's choice does not use, the first 30 s of 2), and splice their
-per-step figures (:mod:`mpcshare.experiments.splice_bound`): the lowest line ratio, within 0.75x the
+per-step figures (:mod:`research.splice_bound`): the lowest line ratio, within 0.75x the
 wearer's effort, of any schedule that gives each group of control steps one of those authorities,
 
 * groups: segments of 0.1 s, 1 s and 3 s, or whole modes (the controller's own mode estimate);
@@ -13,20 +13,20 @@ wearer's effort, of any schedule that gives each group of control steps one of t
   where the wearer leads it), or ``free``;
 * ``saws by measure`` (1 s, 3 s and whole modes): the spliced knife's stroke-band correlation with the
   intent over the cutting steps of both trials is at least 0.6, issue 28's target
-  (:mod:`mpcshare.experiments.sawing_bound`: a Lagrangian bound from below and the best schedule found
+  (:mod:`research.sawing_bound`: a Lagrangian bound from below and the best schedule found
   that saws, from above). This pools both trials' cutting; the reports average each trial's correlation
   weighted by its cutting time, and ask an amplitude too.
 
 A splice pays no switch (no reaction, no pick-up), so no such schedule does better in the closed
 loop: a bound from below on the line ratio. With ``--replay`` the best 1 s and 3 s schedules that saw
 by the measure, among the levels the ``schedule`` strategy replays (``voluntary``, ``reactive``,
-``mix50``, ``mix75``), are run in the closed loop (:class:`mpcshare.experiments.schedule.LevelSchedule`,
+``mix50``, ``mix75``), are run in the closed loop (:class:`mpcshare.evaluation.schedule.LevelSchedule`,
 read half a hand-over ramp ahead): what such a schedule, knowing the future, reaches once its switches
 cost what they cost. With ``--priced ROUNDS`` the 1 s schedules that saw are searched with a price on each
-switch (:mod:`mpcshare.experiments.switch_priced`), the prices measured from the earlier rounds' replays,
+switch (:mod:`research.switch_priced`), the prices measured from the earlier rounds' replays,
 and replayed round by round; ``--polish REPLAYS`` then searches around the best one in the closed loop, every
 candidate replayed; and causal tables (a level per mode estimate, or true phase, and the time in it) are
-fitted in hindsight on the same steps (:mod:`mpcshare.experiments.table_rule`): what a rule that sees only
+fitted in hindsight on the same steps (:mod:`research.table_rule`): what a rule that sees only
 those could reach at best (``priced_schedules.py``). ``--trial-set choice`` takes the rule choice's two
 trials instead, another draw. Prints one JSON line per world and a summary object.
 
@@ -49,8 +49,10 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from priced_schedules import ALPHAS, MIN_CORRELATION, REPLAYABLE, per_step, priced, replay_alpha  # noqa: E402
+from worlds import world_data  # noqa: E402
 
 LEVELS = ("voluntary", "reactive", "mix25", "mix50", "mix75")
 SEGMENTS_S = (0.1, 1.0, 3.0)
@@ -59,7 +61,7 @@ SEGMENTS_S = (0.1, 1.0, 3.0)
 def _stroke(episodes: list[Any], n: list[int], cutting: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray,
                                                                                        float, np.ndarray]:
     """(b·b* (N,), ‖b‖² (N,), Y, the intent (N, 3)) of one run over the first n[i] steps of each episode."""
-    from mpcshare.experiments.sawing_bound import stroke_terms
+    from research.sawing_bound import stroke_terms
 
     parts, start = [], 0
     for ep, k in zip(episodes, n):
@@ -73,7 +75,7 @@ def _stroke(episodes: list[Any], n: list[int], cutting: np.ndarray, dt: float) -
 def _sawing_entry(e2: np.ndarray, ef: np.ndarray, groups: np.ndarray, strokes: list[tuple], vol: tuple[float, float],
                   rea: tuple[float, float], cutting: np.ndarray, since_cut_s: np.ndarray) -> dict[str, Any]:
     """The bound and the best schedule found whose knife saws by the measure (module docstring)."""
-    from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front
+    from research.sawing_bound import best_line_ratios, sawing_front
 
     runs = e2.shape[0]
     dot, power = np.stack([s[0] for s in strokes[:runs]]), np.stack([s[1] for s in strokes[:runs]])
@@ -119,7 +121,7 @@ def _by_time_in_cutting(wearer: np.ndarray, cutting: np.ndarray, since_s: np.nda
 
 def _replay(ctx: dict[str, Any], groups: np.ndarray) -> dict[str, Any]:
     """The best schedule that saws among :data:`REPLAYABLE` levels, spliced and replayed in the closed loop."""
-    from mpcshare.experiments.sawing_bound import best_line_ratios, sawing_front
+    from research.sawing_bound import best_line_ratios, sawing_front
 
     idx = [LEVELS.index(name) for name in REPLAYABLE]
     st = [ctx["strokes"][i] for i in idx]
@@ -141,15 +143,13 @@ def run_world(world: str, replay: bool = False, n_rounds: int = 0, bounds: bool 
     import torch
 
     torch.set_num_threads(1)
-    from bench_family import _data
-
-    from mpcshare.experiments.splice_bound import best_line_ratio, splice_front
+    from mpcshare.calibration.rule_choice import choice_trials, pooled_run
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
-    from mpcshare.training.rule_choice import choice_trials, pooled_run
+    from research.splice_bound import best_line_ratio, splice_front
 
     t0 = time.perf_counter()
-    demos, mode_names, _ = _data(world, True)
+    demos, mode_names, _ = world_data(world, True)
     bundle = train_bundle(demos, TrainConfig(max_epochs=20), progress=False)
     chooses = choice_trials(bundle.heldout_trials)  # the evaluation trials of bench_family: the others
     trials = ([int(t) for t in chooses][:2] if trial_set == "choice"

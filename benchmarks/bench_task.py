@@ -8,7 +8,7 @@ Prints one JSON object:
   0.25 s after the fork, one slow wide sawyer (1.3 Hz, 3 cm) and one fast short one (2.9 Hz, 1.2 cm));
 * ``runs``: per wearer preset, per run (voluntary, reactive, gate, gate_mpc, oracle_preview, and the
   hand-over baselines random_handover, matched to the gate, and oracle_handover) the
-  pooled metrics of :func:`mpcshare.experiments.compare_strategies` on held-out trials;
+  pooled metrics of :func:`mpcshare.evaluation.compare_strategies` on held-out trials;
 * ``targets``: per preset, each target of issue 19 with its figure and whether it is met
   (ratios against runs of the same process: the machine is shared);
 * ``latency_budget``: per stage, the time shift (s) that minimises the RMS between that stage's
@@ -43,7 +43,7 @@ from learning.data import Demonstrations, load
 from learning.preprocessing.resample import decimation_factor, lowpass_sos
 from mpcshare.bundle import load_bundle
 from mpcshare.control import SharedController
-from mpcshare.experiments import DEFAULT_RUNS, compare_strategies
+from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies
 from sim.closed_loop import run_episode
 from sim.demonstrator import MODE_NAMES, GeneratorConfig, SubjectStyle, generate_demonstrations
 from sim.task_metrics import time_lag

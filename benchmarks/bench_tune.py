@@ -19,8 +19,8 @@ import time
 from pathlib import Path
 
 from learning.data import save
-from mpcshare.experiments.tuning.episodes import TIMING_KEYS
-from mpcshare.experiments.tuning.runner import run_tune
+from mpcshare.evaluation.tuning.episodes import TIMING_KEYS
+from mpcshare.evaluation.tuning.runner import run_tune
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 

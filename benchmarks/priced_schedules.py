@@ -1,11 +1,11 @@
 """Switch-priced schedules replayed in the closed loop, and causal tables fitted in hindsight (issue 28).
 
 The part of ``bench_splice_bound.py --priced`` that runs schedules: :func:`replay_alpha` replays an authority
-level per step with :class:`mpcshare.experiments.schedule.LevelSchedule`; :func:`priced` searches
-switch-priced schedules (:mod:`mpcshare.experiments.switch_priced`) round by round, each round's switch
+level per step with :class:`mpcshare.evaluation.schedule.LevelSchedule`; :func:`priced` searches
+switch-priced schedules (:mod:`research.switch_priced`) round by round, each round's switch
 prices measured from the earlier replays; :func:`polish` then searches around the best one in the closed
 loop itself, each candidate replayed; :func:`table_rules` fits causal tables in hindsight
-(:mod:`mpcshare.experiments.table_rule`).
+(:mod:`research.table_rule`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ ALPHAS = np.array(list(REPLAYABLE.values()))  # α per replayable level, in REPL
 
 def per_step(episodes: list[Any], n: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """(squared tracking error [m²], effort [rad]) per step of the first n[i] steps of each episode."""
-    from mpcshare.experiments.handover import tracking_error
+    from mpcshare.evaluation.handover import tracking_error
 
     e2 = np.concatenate([tracking_error(ep)[:k] ** 2 for ep, k in zip(episodes, n)])
     ef = np.concatenate([np.linalg.norm(np.asarray(ep.voluntary), axis=1)[:k] for ep, k in zip(episodes, n)])
@@ -33,9 +33,9 @@ def replay_alpha(ctx: dict[str, Any], alpha: np.ndarray) -> tuple[dict[str, Any]
     """Replay α per step (N,) in the closed loop (:class:`LevelSchedule`, read half a hand-over ramp ahead):
     (the pooled figures, the replay's e² [m²] and θ [rad] per step (N,))."""
     from mpcshare.control.types import ControllerConfig
-    from mpcshare.experiments.pooling import pool_metrics
-    from mpcshare.experiments.runs import simulate_episode
-    from mpcshare.experiments.schedule import LevelSchedule
+    from mpcshare.evaluation.pooling import pool_metrics
+    from mpcshare.evaluation.runs import simulate_episode
+    from mpcshare.evaluation.schedule import LevelSchedule
     from mpcshare.line_ratio import line_ratio
     from mpcshare.run_table import StrategyRun
 
@@ -61,15 +61,15 @@ def replay_alpha(ctx: dict[str, Any], alpha: np.ndarray) -> tuple[dict[str, Any]
 
 
 def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: int = 0) -> dict[str, Any]:
-    """Switch-priced schedules (:mod:`mpcshare.experiments.switch_priced`), replayed round by round: round 0
+    """Switch-priced schedules (:mod:`research.switch_priced`), replayed round by round: round 0
     pays nothing for a switch (the splice); each later round prices the switches by the excess of every
     earlier replay over its splice and searches again. Where a replay saws below the target (the reports
     average the trials' correlations, the search pools them, and a switch moves the stroke), the next
     round asks the search for that much more correlation; where it costs more than the effort cap, for that
     much less effort. With ``polish_budget`` > 0, :func:`polish` then
     searches around the best schedule replayed."""
-    from mpcshare.experiments.splice_bound import group_sums
-    from mpcshare.experiments.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
+    from research.splice_bound import group_sums
+    from research.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
 
     idx = [list(ctx["levels"]).index(name) for name in REPLAYABLE]
     e2, ef = ctx["e2"][idx], ctx["ef"][idx]
@@ -197,12 +197,12 @@ ANTICIPATION_S = 0.5  # issue 28's anticipating hand-over: the wearer leads from
 def table_rules(ctx: dict[str, Any], e2: np.ndarray, ef: np.ndarray, st: list[tuple], prices: Any,
                  target: float, replay_tables: bool = True) -> dict[str, Any]:
     """Causal tables fitted in hindsight on the same steps, with the last round's switch prices
-    (:mod:`mpcshare.experiments.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
+    (:mod:`research.table_rule`): a level per mode estimate (whole modes) and per mode estimate ×
     time in it; the same with the true task phase in place of the estimate (what a perfect mode filter adds), and
     with the true phase :data:`ANTICIPATION_S` ahead (what a filter that foresaw each phase change could add).
     Each fitted table's schedule is then replayed in the closed loop (the priced splice only estimates what its
     switches cost)."""
-    from mpcshare.experiments.table_rule import fit_table, score_schedule, time_in_cell
+    from research.table_rule import fit_table, score_schedule, time_in_cell
 
     dot, pw = np.stack([s[0] for s in st]), np.stack([s[1] for s in st])
 

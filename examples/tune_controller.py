@@ -14,8 +14,8 @@ import argparse
 from pathlib import Path
 
 from learning.data import save
-from mpcshare.experiments.tuning.report import build_result, chance_sentences, write_tune
-from mpcshare.experiments.tuning.runner import run_tune
+from mpcshare.evaluation.tuning.runner import run_tune
+from mpcshare.reports.tune import build_result, chance_sentences, write_tune
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import MODE_NAMES, generate_demonstrations
 

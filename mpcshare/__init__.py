@@ -5,8 +5,9 @@
 - :mod:`mpcshare.bundle` — model bundles (:func:`load_bundle`, re-exported here lazily, so that
   ``import mpcshare`` does not import torch or scikit-learn) and their files;
 - :mod:`mpcshare.training` — training a bundle, its settings, held-out evaluation, the K sweep;
+- :mod:`mpcshare.calibration` — after training: the hand-over rule chosen in the closed loop;
 - :mod:`mpcshare.reports` — the analysis, comparison and demo reports and their plots;
-- :mod:`mpcshare.experiments` — every closed-loop experiment in one package: the comparison of
+- :mod:`mpcshare.evaluation` — every closed-loop experiment in one package: the comparison of
   strategies on held-out trials (``runs``), their metrics pooled over trials (``pooling``), the
   placebo and oracle hand-over schedules (``schedule``, ``handover``) and the ``tune`` sweep of
   K × β × strategy, local or on Ray (``tuning``); :mod:`mpcshare.run_table` — the runs

@@ -10,8 +10,7 @@ swept strategies (``tunable``), the Pareto set, the plots' colours and the bench
 * :data:`EXTRA_RUNS`: ``gate_mpc`` (the default strategy with the MPC), ``oracle_preview`` (the
   robot given the true intent as its preview), ``random_handover`` (the placebo, the mean over
   :data:`RANDOM_DRAWS` draws) and ``oracle_handover`` (the upper bound), see
-  :mod:`mpcshare.experiments.handover`;
-* :data:`BOUND_RUNS`: ``oracle_line`` (the effort-aware hand-over oracle), for the benchmarks only.
+  :mod:`mpcshare.evaluation.handover`.
 """
 
 from __future__ import annotations
@@ -21,7 +20,7 @@ from dataclasses import dataclass
 
 from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, user_strategies
 
-__all__ = ["BOUND_RUNS", "DEFAULT_RUNS", "EXTRA_RUNS", "RANDOM_DRAWS", "REALISABLE", "RUN_COLORS", "RUN_NAMES",
+__all__ = ["DEFAULT_RUNS", "EXTRA_RUNS", "RANDOM_DRAWS", "REALISABLE", "RUN_COLORS", "RUN_NAMES",
            "TUNABLE", "StrategyRun", "strategy_code"]
 
 #: Draws of the placebo per trial (and per pair in ``tune``): its figure is their mean.
@@ -34,7 +33,7 @@ class StrategyRun:
     and ``oracle``: the controller is given the wearer's true intent as its preview instead of
     the predictor's forecast (an upper bound, not realisable). ``schedule``: ``"random"`` or
     ``"oracle"``: the run replays a hand-over schedule computed from the default strategy's, or
-    the pure runs', episodes on the same trial (:mod:`mpcshare.experiments.handover`), ``draws`` times."""
+    the pure runs', episodes on the same trial (:mod:`mpcshare.evaluation.handover`), ``draws`` times."""
 
     name: str
     strategy: str
@@ -52,9 +51,6 @@ EXTRA_RUNS: tuple[StrategyRun, ...] = (
 )
 DEFAULT_RUNS: tuple[StrategyRun, ...] = tuple(StrategyRun(n, n) for n in user_strategies()) + EXTRA_RUNS
 RUN_NAMES: tuple[str, ...] = tuple(r.name for r in DEFAULT_RUNS)
-#: Runs too costly for every comparison (6 replays a trial), asked for by name (``bench_family.py``):
-#: ``oracle_line``, the effort-aware hand-over oracle (:mod:`mpcshare.experiments.handover`).
-BOUND_RUNS: tuple[StrategyRun, ...] = (StrategyRun("oracle_line", "schedule", schedule="oracle_line"),)
 #: The strategies ``tune`` sweeps over K and β (each gets a matched ``random_handover``).
 TUNABLE: tuple[str, ...] = tuple(n for n, s in REGISTRY.items() if s.tunable and s.user)
 #: The realisable strategies (a user's choices): the Pareto set is drawn from them.

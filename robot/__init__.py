@@ -4,7 +4,8 @@
   frame, limits, mount) for the QP, the MPC, the controller, the scene and the servo;
   :mod:`robot.mjcf` writes any description's MuJoCo bodies; :mod:`robot.ik` its numerical
   inverse kinematics; :mod:`robot.braking` the speed and acceleration caps whose braking is
-  torque-feasible; :mod:`robot.presets` the common arms of example-robot-data.
+  torque-feasible; :mod:`robot.presets` the common arms of example-robot-data; :mod:`robot.default_arm`
+  the arm when none is named (the SuperLimb).
 - :mod:`robot.superlimb` — the SuperLimb, one description among others, with its own knowledge:
   one parametric source (``SuperLimbParams``) for its URDF, MJCF and Pinocchio model, the
   closed-form inverse kinematics (``superlimb_description()``).
@@ -20,7 +21,8 @@
 """
 
 from .constraints import Bounds, Constraint, Limit
-from .description import RobotDescription, as_description
+from .default_arm import as_description
+from .description import RobotDescription
 from .errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from .limits import JointLimits
 from .qp import QPConfig, QPController, QPResult, QPStatus

@@ -28,7 +28,7 @@ from robot.braking import braking_torque_ratio
 from robot.errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from robot.limits import JointLimits
 
-__all__ = ["RobotDescription", "as_description", "braking_torque_ratio", "mount_model"]
+__all__ = ["RobotDescription", "braking_torque_ratio", "mount_model"]
 
 Vec3 = tuple[float, float, float]
 FILE_KINDS = {".urdf": "URDF", ".xml": "MJCF", ".mjcf": "MJCF"}
@@ -228,16 +228,3 @@ class RobotDescription:
             model = pin.buildReducedModel(model, [model.getJointId(j) for j in locked_joints], q)
         options.setdefault("source", str(path))
         return cls.from_model(model, tip_frame, **options)
-
-
-def as_description(robot: Any = None) -> RobotDescription:
-    """``robot`` as a description: None → the SuperLimb, a ``SuperLimbParams`` → that SuperLimb,
-    a :class:`RobotDescription` → itself; anything else raises a TypeError naming the choices."""
-    if isinstance(robot, RobotDescription):
-        return robot
-    from robot.superlimb import SuperLimbParams, superlimb_description
-
-    if robot is None or isinstance(robot, SuperLimbParams):
-        return superlimb_description(robot)
-    raise TypeError(f"robot must be a robot.description.RobotDescription, a robot.superlimb.SuperLimbParams or "
-                    f"None (the SuperLimb), got {type(robot).__name__}")

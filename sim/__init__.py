@@ -10,7 +10,7 @@
 - :mod:`sim.wearer_protocol` — what the closed loop needs from a wearer (:class:`~sim.wearer_protocol.Wearer`,
   a factory of one); :mod:`sim.wearer` — the simulated wearer (their own plan when leading, delayed
   corrections); :mod:`sim.wearer_presets` — its presets from the literature (unimpaired, mild and
-  severe hemiparesis).
+  severe hemiparesis), their numbers in :mod:`sim.wearer_preset_values`.
 - :mod:`sim.closed_loop` — ``run_episode``; :mod:`sim.episode` — its record and run file;
   :mod:`sim.metrics` — episode metrics; :mod:`sim.task_metrics` — lag, sawing and the share per mode;
   :mod:`sim.keepout_metrics` — how close the knife came to the wearer's body;

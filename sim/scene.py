@@ -40,7 +40,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from robot.description import RobotDescription, as_description
+from robot.default_arm import as_description
+from robot.description import RobotDescription
 from robot.keepout import BLADE_LENGTH
 from robot.superlimb import rpy_to_matrix, superlimb_description
 from robot.wearer_body import WearerBody, body_zones

@@ -40,7 +40,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robot.description import RobotDescription, as_description
+from robot.default_arm import as_description
+from robot.description import RobotDescription
 from robot.solvers import make_backend
 
 __all__ = ["JointServo", "ServoConfig", "viable_next_velocity"]

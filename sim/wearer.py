@@ -65,8 +65,9 @@ from scipy import signal
 
 from robot.shoulder import SHOULDER_TO_PLATE, ShoulderMap
 from sim.errors import WearerConfigError
+from sim.wearer_preset_values import PRESET_VALUES
 
-__all__ = ["SimulatedWearer", "WearerConfig", "rhythmic_plan", "smooth_intent"]
+__all__ = ["SimulatedWearer", "WearerConfig", "rhythmic_plan", "smooth_intent", "wearer_preset_name"]
 
 _DEADZONE_RAMP = 0.1  # ε / δ_θ: below ε the wearer relaxes toward rest instead of holding δ_θ
 
@@ -121,6 +122,13 @@ class WearerConfig:
     def __call__(self, intent: np.ndarray, rate_hz: float, *, seed: int = 0) -> SimulatedWearer:
         """The wearer with these settings (a :class:`sim.wearer_protocol.WearerFactory`)."""
         return SimulatedWearer(intent, rate_hz, self, seed=seed)
+
+
+def wearer_preset_name(config: WearerConfig) -> str | None:
+    """The name of the preset (:mod:`sim.wearer_presets`) whose settings equal ``config`` (compared by
+    ``to_dict``), or None."""
+    d = config.to_dict()
+    return next((name for name, values in PRESET_VALUES.items() if WearerConfig(**values).to_dict() == d), None)
 
 
 def smooth_intent(positions: np.ndarray, rate_hz: float, cutoff_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -195,8 +203,6 @@ class SimulatedWearer:
 
     def info(self) -> dict[str, Any]:
         """The episode's record of this wearer: the shoulder map, the dead band and the preset's name (or None)."""
-        from sim.wearer_presets import wearer_preset_name  # the presets are built from this module
-
         c = self.config
         out = {"shoulder_gain": c.shoulder.gain, "shoulder_deadband_rad": c.shoulder.deadband_rad,
                "wearer_deadband_m": c.deadband_m, "wearer_preset": wearer_preset_name(c)}

@@ -79,24 +79,14 @@ from types import MappingProxyType
 from typing import Mapping
 
 from sim.errors import WearerConfigError
-from sim.wearer import WearerConfig
+from sim.wearer import WearerConfig, wearer_preset_name
+from sim.wearer_preset_values import DEFAULT_WEARER_PRESET, PRESET_VALUES
 
 __all__ = ["DEFAULT_WEARER", "DEFAULT_WEARER_PRESET", "WEARER_PRESETS", "wearer_preset", "wearer_preset_name"]
 
-DEFAULT_WEARER_PRESET = "hemiparetic_mild"
-
-#: name → settings (module docstring for the sources); read-only.
-WEARER_PRESETS: Mapping[str, WearerConfig] = MappingProxyType({
-    "unimpaired": WearerConfig(reaction_delay_s=0.2, bandwidth_hz=2.0, rhythmic_bandwidth_hz=4.0,
-                               feedback_gain_per_s=2.0, max_speed_mps=0.5, noise_rad=0.002,
-                               noise_signal_dependent=0.10),
-    "hemiparetic_mild": WearerConfig(reaction_delay_s=0.3, bandwidth_hz=1.5, rhythmic_bandwidth_hz=2.5,
-                                     feedback_gain_per_s=1.5, max_speed_mps=0.3, noise_rad=0.003,
-                                     noise_signal_dependent=0.15),
-    "hemiparetic_severe": WearerConfig(reaction_delay_s=0.45, bandwidth_hz=1.0, rhythmic_bandwidth_hz=1.5,
-                                       feedback_gain_per_s=1.0, max_speed_mps=0.15, noise_rad=0.004,
-                                       noise_signal_dependent=0.25),
-})
+#: name → settings (module docstring for the sources; the numbers in :mod:`sim.wearer_preset_values`); read-only.
+WEARER_PRESETS: Mapping[str, WearerConfig] = MappingProxyType({name: WearerConfig(**values)
+                                                               for name, values in PRESET_VALUES.items()})
 
 #: the default wearer of a closed-loop episode (``sim.closed_loop.run_episode``): a wearer factory
 DEFAULT_WEARER: WearerConfig = WEARER_PRESETS[DEFAULT_WEARER_PRESET]
@@ -109,9 +99,3 @@ def wearer_preset(name: str) -> WearerConfig:
         return WEARER_PRESETS[name]
     except (KeyError, TypeError):
         raise WearerConfigError(f'wearer preset "{name}" not in {list(WEARER_PRESETS)}') from None
-
-
-def wearer_preset_name(config: WearerConfig) -> str | None:
-    """The name of the preset whose settings equal ``config`` (compared by ``to_dict``), or None."""
-    d = config.to_dict()
-    return next((name for name, c in WEARER_PRESETS.items() if c.to_dict() == d), None)

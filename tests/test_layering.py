@@ -1,7 +1,11 @@
 """The layering table of docs/design.md ("Layout and layering"), checked on the source.
 
-Every import counts, also those inside functions (the lazy ones), because a lazy import
-that goes upward is still a dependency. A test failure names the file, the line and the rule.
+Every import counts, also those inside functions (the lazy ones) and under ``TYPE_CHECKING``, because a
+lazy import that goes upward is still a dependency. The rules: each package's row of the table; folders
+that never import some packages (the controller, training, the product against ``research``, the
+benchmarks against the tests); no cycle between the subpackages and modules of ``mpcshare``; no cycle
+between files anywhere in the packages and ``research``. A failure names the file, the line and the rule;
+each rule is shown to fail on a planted file.
 """
 
 from __future__ import annotations
@@ -29,12 +33,24 @@ THIRD_PARTY = {
     "robot": {"numpy", "scipy", "pinocchio", "qpsolvers", "osqp", "daqp", "ruckig", "casadi", "example_robot_data"},
     "sim": {"numpy", "scipy", "mujoco", "tqdm", "PIL", "imageio", "imageio_ffmpeg", "mcap"},
 }
-#: inside mpcshare: the online controller never imports training, reports or the command line
-CONTROL_NEVER = ("mpcshare.training", "mpcshare.reports", "mpcshare.commands", "mpcshare.cli")
+#: folder → the modules it never imports (a name or anything below it): the online controller nothing of
+#: training, calibration, evaluation, reports or the command line; training neither its calibration nor the
+#: simulator; the distribution's packages never ``research``; benchmarks no test module
+NEVER = {
+    "mpcshare/control": ("mpcshare.training", "mpcshare.calibration", "mpcshare.evaluation", "mpcshare.reports",
+                         "mpcshare.commands", "mpcshare.cli"),
+    "mpcshare/training": ("mpcshare.calibration", "mpcshare.evaluation", "mpcshare.commands", "mpcshare.cli",
+                          "sim"),
+    **{package: ("research",) for package in FIRST_PARTY},
+    "benchmarks": ("tests",),
+}
+#: the folders whose files may form no import cycle
+ACYCLIC = (*FIRST_PARTY, "research")
 
 
-def _imports(path: Path) -> list[tuple[int, str]]:
-    """(line, absolute module name) of every import in ``path``; relative ones resolved."""
+def _imports(path: Path, with_names: bool = False) -> list[tuple[int, str]]:
+    """(line, absolute module name) of every import in ``path``; relative ones resolved. ``with_names``: also
+    ``a.b`` for each ``from a import b`` (``b`` may be a module)."""
     package = list(path.relative_to(ROOT).with_suffix("").parts[:-1])
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
@@ -47,6 +63,8 @@ def _imports(path: Path) -> list[tuple[int, str]]:
             else:
                 name = node.module or ""
             found.append((node.lineno, name))
+            if with_names:
+                found += [(node.lineno, f"{name}.{a.name}") for a in node.names if a.name != "*"]
     return found
 
 
@@ -70,10 +88,11 @@ def test_each_package_imports_only_what_its_row_allows(package):
     assert not bad, "\n".join(bad)
 
 
-def test_the_controller_never_imports_training_reports_or_the_command_line():
-    bad = [f"{p.relative_to(ROOT)}:{line} imports {name}"
-           for p in _sources("mpcshare/control") for line, name in _imports(p)
-           if any(name == m or name.startswith(m + ".") for m in CONTROL_NEVER)]
+@pytest.mark.parametrize("folder", NEVER)
+def test_folder_never_imports_what_its_rule_forbids(folder):
+    bad = [f"{p.relative_to(ROOT)}:{line} imports {name} ({folder}/ never imports {', '.join(NEVER[folder])})"
+           for p in _sources(folder) for line, name in _imports(p)
+           if any(name == m or name.startswith(m + ".") for m in NEVER[folder])]
     assert not bad, "\n".join(bad)
 
 
@@ -107,6 +126,150 @@ def test_the_checker_sees_a_violation(tmp_path, monkeypatch):
             test_each_package_imports_only_what_its_row_allows("learning")
     finally:
         planted.unlink()
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _module_graph(folders: tuple[str, ...]) -> dict[str, dict[str, int]]:
+    """module → {module it imports: first line}, over the files of ``folders``. ``from a import b`` is an edge to
+    the module ``a.b`` where there is one, else to ``a``; ``import a.b.c`` to the longest module prefix."""
+    paths = {_module_name(p): p for folder in folders for p in _sources(folder)}
+    graph: dict[str, dict[str, int]] = {}
+    for module, path in paths.items():
+        edges = graph.setdefault(module, {})
+        for line, name in _imports(path, with_names=True):
+            while name and name not in paths:
+                name = name.rpartition(".")[0]
+            if name and name != module:
+                edges.setdefault(name, line)
+    return graph
+
+
+def _cycles(graph: dict[str, dict[str, int]]) -> list[list[str]]:
+    """The strongly connected components of more than one node (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph.get(v, {}):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def _describe(cycle: list[str], graph: dict[str, dict[str, int]], where: dict[str, str]) -> str:
+    """One cycle with the edges that close it: ``a -> b (file:line)``."""
+    members = set(cycle)
+    edges = [f"{a} -> {b} ({where[a]}:{line})" for a in cycle for b, line in sorted(graph[a].items()) if b in members]
+    return "cycle " + " / ".join(cycle) + ": " + "; ".join(edges)
+
+
+def _file_cycles() -> list[str]:
+    graph = _module_graph(ACYCLIC)
+    where = {_module_name(p): str(p.relative_to(ROOT)) for folder in ACYCLIC for p in _sources(folder)}
+    return [_describe(c, graph, where) for c in _cycles(graph)]
+
+
+def _mpcshare_part(module: str) -> str | None:
+    """The child of ``mpcshare`` (subpackage or module) that ``module`` belongs to; None outside it or for
+    the package itself."""
+    parts = module.split(".")
+    return parts[1] if parts[0] == "mpcshare" and len(parts) > 1 else None
+
+
+def _package_cycles() -> list[str]:
+    files = _module_graph(("mpcshare",))
+    where = {_module_name(p): str(p.relative_to(ROOT)) for p in _sources("mpcshare")}
+    graph: dict[str, dict[str, int]] = {}
+    first: dict[tuple[str, str], str] = {}
+    for module, edges in files.items():
+        a = _mpcshare_part(module)
+        for target, line in edges.items():
+            b = _mpcshare_part(target)
+            if a and b and a != b:
+                graph.setdefault(a, {}).setdefault(b, line)
+                first.setdefault((a, b), f"{where[module]}:{line} imports {target}")
+    return ["cycle " + " / ".join(c) + ": " + "; ".join(first[(a, b)] for a in c for b in c if (a, b) in first)
+            for c in _cycles(graph)]
+
+
+def test_no_import_cycle_between_files():
+    bad = _file_cycles()
+    assert not bad, "\n".join(bad)
+
+
+def test_no_import_cycle_between_the_parts_of_mpcshare():
+    bad = _package_cycles()
+    assert not bad, "\n".join(bad)
+
+
+@pytest.fixture
+def plant():
+    """``plant(relative path, source)`` writes a file into the real tree for one test; removed afterwards."""
+    planted: list[Path] = []
+
+    def write(relative: str, source: str) -> None:
+        path = ROOT / relative
+        assert not path.exists()
+        path.write_text(source)
+        planted.append(path)
+
+    yield write
+    for path in planted:
+        path.unlink()
+
+
+def test_the_folder_rules_see_a_planted_import(plant):
+    plant("mpcshare/training/_planted_for_test.py", "def f():\n    from sim.scene import SceneConfig\n")
+    plant("sim/_planted_for_test.py", "import research.splice_bound\n")
+    plant("benchmarks/_planted_for_test.py", "from tests.sim.controllers import IdleController\n")
+    for folder, needle in [("mpcshare/training", "_planted_for_test.py:2 imports sim.scene"),
+                           ("sim", "_planted_for_test.py:1 imports research.splice_bound"),
+                           ("benchmarks", "_planted_for_test.py:1 imports tests.sim.controllers")]:
+        with pytest.raises(AssertionError, match=needle):
+            test_folder_never_imports_what_its_rule_forbids(folder)
+
+
+def test_the_cycle_checks_see_planted_cycles(plant):
+    """A lazy import back and forth between two files, and a module of ``bundle/`` that imports the command
+    line (which imports ``bundle``), are both found."""
+    plant("learning/_planted_a.py", "from learning import _planted_b\n")
+    plant("learning/_planted_b.py", "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                                    "    from learning._planted_a import x\n")
+    plant("mpcshare/bundle/_planted_for_test.py", "def f():\n    import mpcshare.commands.train\n")
+    with pytest.raises(AssertionError, match=r"cycle learning\._planted_a / learning\._planted_b"):
+        test_no_import_cycle_between_files()
+    with pytest.raises(AssertionError, match=r"cycle .*bundle / .*commands .*bundle/_planted_for_test\.py:2 imports "
+                                             r"mpcshare\.commands\.train"):
+        test_no_import_cycle_between_the_parts_of_mpcshare()
+
+
+def test_the_cycle_finder_on_small_graphs():
+    assert _cycles({"a": {"b": 1}, "b": {"c": 1}, "c": {"a": 1}, "d": {"a": 1}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b": 1}, "b": {}}) == []
 
 
 def _design_rows() -> dict[str, tuple[str, str]]:

@@ -20,7 +20,7 @@ from learning.modes import TaskModes
 from learning.preprocessing.preprocess import causal_windows
 
 if TYPE_CHECKING:
-    from learning.analysis import AnalysisConfig
+    from learning.analysis.config import AnalysisConfig
 
 __all__ = ["QuotientCall", "fit_modes", "mean_share", "run_calls", "search_candidates", "search_labelings",
            "within_group_quotients"]

@@ -16,20 +16,18 @@ import math
 from bisect import bisect_right
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from learning.errors import LearningError
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .model import Trial
 
 __all__ = [
     "CHANNEL_PREFIX",
     "RATE_TOLERANCE",
     "DataFormatError",
     "Origin",
+    "TrialFields",
     "as_integer",
     "check_rate",
     "check_set",
@@ -39,6 +37,18 @@ __all__ = [
     "infer_rate",
     "rate_value",
 ]
+
+
+class TrialFields(Protocol):
+    """What the checks read of a trial (:class:`learning.data.Trial` has these fields)."""
+
+    trial_id: int
+    t: np.ndarray
+    obs: np.ndarray
+    act: np.ndarray
+    mode: np.ndarray | None
+    voluntary: np.ndarray | None
+
 
 #: Relative tolerance between a trial's median sample interval and 1 / rate_hz.
 RATE_TOLERANCE = 0.05
@@ -162,7 +172,7 @@ def check_shapes(n_rows: int, fields: Mapping[str, tuple[np.ndarray | None, int]
                                f"(shape {a.shape})", kind, row=start + min(n_rows, a.shape[0]))
 
 
-def check_trial(tr: Trial, start: int, origin: Origin) -> None:
+def check_trial(tr: TrialFields, start: int, origin: Origin) -> None:
     """One trial's content: shapes, ≥ 2 samples, finite values, strictly increasing
     time, mode labels ≥ −1. ``start``: stacked row of the trial's first sample."""
     context = f"trial {tr.trial_id}: "
@@ -225,7 +235,7 @@ def infer_rate(times: Sequence[np.ndarray]) -> float:
     return float(f"{1.0 / float(np.median(dt)):.9g}")
 
 
-def check_rate(tr: Trial, start: int, rate_hz: float, origin: Origin) -> None:
+def check_rate(tr: TrialFields, start: int, rate_hz: float, origin: Origin) -> None:
     """The trial's median sample interval is 1 / rate_hz within :data:`RATE_TOLERANCE`."""
     med = float(np.median(np.diff(tr.t)))
     if abs(med * rate_hz - 1.0) > RATE_TOLERANCE:
@@ -247,7 +257,7 @@ def check_names(names: Mapping[str, Sequence[str]], origin: Origin) -> None:
                                       "spaces, commas, quotes or newlines", path=origin.path, field=fld)
 
 
-def check_set(trials: Sequence[Trial], rate_hz: Any, names: Mapping[str, Sequence[str]],
+def check_set(trials: Sequence[TrialFields], rate_hz: Any, names: Mapping[str, Sequence[str]],
               origin: Origin, starts: Sequence[int]) -> float:
     """Check a whole set once; return its rate [Hz] (inferred from ``t`` when ``rate_hz`` is None).
 

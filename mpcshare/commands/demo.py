@@ -35,7 +35,7 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.data import format_summary
 from mpcshare.commands.sim import add_wearer_argument, cutting_steps
-from mpcshare.experiments.episode_pool import MAX_DEFAULT_WORKERS, EpisodePool, default_workers
+from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, EpisodePool, default_workers
 from mpcshare.training.config import RULE_DURATION_S, TrainConfig
 from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
 
@@ -110,7 +110,7 @@ def _start_choice(bundle: Any, demos: Demonstrations, wearer_name: str, rule_dur
     held-out trials, ``rule_duration_s`` each, beside the wearer ``wearer_name``; recorded in
     ``bundle.metrics``), its episodes in ``pool``: with workers, in a thread that waits for them while this
     process goes on (its lines printed at the end); else at once. Returns what ends it and prints it."""
-    from mpcshare.training.rule_choice import choose_for_bundle
+    from mpcshare.calibration.rule_choice import choose_for_bundle
 
     lines: list[str] = []
     choose = partial(choose_for_bundle, bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,
@@ -212,7 +212,7 @@ def _start_sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainC
 def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, out: Path, pool: EpisodePool) -> dict:
     """Stage 6: every run of the run table on the held-out trials (episodes in ``pool``), the video,
     ``sim/comparison.*``."""
-    from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, output_size, render_clip
+    from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies, output_size, render_clip
     from mpcshare.reports.comparison import write_comparison
     from sim.wearer_presets import wearer_preset
 

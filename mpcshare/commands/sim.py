@@ -132,7 +132,7 @@ def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list
                          out: Path, scene: Any = None) -> None:
     """Say how much the run files will take (``scene``: the arm's world, None: the SuperLimb's), after the
     options are checked and before anything is written, and how to make them smaller."""
-    from mpcshare.experiments import output_size
+    from mpcshare.evaluation import output_size
 
     mcap = getattr(args, "mcap", False)
     npz, mcap_bytes = output_size(runs, demos, trial_ids, args.duration, mcap, getattr(args, "mcap_rate", None),
@@ -157,7 +157,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     from mpcshare.conflicts import Scenario
     from mpcshare.control.keepout import KeepOutSettings
     from mpcshare.control.types import ControllerConfig
-    from mpcshare.experiments import DEFAULT_RUNS, compare_strategies, render_clip
+    from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies, render_clip
     from mpcshare.reports.comparison import write_comparison
     from sim.wearer_presets import wearer_preset
 

@@ -107,7 +107,7 @@ def serve_controller(args: argparse.Namespace, bundle: Any) -> tuple[Callable[..
                            f"(domain {config.network.domain_id})")
 
     def make(_bundle: Any, **options: Any) -> Any:
-        from robot.description import as_description
+        from robot.default_arm import as_description
 
         robot = options.get("robot") or as_description(None)
         if list(robot.joint_names) != list(config.arm.joints):

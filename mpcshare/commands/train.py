@@ -156,20 +156,20 @@ def _run(args: argparse.Namespace) -> int:
             print(result.conclusion)
             print(f"sweep: {out / 'sweep.md'}")
             return 0
-        from mpcshare.bundle import save_bundle
         from mpcshare.training import train_bundle
-        bundle = train_bundle(demos, config, progress=not args.quiet)
+        bundle = train_bundle(demos, config, progress=not args.quiet)  # stage 1: training (no simulator)
         bundle.config["data_path"] = str(Path(args.data).resolve())  # `mpcshare sim`'s default --data
         bundle.config["channel_map"] = mapping  # applied again by `mpcshare sim`
-        choice, skipped = _choose_rule(bundle, demos, args)
     except TrainingError as exc:
         raise CommandError(f"cannot train on {args.data}: {exc}") from None
+    choice, skipped = _calibrate(bundle, demos, args)  # stage 2: calibration, in the closed loop
+    from mpcshare.bundle import save_bundle
     try:
         save_bundle(bundle, out)
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
+    from mpcshare.calibration.rule_choice import rule_markdown
     from mpcshare.reports.training import write_training_md
-    from mpcshare.training.rule_choice import rule_markdown
 
     extra = rule_markdown(choice) if choice is not None else \
         f"## Hand-over rule\n\nThe {skipped}.\n" if skipped else ""
@@ -183,8 +183,8 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _choose_rule(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, str | None]:
-    """(the gate's settings chosen in the closed loop (:mod:`mpcshare.training.rule_choice`), recorded in
+def _calibrate(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, str | None]:
+    """(the gate's settings chosen in the closed loop (:mod:`mpcshare.calibration.rule_choice`), recorded in
     ``bundle.metrics`` (``rule_settings``, ``rule_choice``), or None; why the choice was skipped, or None).
     Skipped with ``--no-rule-choice`` (no reason given) and where the data cannot drive the simulator."""
     if args.no_rule_choice:
@@ -196,7 +196,7 @@ def _choose_rule(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, 
                "simulator: " + "; ".join(gaps))
         bundle.metrics["rule_choice_skipped"] = why
         return None, why
-    from mpcshare.training.rule_choice import choose_for_bundle
+    from mpcshare.calibration.rule_choice import choose_for_bundle
     from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,

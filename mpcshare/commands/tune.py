@@ -4,7 +4,7 @@
 fitted once), simulates every setting and what its comparison needs (the parties ``voluntary`` and
 ``reactive``, ``random_handover`` matched to each setting, the mean of :data:`DEFAULT_DRAWS` draws per
 pair; ``oracle_preview`` only with ``--oracle-preview``) on held-out trials × seeds (defaults: ≥ 10 pairs,
-tests Holm-corrected across settings) (:mod:`mpcshare.experiments.tuning`), and writes ``tune.json``,
+tests Holm-corrected across settings) (:mod:`mpcshare.evaluation.tuning`), and writes ``tune.json``,
 ``tune.md`` and ``pareto.png``. It says first how many episodes it plans and, after a first one timed, about
 how long they will take. Episodes run in a local process pool (``--workers``, default the CPU count, at
 most 2) or on Ray (``--backend ray``, the optional extra ``pip install -e .[ray]``); an interrupted sweep
@@ -21,7 +21,7 @@ from mpcshare.commands import base
 from mpcshare.commands.base import Command, CommandError, load_or_fail, prepare_output_folder
 from mpcshare.commands.data import DATA_HELP
 from mpcshare.commands.sim import add_wearer_argument
-from mpcshare.experiments.episode_pool import MAX_DEFAULT_WORKERS, default_workers
+from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, default_workers
 from mpcshare.run_table import RANDOM_DRAWS, TUNABLE
 from sim.demonstrator import MODE_NAMES
 
@@ -113,8 +113,8 @@ def _usage_error(message: str) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from learning.data import split_by_trial
-    from mpcshare.experiments.tuning.report import build_result, chance_sentences, recommendation_line, write_tune
-    from mpcshare.experiments.tuning.runner import RayMissing, run_tune
+    from mpcshare.evaluation.tuning.runner import RayMissing, run_tune
+    from mpcshare.reports.tune import build_result, chance_sentences, recommendation_line, write_tune
     from mpcshare.training.config import TrainConfig
 
     if args.backend == "ray":

@@ -59,7 +59,8 @@ from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundl
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, bound_reference, check_base_pose
 from mpcshare.errors import ControllerTypeError
-from robot.description import RobotDescription, as_description
+from robot.default_arm import as_description
+from robot.description import RobotDescription
 from robot.floor import FloorLimit
 from robot.kinematics import TipKinematics
 from robot.qp import QPStatus

@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from learning.atomic import atomic_open, write_json
-from mpcshare.experiments import Comparison
+from mpcshare.evaluation import Comparison
 from mpcshare.reports.headline import headline_lines, lag_words, trials_words
 from mpcshare.reports.style import strategy_colour, strategy_ticks
 from sim.task_metrics import SAWING_CRITERION, saws

@@ -21,7 +21,8 @@ from mpcshare.arms import TaskArm, task_arm
 from mpcshare.control.controller import SharedController
 from mpcshare.errors import ControllerSetupError
 from mpcshare.runtime.config import RunConfig, RunConfigError, check_against_model
-from robot.description import RobotDescription, as_description
+from robot.default_arm import as_description
+from robot.description import RobotDescription
 from robot.errors import ControllerConfigError
 from sim.scene import SceneConfig
 

@@ -34,7 +34,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from robot.description import RobotDescription, as_description
+from robot.default_arm import as_description
+from robot.description import RobotDescription
 from robot.mjcf import joint_axis
 
 __all__ = ["SymbolicArm"]

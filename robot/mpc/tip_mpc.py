@@ -39,7 +39,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robot.description import RobotDescription, as_description
+from robot.default_arm import as_description
+from robot.description import RobotDescription
 from robot.mpc.problem import CondensedProblem, Weights
 from robot.mpc.qp import ConicQP, DaqpQP
 

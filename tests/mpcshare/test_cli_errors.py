@@ -64,7 +64,7 @@ def test_top_level_help_lists_every_command():
 
 
 def test_sim_help_names_the_runs_it_runs_by_default():
-    from mpcshare.experiments import DEFAULT_RUNS
+    from mpcshare.evaluation import DEFAULT_RUNS
 
     sim = next(c for c in COMMANDS if c.name == "sim")
     p = argparse.ArgumentParser()

@@ -10,7 +10,7 @@ import pytest
 
 from learning.data import Demonstrations, load, save
 from mpcshare.cli import main
-from mpcshare.experiments import METRIC_KEYS, pool_metrics
+from mpcshare.evaluation import METRIC_KEYS, pool_metrics
 from mpcshare.reports.html import markdown_to_html
 from sim.demonstrator import generate_demonstrations
 from sim.episode import Episode

@@ -12,10 +12,10 @@ import pytest
 from mcap.reader import make_reader
 
 import mpcshare.bundle
-import mpcshare.experiments.runs
+import mpcshare.evaluation.runs
 from learning.data import save
 from mpcshare.cli import main
-from mpcshare.experiments import StrategyRun, compare_strategies
+from mpcshare.evaluation import StrategyRun, compare_strategies
 from sim.closed_loop import Episode
 from sim.demonstrator import generate_demonstrations
 from tests.sim.controllers import IdleController
@@ -68,12 +68,12 @@ def _stand_in_bundle(demos, tmp_path, monkeypatch) -> None:
                              vol_names=list(demos.vol_names), rate_hz=demos.rate_hz, heldout_trials=[0],
                              config={"data_path": str(data)})
     monkeypatch.setattr(mpcshare.bundle, "load_bundle", lambda path: bundle)
-    monkeypatch.setattr(mpcshare.experiments.runs, "_from_bundle", _idle)
+    monkeypatch.setattr(mpcshare.evaluation.runs, "_from_bundle", _idle)
 
 
 def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tmp_path, monkeypatch, capsys):
     _stand_in_bundle(demos, tmp_path, monkeypatch)
-    from mpcshare.experiments import DEFAULT_RUNS, output_size
+    from mpcshare.evaluation import DEFAULT_RUNS, output_size
 
     out = tmp_path / "sim"
     assert main(["sim", "--model", "stand-in", "--out", str(out), "--duration", "3", "--runs", "voluntary",

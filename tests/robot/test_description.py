@@ -8,7 +8,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robot.description import RobotDescription, as_description, braking_torque_ratio
+from robot.default_arm import as_description
+from robot.description import RobotDescription, braking_torque_ratio
 from robot.errors import ControllerConfigError, FrameNotFoundError
 from robot.limits import JointLimits
 from robot.superlimb import SuperLimbParams, superlimb_description

@@ -134,7 +134,7 @@ def test_pickup_error_against_a_direct_computation():
 
 
 def test_pooled_pickups_weigh_by_time_and_squared_error():
-    from mpcshare.experiments.pooling import pool_task_metrics
+    from mpcshare.evaluation.pooling import pool_task_metrics
 
     a = {"pickups": 2, "pickup_rms_m": 0.03, "pickup_s": 2.0, "pickup_error_share": 0.5, "tracking_rmse_m": 0.01}
     b = {"pickups": 0, "pickup_rms_m": None, "pickup_s": 0.0, "pickup_error_share": None, "tracking_rmse_m": 0.02}

@@ -38,13 +38,13 @@ lead, and keeps it for ``hold_s`` after the evidence fades (off when ``push_mps`
 **A bounded lead.** With ``wearer_max_s`` finite, the wearer leads a wearer mode for at most that long:
 then the robot takes back (at its share, below) until the score has fallen below ``share_off``, so the
 next entry into a wearer mode is handed over afresh. The splice bound under the task's own measure
-(:mod:`mpcshare.experiments.sawing_bound`) found, on some worlds, the best sawing schedules giving the
+(``research/sawing_bound.py``) found, on some worlds, the best sawing schedules giving the
 wearer the first one or two seconds of each cutting stretch, where the robot cannot predict the intent's
 jump, and the robot the rest at a shared α; the hand-back costs little (the robot's P-gain takes up at
 once). Default: inf (the wearer keeps the mode).
 
 **Measured wearer modes.** Where ``mpcshare train`` chose the wearer's modes in the closed loop
-(:mod:`mpcshare.training.rule_choice`, by what each mode costs under each party), the setting
+(:mod:`mpcshare.calibration.rule_choice`, by what each mode costs under each party), the setting
 ``wearer_modes`` lists them and v is their indicator (v_j = 1 for a wearer mode, else 0): s_t is
 then the forecast probability of being in a wearer mode within ``lead_s``.
 

@@ -7,7 +7,7 @@ import pytest
 
 from mpcshare.control import ControllerConfig, SharedController
 from mpcshare.control.arbitration import Arbiter
-from mpcshare.experiments import intent_preview
+from mpcshare.evaluation import intent_preview
 from sim.closed_loop import run_episode
 from sim.task_metrics import time_lag
 from tests.mpcshare.control.controller_doubles import demos_and_bundle

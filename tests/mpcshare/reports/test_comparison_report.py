@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 from matplotlib.colors import to_rgb
 
-from mpcshare.experiments import Comparison
+from mpcshare.evaluation import Comparison
 from mpcshare.reports.comparison import comparison_findings, comparison_markdown, task_sentence
 from mpcshare.reports.style import strategy_colour
 from mpcshare.run_table import RUN_NAMES

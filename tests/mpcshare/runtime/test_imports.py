@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from tests.test_layering import ROOT, _imports, _sources
 
-NEVER = ("mpcshare.training", "mpcshare.reports", "mpcshare.commands", "mpcshare.cli", "mpcshare.experiments")
+NEVER = ("mpcshare.training", "mpcshare.reports", "mpcshare.commands", "mpcshare.cli", "mpcshare.evaluation")
 
 
 def test_the_runtime_never_imports_training_reports_or_the_command_line():

@@ -13,7 +13,7 @@ from mcap.reader import make_reader
 from mcap.well_known import MessageEncoding
 
 from mpcshare.runtime.live import LiveView
-from robot.description import as_description
+from robot.default_arm import as_description
 from sim.run_mcap import TOPICS
 
 needs_foxglove = pytest.mark.skipif(importlib.util.find_spec("foxglove") is None,

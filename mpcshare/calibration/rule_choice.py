@@ -1,0 +1,384 @@
+"""The default gate's wearer modes chosen in the closed loop on held-out trials of the user's own data.
+
+The rule (:mod:`mpcshare.control.strategies.gate`) hands the wearer whole modes, before they
+begin. Which modes those should be depends on how well the robot and the wearer *track* each
+mode and what leading costs the wearer, which the data alone do not say (the wearer's error is
+not recorded), so :func:`choose_rule` measures it:
+
+1. it simulates the closed loop (:func:`mpcshare.evaluation.simulate_episode`, the default
+   wearer) on the given held-out trials with ``voluntary`` and ``reactive``, and reads what each
+   mode costs under each party (:func:`mpcshare.calibration.mode_cost.mode_costs`: the squared
+   error the wearer saves per unit of effort, the *price* ρ_j);
+2. candidates (:func:`candidate_sets`): the wearer leads the top 1, 2, … modes by price (the
+   lower hull of effort against error over whole-mode assignments); each of them together
+   with the modes that carry the labelled cutting, where the data name one (the task: the knife
+   must saw, and only the wearer knows the stroke); and the robot leading every mode; each set with
+   two hand-over timings (:data:`HANDOVER_TIMINGS`: ``prompt``, the wearer leads once a wearer mode is
+   likely within 0.5 s; ``early``, once it is possible within 1.5 s, kept 1 s longer), with the robot's
+   full share while it leads; then, a second stage, the best :data:`SECOND_STAGE_TOP` of those by the
+   criterion and the empty set with the robot's share 0.5 while it leads (:data:`ROBOT_ALPHAS`, the
+   gate's ``robot_alphas``: at 0.5 a robot-led step is the mixture 0.5·û_r + 0.5·û_v, ``mix50``). The
+   share changes only the robot-led steps, so it is tried on the sets that win without it rather than on
+   all of them: that halves the choice's cost;
+3. each candidate is simulated in the closed loop (hand-over costs included) and scored by its
+   **line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to
+   that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
+
+Criterion (:data:`CRITERION`): among the candidates whose effort is at most ``max_effort`` × the
+voluntary effort (the issue-28 target 0.75), those that saw while cutting (:func:`saws`: the
+task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line
+ratio; where the line is ill-posed (the robot alone costs the wearer at least ``max_effort`` × the
+effort of doing it alone), the lowest tracking RMS of those. When none is within the effort cap,
+the same without the cap (sawing first, the lowest line ratio; the lowest RMS where no line ratio is
+defined): the lowest RMS alone would pick the candidate that hands the wearer nearly everything (the
+early timing's, at 1.00x the effort, on the demo's choice trials). The choice, every candidate's
+figures, the per-mode costs and why are returned for the bundle's ``metrics`` and ``training.md``.
+"""
+
+from __future__ import annotations
+
+import time
+from contextlib import nullcontext
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from learning.data import Demonstrations
+from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
+from mpcshare.control.strategies.gate import DEFAULTS as GATE_DEFAULTS
+from mpcshare.control.types import ControllerConfig
+from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
+from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
+from mpcshare.line_ratio import line_ratio as _line_ratio
+from mpcshare.training.config import RULE_DURATION_S
+from sim.task_metrics import saws as task_saws
+from sim.wearer import WearerConfig
+
+__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
+           "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
+           "pooled_run", "pooled_runs", "rule_markdown", "saws"]
+
+CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
+             "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
+             "max_effort x voluntary); if none is within the cap, the same without the cap (the lowest line "
+             "ratio of those that saw)")
+#: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
+HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GATE_DEFAULTS["lead_s"],
+                     "hold_s": GATE_DEFAULTS["hold_s"]}
+#: the early timing: the wearer takes the lead at a forecast probability of 0.2 within 1.5 s and keeps it
+#: for 1 s after it falls below 0.1. A hand-over to the wearer costs most when it comes just after the
+#: knife's intent has jumped into a wearer mode (the pick-up, docs/design.md); earlier, while the robot
+#: still tracks, the wearer inherits a small error and leads through the jump (family world 0, modes
+#: [0, 1]: line 1.04 → 0.97; default data [0, 2]: 0.76 → 0.71; at more effort: 0.34 → 0.46, 0.60 → 0.72)
+EARLY_HANDOVER_SETTINGS = {"share_on": 0.2, "share_off": 0.1, "lead_s": 1.5, "hold_s": 1.0}
+#: the hand-over timings each non-empty wearer-mode set is tried with: name → the gate's settings
+HANDOVER_TIMINGS = {"prompt": HANDOVER_SETTINGS, "early": EARLY_HANDOVER_SETTINGS}
+#: the robot's shares α while the wearer leads that each non-empty wearer-mode set is tried with (the gate's
+#: ``wearer_alpha``). Only 0, the wearer alone: 0.25 (``mix25`` within the wearer's modes) was tried on 5
+#: worlds (bench_family --quick, every candidate on the evaluation trials): it lowered the line ratio of 2
+#: of 20 sets by more than 0.01 (default data [0, 1]: 1.05 → 0.80, [0, 1, 2]: 0.97 → 0.73) and raised it
+#: on 16 (up to 1.60 → 3.21 on the family, where the robot's stroke is noise), at twice the choice's
+#: cost; pass ``wearer_alphas`` to try it.
+WEARER_ALPHAS = (0.0,)
+#: the robot's shares α while it leads (the gate's ``robot_alphas``, the same in every mode) that each set is
+#: tried with. The robot at full share (α = 1, the user's β) lay above the voluntary–reactive line on the
+#: family of worlds where the mixture at 0.5 lay below it (family worlds 0 and 3, the robot leading every
+#: mode: line 0.96 and 1.02 at 1, 0.90 and 0.99 at 0.5; docs/design.md, "The robot's share while it leads").
+ROBOT_ALPHAS = (1.0, 0.5)
+#: how many of the first stage's candidates (at the first robot share) the other shares are tried on, beside
+#: the empty set (the robot leading every mode)
+SECOND_STAGE_TOP = 2
+
+
+def line_ratio(rms: float, effort: float, voluntary: dict[str, float], reactive: dict[str, float]) -> float | None:
+    """RMS / RMS_line(effort) of :func:`mpcshare.line_ratio.line_ratio` (the one definition: the line
+    held at its ends, never extrapolated), from the parties' pooled metrics; None where undefined."""
+    return _line_ratio(rms, effort, (voluntary["voluntary_effort"], voluntary["tracking_rmse_m"]),
+                       (reactive["voluntary_effort"], reactive["tracking_rmse_m"]))
+
+
+def candidate_sets(order: Sequence[int], cutting: Sequence[int], n_modes: int) -> list[list[int]]:
+    """The wearer-mode sets to try (module docstring): the prefixes of ``order`` (modes by price), each
+    also joined with the ``cutting`` modes, the cutting modes alone, and last the empty set (the robot
+    leads every mode); never all ``n_modes`` (that is ``voluntary``); sorted sets, no repeats."""
+    sets: list[list[int]] = []
+    prefixes = [list(order[:i]) for i in range(1, len(order) + 1)]
+    for base in prefixes + ([[]] if cutting else []):
+        for s in (base, sorted(set(base) | set(cutting))):
+            s = sorted(int(j) for j in s)
+            if s and len(s) < n_modes and s not in sets:
+                sets.append(s)
+    return sets + [[]]
+
+
+def _variants(sets: list[list[int]], timings: Sequence[str], wearer_alphas: Sequence[float],
+              robot_alphas: Sequence[float] = (1.0,)) -> list[tuple[list[int], str, float, float]]:
+    """Each wearer-mode set with each hand-over timing, each robot share while the wearer leads
+    (``wearer_alphas``) and each robot share while the robot leads (``robot_alphas``); the empty set, with
+    no hand-over, with the first timing and wearer share 0 only."""
+    return [(m, h, float(a), float(r)) for m in sets for h in (timings if m else timings[:1])
+            for a in (wearer_alphas if m else (0.0,)) for r in robot_alphas]
+
+
+def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
+                specs: Sequence[tuple[str, dict | None]], duration_s: float | None, wearer: WearerConfig | None,
+                seed: int, mode_names: Sequence[str] | None = None,
+                pool: EpisodePool | None = None) -> list[tuple[dict[str, float], list[Any]]]:
+    """:func:`pooled_run` of each (strategy, gate options) in ``specs``, every episode in one batch of
+    ``pool`` (default: this process), in the order of ``specs``."""
+    jobs = [EpisodeJob(int(tid), StrategyRun(strategy, strategy),
+                       {"config": ControllerConfig(strategy_options=dict(options))} if options else {})
+            for strategy, options in specs for tid in trials]
+    done = (pool or EpisodePool(demos)).map(simulate_episode, bundle, jobs, beta=0.5, duration_s=duration_s,
+                                           seed=seed, wearer=wearer, mode_names=mode_names)
+    n = len(trials)
+    return [_pooled(done[i * n:(i + 1) * n]) for i in range(len(specs))]
+
+
+def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
+               duration_s: float | None, wearer: WearerConfig | None, seed: int,
+               mode_names: Sequence[str] | None = None,
+               pool: EpisodePool | None = None) -> tuple[dict[str, float], list[Any]]:
+    """Pooled figures of ``strategy`` on ``trials`` (RMS, effort, limit violations, mean stroke correlation
+    while cutting or None) and the episodes."""
+    return pooled_runs(bundle, demos, trials, [(strategy, options)], duration_s, wearer, seed, mode_names, pool)[0]
+
+
+def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float], list[Any]]:
+    """The figures of :func:`pooled_run` from (episode, metrics) per trial, and the episodes."""
+    ms = [m for _, m in done]
+    episodes = [ep for ep, _ in done]
+    steps = [np.asarray(ep.step_time, dtype=float) for ep in episodes]
+    secs = [float(ep.t[-1] - ep.t[0]) for ep in episodes]
+    p = pool_metrics(ms, steps, secs)
+    out = {k: p[k] for k in ("tracking_rmse_m", "voluntary_effort", "limit_violations")}
+    for key in ("saw_correlation", "saw_amplitude_ratio"):
+        vals = [m[key] for m in ms if m.get(key) is not None]
+        out[key] = float(np.mean(vals)) if vals else None
+    return out, episodes
+
+
+def saws(row: dict[str, Any]) -> bool:
+    """Whether the knife sawed while cutting in ``row``: the task's criterion (:func:`sim.task_metrics.saws`)."""
+    return task_saws(row.get("saw_correlation"), row.get("saw_amplitude_ratio"))
+
+
+def _n_modes(bundle: Any) -> int:
+    """The mode model's number of modes; ValueError when the bundle has none."""
+    modes = getattr(bundle, "modes", None)
+    A = getattr(modes, "transmat_", None)
+    if A is None:
+        raise ValueError("the bundle has no mode model (modes.transmat_) whose modes the wearer could lead")
+    return int(np.shape(A)[0])
+
+
+def _cutting(bundle_episodes: list[Any], demos: Demonstrations, trials: Sequence[int],
+             mode_names: Sequence[str] | None, n_modes: int) -> list[int]:
+    """The controller's modes that carry the labelled cutting (none without labels or a ``cutting`` name)."""
+    if not mode_names or "cutting" not in mode_names:
+        return []
+    by_id = {tr.trial_id: tr for tr in demos.trials}
+    labels = [by_id[int(t)].mode for t in trials]
+    if any(lab is None for lab in labels):
+        return []
+    return cutting_modes(bundle_episodes, labels, list(mode_names).index("cutting"), n_modes)
+
+
+def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
+               max_effort: float) -> tuple[dict[str, Any], str]:
+    """The chosen row and why (module docstring, :data:`CRITERION`)."""
+    within = [r for r in rows if r["effort_vs_voluntary"] <= max_effort]
+    if not within:
+        sawing = [r for r in rows if saws(r)]
+        pool, task = (sawing, " of those that saw while cutting") if saws(vol) and sawing else (rows, "")
+        ranked = [r for r in pool if r["line_ratio"] is not None]
+        if ranked:
+            best = min(ranked, key=lambda r: r["line_ratio"])
+            return best, (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest line ratio "
+                          f"({best['line_ratio']:.3f}){task}")
+        best = min(pool, key=lambda r: r["tracking_rmse_m"])
+        return best, (f"no candidate has effort <= {max_effort:g}x voluntary and none a line ratio; the lowest "
+                      f"tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm){task}")
+    sawing = [r for r in within if saws(r)]
+    pool, task = (sawing, ", of those that saw while cutting") if saws(vol) and sawing else (within, "")
+    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
+    ranked = [r for r in pool if r["line_ratio"] is not None]
+    if posed and ranked:
+        best = min(ranked, key=lambda r: r["line_ratio"])
+        return best, (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(within)} of {len(rows)} "
+                      f"candidates with effort <= {max_effort:g}x voluntary{task}")
+    best = min(pool, key=lambda r: r["tracking_rmse_m"])
+    cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort, "
+             "so the line is ill-posed" if not posed else "no line ratio is defined")
+    return best, (f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm) among the "
+                  f"{len(within)} of {len(rows)} candidates with effort <= {max_effort:g}x voluntary{task}")
+
+
+def _second_stage(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any], max_effort: float,
+                  top: int) -> list[dict[str, Any]]:
+    """The first stage's ``top`` rows in the criterion's order (:func:`_criterion` applied again to what
+    is left), and the empty set's row (the robot leading every mode) where it is not among them."""
+    left, picked = list(rows), []
+    while left and len(picked) < top:
+        best, _ = _criterion(left, vol, rea, max_effort)
+        picked.append(best)
+        left = [r for r in left if r is not best]
+    picked += [r for r in left if not r["wearer_modes"]][:1]
+    return picked
+
+
+def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
+                duration_s: float | None = RULE_DURATION_S,
+                max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
+                mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
+                timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
+                log: Callable[[str], None] | None = None, pool: EpisodePool | None = None) -> dict[str, Any]:
+    """Choose the gate's wearer modes in the closed loop (module docstring).
+
+    ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
+    task's stroke; None: no sawing figures); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
+    wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer
+    leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's
+    shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
+    with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
+    stage's episodes are one batch). Returns ``{"settings", "wearer_modes", "why",
+    "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
+    "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
+    "seconds"}``. Raises ValueError when the bundle has no mode model or no
+    trial is given.
+    """
+    if not len(trials):
+        raise ValueError("choose_rule needs at least one held-out trial")
+    n_modes = _n_modes(bundle)
+    t0 = time.perf_counter()
+
+    def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
+        return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool)
+
+    (vol, vol_eps), (rea, rea_eps) = run([("voluntary", None), ("reactive", None)])
+    costs = mode_costs(vol_eps, rea_eps, n_modes)
+    order = price_order(costs)
+    cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
+    rows: list[dict[str, Any]] = []
+    unknown = sorted(set(timings) - set(HANDOVER_TIMINGS))
+    if unknown or not timings:
+        raise ValueError(f"unknown hand-over timing(s) {unknown or timings!r}; valid: {', '.join(HANDOVER_TIMINGS)}")
+    bad = [a for a in robot_alphas if not 0.5 <= float(a) <= 1.0]
+    if bad or not robot_alphas:
+        raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
+
+    def evaluate(variants: list[tuple[list[int], str, float, float]]) -> None:
+        # every setting written out, so that none is taken from a bundle's earlier choice (rule_settings)
+        settings = [{"wearer_modes": modes, **HANDOVER_TIMINGS[timing], "wearer_alpha": a_w,
+                     "robot_alphas": [a_r] * n_modes} for modes, timing, a_w, a_r in variants]
+        for (modes, timing, a_w, a_r), st, (m, _) in zip(variants, settings, run([("gate", x) for x in settings])):
+            rows.append({"wearer_modes": modes, "timing": timing, "wearer_alpha": a_w, "robot_alpha": a_r,
+                         "settings": st, **m,
+                         "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
+                         "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
+            if log is not None:
+                r = rows[-1]
+                lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
+                log(f"  gate with wearer modes {r['wearer_modes']} ({timing} hand-over, robot share {a_w:g} while "
+                    f"the wearer leads, {a_r:g} while it leads): "
+                    f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
+                    f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
+
+    evaluate(_variants(candidate_sets(order, cutting, n_modes), list(timings), wearer_alphas, robot_alphas[:1]))
+    evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
+              for r in _second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
+    best, why = _criterion(rows, vol, rea, max_effort)
+    task_effort = cutting_effort(costs, cutting)
+    if task_effort is not None and task_effort > max_effort and not (saws(best) and
+                                                                     best["effort_vs_voluntary"] <= max_effort):
+        why += (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
+                f"task alone (the robot leading the rest; from the per-mode costs), so no rule that leaves them to the "
+                f"wearer stays within {max_effort:g}x here")
+    return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
+            "cutting_effort_vs_voluntary": task_effort,
+            "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
+            "mode_costs": costs, "price_order": order, "cutting_modes": cutting,
+            "trials": [int(t) for t in trials], "duration_s": duration_s,
+            "seconds": round(time.perf_counter() - t0, 1)}
+
+
+def choice_trials(heldout: Sequence[int], n_trials: int | None = None) -> list[int]:
+    """The held-out trials the choice runs on: the last ``n_trials`` (default: half of them, 1 to 2). The
+    others are left for evaluating the chosen rule."""
+    held = [int(t) for t in heldout]
+    n = n_trials or min(2, max(1, len(held) // 2))
+    return held[-n:]
+
+
+def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
+                      duration_s: float | None = RULE_DURATION_S, wearer_name: str | None = None,
+                      mode_names: Sequence[str] | None = None,
+                      log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
+                      workers: int | None = None) -> dict[str, Any]:
+    """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
+    1 to 2) with the wearer preset ``wearer_name`` (default the default preset) and the demonstrations'
+    ``mode_names`` (for the cutting modes), recorded in
+    ``bundle.metrics`` (``rule_settings``, ``rule_choice``) so that the saved bundle's ``gate`` uses it;
+    returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
+    :func:`mpcshare.evaluation.episode_pool.default_workers`) closed afterwards; the choice is the same
+    whatever the number. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
+    from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
+
+    name = wearer_name or DEFAULT_WEARER_PRESET
+    trials = choice_trials(bundle.heldout_trials, n_trials)
+    with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
+        choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
+                             mode_names=mode_names, pool=episodes)
+    choice["wearer"] = name
+    bundle.metrics["rule_settings"] = choice["settings"]
+    bundle.metrics["rule_choice"] = choice
+    return choice
+
+
+def rule_markdown(choice: dict[str, Any]) -> str:
+    """The choice as a Markdown section (for ``training.md``)."""
+    dur = "whole trials" if choice["duration_s"] is None else f"the first {choice['duration_s']:g} s"
+    lines = ["## Hand-over rule (closed-loop choice)", "",
+             f"Chosen on held-out trials {choice['trials']} ({dur}, wearer {choice.get('wearer', 'default')}) in "
+             f"{choice['seconds']:g} s: "
+             f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
+             f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
+             *_costs_markdown(choice),
+             "| run | wearer modes | hand-over | robot share while the wearer leads | robot share while it leads | "
+             "RMS [mm] | effort vs voluntary | line ratio | stroke corr. |", "|---|---|---|---|---|---|---|---|---|"]
+    for name in ("voluntary", "reactive"):
+        m = choice[name]
+        lines.append(f"| {name} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
+                     f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
+    for r in choice["candidates"]:
+        lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
+        lines.append(f"| gate | {r['wearer_modes']} | {r.get('timing', 'prompt')} | {r.get('wearer_alpha', 0.0):g} | "
+                     f"{r.get('robot_alpha', 1.0):g} | "
+                     f"{r['tracking_rmse_m'] * 1e3:.1f} | "
+                     f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
+    return "\n".join(lines) + "\n"
+
+
+def _f(row: dict[str, Any]) -> str:
+    return "n/a" if row.get("saw_correlation") is None else f"{row['saw_correlation']:.2f}"
+
+
+def _costs_markdown(choice: dict[str, Any]) -> list[str]:
+    """The per-mode costs table (:mod:`mpcshare.calibration.mode_cost`) and the order and cutting modes."""
+    c = choice["mode_costs"]
+    rows = ["What each mode costs (the controller's own mode estimate; price: squared error the wearer saves per "
+            "rad of effort):", "",
+            "| mode | share | wearer RMS [mm] | robot RMS [mm] | wearer effort [rad] | robot effort [rad] | "
+            "price [mm²/rad] |", "|---|---|---|---|---|---|---|"]
+    def f(key: str, j: int, digits: int) -> str:
+        return "n/a" if c[key][j] is None else f"{c[key][j]:.{digits}f}"
+
+    for j in range(len(c["share"])):
+        rows.append(f"| {j} | {f('share', j, 2)} | {f('rms_wearer_mm', j, 1)} | {f('rms_robot_mm', j, 1)} | "
+                    f"{f('effort_wearer_rad', j, 3)} | {f('effort_robot_rad', j, 3)} | "
+                    f"{f('price_mm2_per_rad', j, 0)} |")
+    task = choice.get("cutting_effort_vs_voluntary")
+    task_line = "" if task is None else (f" Leading them, the robot leading the rest, costs the wearer {task:.2f}x the "
+                                         "effort of doing the task alone (before any hand-over's cost).")
+    return rows + ["", f"Modes by price: {choice['price_order']}; modes that carry the cutting: "
+                   f"{choice['cutting_modes'] or 'none named'}.{task_line}", ""]

@@ -1,0 +1,90 @@
+"""One closed-loop episode of a strategy on a held-out trial, with its metrics: :func:`simulate_episode`.
+
+What :func:`mpcshare.evaluation.runs.compare_strategies`, the rule choice and ``tune`` run per episode:
+the controller built from the bundle (:meth:`SharedController.from_bundle` by default), the trial
+simulated by :func:`sim.closed_loop.run_episode`, and the metrics of :mod:`sim.metrics`,
+:mod:`sim.task_metrics` and :mod:`sim.keepout_metrics`.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Callable, Sequence
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from learning.data import Demonstrations
+from mpcshare.channel_map import bundle_wearer
+from mpcshare.run_table import StrategyRun
+from sim.closed_loop import run_episode
+from sim.keepout_metrics import episode_keepout_metrics
+from sim.metrics import episode_metrics
+from sim.scene import SceneConfig
+from sim.task_metrics import episode_task_metrics
+from sim.wearer import WearerConfig
+
+if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
+    from mpcshare.bundle import ModelBundle
+
+__all__ = ["intent_preview", "simulate_episode"]
+
+
+def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
+    """The default controller factory: :meth:`SharedController.from_bundle` (imported when first used)."""
+    from mpcshare.control.controller import SharedController
+
+    return SharedController.from_bundle(bundle, **options)
+
+
+def intent_preview(trial: Any, act_names: Sequence[str], wearer: WearerConfig | None = None) -> Any:
+    """The wearer's true intent as a known tip trajectory (the ``oracle_preview`` run's preview):
+    the trial's knife tip smoothed as :class:`sim.wearer.SimulatedWearer` smooths its intent."""
+    from mpcshare.control.forecast import KnownTrajectory
+    from sim.closed_loop import TIP_CHANNELS
+    from sim.wearer import smooth_intent
+
+    names = list(act_names)
+    missing = [c for c in TIP_CHANNELS if c not in names]
+    if missing:
+        raise ValueError(f"oracle_preview needs the knife tip channels {missing} in the act names {names}")
+    rate = 1.0 / float(np.median(np.diff(trial.t)))
+    cutoff = (wearer or WearerConfig()).intent_cutoff_hz
+    positions, _ = smooth_intent(trial.act[:, [names.index(c) for c in TIP_CHANNELS]], rate, cutoff)
+    return KnownTrajectory(positions, 1.0 / rate)
+
+
+def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: StrategyRun, options: dict[str, Any],
+                     *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
+                     mode_names: Sequence[str] | None,
+                     make_controller: Callable[..., Any] | None = None,
+                     scene: SceneConfig | None = None, scenario: Any = None) -> tuple[Any, dict[str, Any]]:
+    """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
+    its metrics: :func:`sim.metrics.episode_metrics`, the task figures of :mod:`sim.task_metrics`
+    and the keep-out figures of :mod:`sim.keepout_metrics`. ``scene``: the world and its arm (default
+    ``SceneConfig()``, the SuperLimb); the controller is given the scene's arm (``robot=``).
+    ``scenario``: a :class:`mpcshare.conflicts.Scenario` that transforms the trial (and the bundle's
+    predictor) first."""
+    make_controller = make_controller or _from_bundle
+    fork_truth = None
+    if scenario is not None:
+        st = scenario.apply(trial, duration_s)
+        trial, fork_truth = st.trial, st.fork_truth
+        bundle = scenario.wrap_bundle(bundle, st, demos.act_names)
+    if run.oracle:
+        options = {**options, "preview": intent_preview(trial, demos.act_names, wearer)}
+    if scene is not None:
+        options = {**options, "robot": scene.robot}
+    wearer = bundle_wearer(bundle, wearer)
+    controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
+    # one BLAS thread: the controller's products are small (a 7-joint MPC's take ≈ 2 ms a solve on one
+    # thread, ≈ 20 ms with OpenBLAS's threads on a shared 2-core machine; docs/design.md)
+    with threadpool_limits(limits=1, user_api="blas"):
+        episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
+                              obs_names=list(demos.obs_names), act_names=list(demos.act_names),
+                              fork_truth=fork_truth)
+    m = episode_metrics(episode)
+    true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
+    m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
+                                  true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
+    m.update(episode_keepout_metrics(episode))
+    return episode, m

@@ -1,7 +1,0 @@
-"""The closed-loop sweep ``mpcshare tune``: K × β × strategy against matched random hand-overs.
-
-- :mod:`mpcshare.experiments.tuning.episodes` — the episodes of a sweep and one episode in any process;
-- :mod:`mpcshare.experiments.tuning.runner` — bundles per K, the local pool or Ray, resumable rows;
-- :mod:`mpcshare.experiments.tuning.stats` — summaries with bootstrap CIs, the gate against chance, Pareto set;
-- :mod:`mpcshare.experiments.tuning.report` — ``tune.json``, ``tune.md``, ``pareto.png``.
-"""
