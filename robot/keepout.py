@@ -47,7 +47,7 @@ from .errors import ControllerConfigError, FrameNotFoundError
 from .state import ControlState
 
 __all__ = ["BLADE_LENGTH", "Blade", "KeepOutConfig", "KeepOutLimit", "RetreatAction", "Zone", "ZoneClearance",
-           "closest_segment_points", "retreat", "segment_zone_clearance"]
+           "closest_segment_points", "retreat", "segment_zone_clearance", "segment_zone_clearances"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 #: [m] the SuperLimb's blade, tip to heel along the tool frame's −x (of its 0.14 m knife, the
@@ -136,6 +136,42 @@ def segment_zone_clearance(tip: np.ndarray, heel: np.ndarray, zone: Zone) -> Zon
         nn = float(np.linalg.norm(normal))
         normal = normal / nn if nn > 1e-12 else np.array([0.0, 0.0, 1.0])
     return ZoneClearance(dist - zone.radius, s, normal, pb, pz)
+
+
+def segment_zone_clearances(tip: np.ndarray, heel: np.ndarray, a: np.ndarray, b: np.ndarray,
+                            radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`segment_zone_clearance` of N blades and N zone axes at once: tip, heel, a, b (N, 3) [m], one
+    radius [m]. Returns (distance (N,), s (N,), normal (N, 3)); the same arithmetic per row (NaN rows stay NaN)."""
+    d1, d2, r = heel - tip, b - a, tip - a
+    aa, e, f = _dots(d1, d1), _dots(d2, d2), _dots(d2, r)
+    c, bb = _dots(d1, r), _dots(d1, d2)
+    eps = 1e-18
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = aa * e - bb * bb
+        s = np.where(denom > eps, np.clip((bb * f - c * e) / denom, 0.0, 1.0), 0.0)
+        t = (bb * s + f) / e
+        s = np.where(t < 0.0, np.clip(-c / aa, 0.0, 1.0), np.where(t > 1.0, np.clip((bb - c) / aa, 0.0, 1.0), s))
+        t = np.clip(t, 0.0, 1.0)
+        point_zone, point_blade = e <= eps, aa <= eps
+        s = np.where(point_zone, np.clip(-c / aa, 0.0, 1.0), s)
+        t = np.where(point_zone, 0.0, t)
+        t = np.where(point_blade, np.clip(f / e, 0.0, 1.0), t)
+        s = np.where(point_blade, 0.0, s)
+        both = point_blade & point_zone
+        s, t = np.where(both, 0.0, s), np.where(both, 0.0, t)
+        diff = (tip + s[:, None] * (heel - tip)) - (a + t[:, None] * (b - a))
+        dist = np.sqrt(_dots(diff, diff))
+        normal = diff / dist[:, None]
+    on_axis = ~(dist > 1e-12) & np.isfinite(dist)
+    if on_axis.any():  # push along the blade's perpendicular nearest to world up (as segment_zone_clearance)
+        for k in np.flatnonzero(on_axis):
+            normal[k] = segment_zone_clearance(tip[k], heel[k], Zone("", a[k], b[k], radius, a[k], 0.0)).normal
+    return dist - radius, s, normal
+
+
+def _dots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Row-wise x·y of (N, 3) arrays in :func:`_dot`'s order of operations."""
+    return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
 
 
 @dataclass(frozen=True)
