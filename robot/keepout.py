@@ -224,7 +224,7 @@ class Blade:
         heel = np.asarray(heel_offset, dtype=float)
         if heel.shape != (3,) or not np.isfinite(heel).all() or np.linalg.norm(heel) < 1e-6:
             raise ControllerConfigError(f"heel_offset must be a non-zero finite (3,) vector [m], got {heel_offset!r}")
-        self.model = model.copy()
+        self.model, self.heel_offset = model.copy(), heel
         tool = self.model.frames[int(frame)]
         placement = tool.placement * pin.SE3(np.eye(3), heel)
         self.tip_id = int(frame)
@@ -232,6 +232,7 @@ class Blade:
                                                      pin.FrameType.OP_FRAME))
         self.data = self.model.createData()
         self._zero = np.zeros(self.model.nv)
+        self._last: tuple[bytes, bytes | None, tuple[_Point, _Point]] | None = None
 
     def _point(self, fid: int) -> _Point:
         m, d = self.model, self.data
@@ -242,20 +243,29 @@ class Blade:
         return _Point(p, v, J, drift)
 
     def knife(self, q: np.ndarray, v: np.ndarray | None = None) -> tuple[_Point, _Point]:
-        """(tip, heel) positions [m], velocities [m/s], Jacobians and drifts J̇·v [m/s²] at (q, v)."""
+        """(tip, heel) positions [m], velocities [m/s], Jacobians and drifts J̇·v [m/s²] at (q, v); the
+        last state's are kept, so limits that share a blade (the keep-out and the floor) compute them once.
+        Read-only: the points are shared."""
+        key_q = np.asarray(q, dtype=float).tobytes()
+        key_v = None if v is None else np.asarray(v, dtype=float).tobytes()
+        if self._last is not None and self._last[0] == key_q and self._last[1] == key_v:
+            return self._last[2]
         m, d = self.model, self.data
         pin.forwardKinematics(m, d, q, self._zero if v is None else v, self._zero)
         pin.updateFramePlacements(m, d)
         pin.computeJointJacobians(m, d)
-        return self._point(self.tip_id), self._point(self.heel_id)
+        points = self._point(self.tip_id), self._point(self.heel_id)
+        self._last = (key_q, key_v, points)
+        return points
 
 
 class KeepOutLimit:
     """Keep-out rows ``G·a ≤ h`` (module docstring) for any Pinocchio model and tool frame.
 
     ``heel_offset`` (3,) [m]: the blade's heel in the tool frame (the SuperLimb's knife runs
-    along the tool frame's x: ``(−blade_length, 0, 0)``). Give the zones of each step with
-    :meth:`set_zones` (model world frame) before the QP's step; :attr:`clearances` holds the
+    along the tool frame's x: ``(−blade_length, 0, 0)``); ``blade``: a :class:`Blade` of the same model,
+    frame and heel to share (its kinematics computed once per state) instead of a new one. Give the zones of
+    each step with :meth:`set_zones` (model world frame) before the QP's step; :attr:`clearances` holds the
     step's :class:`ZoneClearance` per zone, :attr:`approach` the knife's own speed toward it [m/s]
     and :attr:`rows` the last rows computed.
     """
@@ -263,9 +273,9 @@ class KeepOutLimit:
     name = "keepout"
 
     def __init__(self, model, frame: str | int, heel_offset: Sequence[float],
-                 config: KeepOutConfig | None = None) -> None:
+                 config: KeepOutConfig | None = None, blade: Blade | None = None) -> None:
         self.config = config or KeepOutConfig()
-        self.blade = Blade(model, frame, heel_offset)
+        self.blade = blade if blade is not None else Blade(model, frame, heel_offset)
         self.zones: list[Zone] = []
         self.clearances: list[ZoneClearance] = []
         self.approach: list[float] = []

@@ -91,6 +91,29 @@ def test_heel_frame_and_blade_jacobian_are_those_of_the_rigid_knife():
     assert np.allclose(heel.v, heel.J @ v, atol=1e-12)
 
 
+def test_a_blade_shared_with_the_floor_gives_the_rows_of_separate_blades():
+    from robot.floor import FloorLimit
+    from robot.state import StateEvaluator
+
+    model, _ = _superlimb()
+    floor = FloorLimit(model, TOOL_FRAME, HEEL)
+    floor.set_plane((0.0, 0.0, 1.0), -0.3)
+    shared, alone = KeepOutLimit(model, TOOL_FRAME, HEEL, blade=floor.blade), KeepOutLimit(model, TOOL_FRAME, HEEL)
+    evaluate = StateEvaluator(model, model.getFrameId(TOOL_FRAME))
+    rng = np.random.default_rng(2)
+    for k in range(6):
+        q = 0.5 * (P.lower + P.upper) + 0.3 * rng.normal(size=3)
+        state = evaluate(q, rng.normal(size=3) if k % 3 else np.zeros(3), 0.01)
+        zone = Zone("hand", state.p + 0.05, state.p + 0.05, 0.04, np.zeros(3), 0.15)
+        shared.set_zones([zone])
+        alone.set_zones([zone])
+        for _ in range(2):  # the second call of a state reuses its kinematics
+            rows = [floor.compute_qp_inequalities(state), shared.compute_qp_inequalities(state)]
+            assert np.array_equal(rows[1].G, alone.compute_qp_inequalities(state).G)
+            assert np.array_equal(rows[1].h, alone.rows.h)
+            assert shared.knife(state.q, state.v)[0] is floor.blade.knife(state.q, state.v)[0]
+
+
 def _loop(zone_at, target, steps, cfg=None):
     """QP with the keep-out rows tracking ``target`` while the zone follows ``zone_at(k)``: clearances."""
     model, lim = _superlimb()
