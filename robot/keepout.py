@@ -47,7 +47,7 @@ from .errors import ControllerConfigError, FrameNotFoundError
 from .state import ControlState
 
 __all__ = ["BLADE_LENGTH", "Blade", "KeepOutConfig", "KeepOutLimit", "RetreatAction", "Zone", "ZoneClearance",
-           "closest_segment_points", "retreat", "segment_zone_clearance"]
+           "closest_segment_points", "retreat", "segment_zone_clearance", "segment_zone_clearances"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 #: [m] the SuperLimb's blade, tip to heel along the tool frame's −x (of its 0.14 m knife, the
@@ -138,6 +138,42 @@ def segment_zone_clearance(tip: np.ndarray, heel: np.ndarray, zone: Zone) -> Zon
     return ZoneClearance(dist - zone.radius, s, normal, pb, pz)
 
 
+def segment_zone_clearances(tip: np.ndarray, heel: np.ndarray, a: np.ndarray, b: np.ndarray,
+                            radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`segment_zone_clearance` of N blades and N zone axes at once: tip, heel, a, b (N, 3) [m], one
+    radius [m]. Returns (distance (N,), s (N,), normal (N, 3)); the same arithmetic per row (NaN rows stay NaN)."""
+    d1, d2, r = heel - tip, b - a, tip - a
+    aa, e, f = _dots(d1, d1), _dots(d2, d2), _dots(d2, r)
+    c, bb = _dots(d1, r), _dots(d1, d2)
+    eps = 1e-18
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = aa * e - bb * bb
+        s = np.where(denom > eps, np.clip((bb * f - c * e) / denom, 0.0, 1.0), 0.0)
+        t = (bb * s + f) / e
+        s = np.where(t < 0.0, np.clip(-c / aa, 0.0, 1.0), np.where(t > 1.0, np.clip((bb - c) / aa, 0.0, 1.0), s))
+        t = np.clip(t, 0.0, 1.0)
+        point_zone, point_blade = e <= eps, aa <= eps
+        s = np.where(point_zone, np.clip(-c / aa, 0.0, 1.0), s)
+        t = np.where(point_zone, 0.0, t)
+        t = np.where(point_blade, np.clip(f / e, 0.0, 1.0), t)
+        s = np.where(point_blade, 0.0, s)
+        both = point_blade & point_zone
+        s, t = np.where(both, 0.0, s), np.where(both, 0.0, t)
+        diff = (tip + s[:, None] * (heel - tip)) - (a + t[:, None] * (b - a))
+        dist = np.sqrt(_dots(diff, diff))
+        normal = diff / dist[:, None]
+    on_axis = ~(dist > 1e-12) & np.isfinite(dist)
+    if on_axis.any():  # push along the blade's perpendicular nearest to world up (as segment_zone_clearance)
+        for k in np.flatnonzero(on_axis):
+            normal[k] = segment_zone_clearance(tip[k], heel[k], Zone("", a[k], b[k], radius, a[k], 0.0)).normal
+    return dist - radius, s, normal
+
+
+def _dots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Row-wise x·y of (N, 3) arrays in :func:`_dot`'s order of operations."""
+    return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
+
+
 @dataclass(frozen=True)
 class KeepOutConfig:
     """Settings of the keep-out rows.
@@ -188,7 +224,7 @@ class Blade:
         heel = np.asarray(heel_offset, dtype=float)
         if heel.shape != (3,) or not np.isfinite(heel).all() or np.linalg.norm(heel) < 1e-6:
             raise ControllerConfigError(f"heel_offset must be a non-zero finite (3,) vector [m], got {heel_offset!r}")
-        self.model = model.copy()
+        self.model, self.heel_offset = model.copy(), heel
         tool = self.model.frames[int(frame)]
         placement = tool.placement * pin.SE3(np.eye(3), heel)
         self.tip_id = int(frame)
@@ -196,6 +232,7 @@ class Blade:
                                                      pin.FrameType.OP_FRAME))
         self.data = self.model.createData()
         self._zero = np.zeros(self.model.nv)
+        self._last: tuple[bytes, bytes | None, tuple[_Point, _Point]] | None = None
 
     def _point(self, fid: int) -> _Point:
         m, d = self.model, self.data
@@ -206,20 +243,29 @@ class Blade:
         return _Point(p, v, J, drift)
 
     def knife(self, q: np.ndarray, v: np.ndarray | None = None) -> tuple[_Point, _Point]:
-        """(tip, heel) positions [m], velocities [m/s], Jacobians and drifts J̇·v [m/s²] at (q, v)."""
+        """(tip, heel) positions [m], velocities [m/s], Jacobians and drifts J̇·v [m/s²] at (q, v); the
+        last state's are kept, so limits that share a blade (the keep-out and the floor) compute them once.
+        Read-only: the points are shared."""
+        key_q = np.asarray(q, dtype=float).tobytes()
+        key_v = None if v is None else np.asarray(v, dtype=float).tobytes()
+        if self._last is not None and self._last[0] == key_q and self._last[1] == key_v:
+            return self._last[2]
         m, d = self.model, self.data
         pin.forwardKinematics(m, d, q, self._zero if v is None else v, self._zero)
         pin.updateFramePlacements(m, d)
         pin.computeJointJacobians(m, d)
-        return self._point(self.tip_id), self._point(self.heel_id)
+        points = self._point(self.tip_id), self._point(self.heel_id)
+        self._last = (key_q, key_v, points)
+        return points
 
 
 class KeepOutLimit:
     """Keep-out rows ``G·a ≤ h`` (module docstring) for any Pinocchio model and tool frame.
 
     ``heel_offset`` (3,) [m]: the blade's heel in the tool frame (the SuperLimb's knife runs
-    along the tool frame's x: ``(−blade_length, 0, 0)``). Give the zones of each step with
-    :meth:`set_zones` (model world frame) before the QP's step; :attr:`clearances` holds the
+    along the tool frame's x: ``(−blade_length, 0, 0)``); ``blade``: a :class:`Blade` of the same model,
+    frame and heel to share (its kinematics computed once per state) instead of a new one. Give the zones of
+    each step with :meth:`set_zones` (model world frame) before the QP's step; :attr:`clearances` holds the
     step's :class:`ZoneClearance` per zone, :attr:`approach` the knife's own speed toward it [m/s]
     and :attr:`rows` the last rows computed.
     """
@@ -227,9 +273,9 @@ class KeepOutLimit:
     name = "keepout"
 
     def __init__(self, model, frame: str | int, heel_offset: Sequence[float],
-                 config: KeepOutConfig | None = None) -> None:
+                 config: KeepOutConfig | None = None, blade: Blade | None = None) -> None:
         self.config = config or KeepOutConfig()
-        self.blade = Blade(model, frame, heel_offset)
+        self.blade = blade if blade is not None else Blade(model, frame, heel_offset)
         self.zones: list[Zone] = []
         self.clearances: list[ZoneClearance] = []
         self.approach: list[float] = []

@@ -39,7 +39,7 @@ import numpy as np
 from .keepout import Zone
 from .superlimb import rpy_to_matrix
 
-__all__ = ["BODY_PARTS", "WearerBody", "body_zones", "hand_center", "zones_to_plate"]
+__all__ = ["BODY_PARTS", "WearerBody", "body_zone_axes", "body_zones", "hand_center", "zones_to_plate"]
 
 BODY_PARTS: tuple[str, ...] = ("hand", "forearm", "head", "torso")
 
@@ -135,3 +135,37 @@ def zones_to_plate(zones: Sequence[Zone], base_pose: np.ndarray) -> list[Zone]:
     """The same zones in the plate frame (``p_plate = R·p + t``, velocities rotated)."""
     R, t = base_pose[:3, :3], base_pose[:3, 3]
     return [z._replace(a=R @ z.a + t, b=R @ z.b + t, velocity=R @ z.velocity) for z in zones]
+
+
+def body_zone_axes(body: WearerBody, fork_poses: np.ndarray, base_poses: np.ndarray
+                   ) -> dict[str, tuple[np.ndarray, np.ndarray, float]]:
+    """The zones of :func:`body_zones` (at rest, no uncertainty) placed by :func:`zones_to_plate`, for N
+    steps at once: ``fork_poses`` (N, 6) plate frame, ``base_poses`` (N, 4, 4) T_plate_torso. Returns
+    part → (a (N, 3), b (N, 3) [m] in the plate frame, radius [m]); the hand and forearm rows are NaN
+    where the fork pose is not finite."""
+    fork, base = np.asarray(fork_poses, dtype=float), np.asarray(base_poses, dtype=float)
+    R, t = base[:, :3, :3], base[:, :3, 3]
+
+    def to_plate(p: np.ndarray) -> np.ndarray:
+        return np.einsum("kij,kj->ki", R, p) + t
+
+    roll, pitch, yaw = (fork[:, i] for i in (3, 4, 5))
+    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    Rf = np.stack([np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
+                   np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
+                   np.stack([-sp, cp * sr, cp * cr], axis=-1)], axis=1)  # rpy_to_matrix per row
+    hand_plate = fork[:, :3] + np.einsum("kij,j->ki", Rf, np.asarray(body.hand_offset, dtype=float))
+    hand = np.einsum("kji,kj->ki", R, hand_plate - t)  # torso frame: R.T·(p − t)
+    hand[~np.isfinite(fork).all(axis=1)] = np.nan
+    to_elbow = np.asarray(body.elbow, dtype=float) - hand
+    dist = np.sqrt(np.sum(to_elbow * to_elbow, axis=1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(dist > 1e-9, np.minimum(1.0, body.forearm_length / dist), 0.0)
+    end = hand + to_elbow * scale[:, None]
+    head = np.broadcast_to(np.asarray(body.head_center, dtype=float), hand.shape)
+    torso_a = np.broadcast_to(np.asarray(body.torso_a, dtype=float), hand.shape)
+    torso_b = np.broadcast_to(np.asarray(body.torso_b, dtype=float), hand.shape)
+    hand_p, head_p = to_plate(hand), to_plate(head)
+    return {"hand": (hand_p, hand_p, body.hand_radius), "forearm": (hand_p, to_plate(end), body.forearm_radius),
+            "head": (head_p, head_p, body.head_radius), "torso": (to_plate(torso_a), to_plate(torso_b),
+                                                                  body.torso_radius)}

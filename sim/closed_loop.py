@@ -6,7 +6,7 @@ Per control step k (t_k = k·T, T = 10 ms):
    state (q, v); the knife tip p(t_k) and the base pose ``T_plate_torso`` are read;
 2. the fork (mocap) is put at the demonstration's fork pose of sample k (or, with ``fork_truth``,
    at that pose: the world's fork while the controller's marker reads otherwise), the
-   wearer's forearm with it;
+   wearer's forearm with it on the steps a video frame shows (it is drawn only: contacts are off);
 3. the wearer (any :class:`sim.wearer_protocol.Wearer`; by default :mod:`sim.wearer`: their
    plan and the delayed tip error against the intent) gives the shoulder angles; the α of
    the previous step's command is their cue of who leads (NaN before the first command or
@@ -37,7 +37,7 @@ import json
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Callable, Protocol
 
 import mujoco
 import numpy as np
@@ -114,6 +114,7 @@ class _Loop:
         self.controller, self.trial, self.sc, self.person = controller, trial, sc, person
         self.fork_truth = fork if fork_truth is None else fork_truth
         self.n_ctrl, self.record = n_ctrl, record
+        self.drawn: Callable[[int], bool] = lambda k: False  # whether step k is a video frame
         self.world = EatingScene(sc, seed=seed)
         robot = sc.robot
         self.n = n = robot.n
@@ -146,7 +147,8 @@ class _Loop:
         sc, world, d = self.sc, self.world, self.world.data
         t_k = k * sc.control_period
         world.set_time(t_k)
-        world.set_fork(self.fork_truth[k], t_k)
+        # the forearm is drawn only (contacts are off): placed on the steps a video frame shows
+        world.set_fork(self.fork_truth[k], t_k if self.drawn(k) else None)
         mujoco.mj_step1(world.model, d)
         tip = world.tip_in_plate().copy()
         self.out["knife_heel"][k], self.fork_pose[k] = world.knife_heel_in_plate(), world.fork_pose
@@ -328,6 +330,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         from sim.render import VideoRecorder
 
         renderer = VideoRecorder(loop.world.model, render, fps=25, control_rate_hz=1.0 / sc.control_period)
+        loop.drawn = renderer.wants
     if progress:
         from learning.progress import progress_bar
 

@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from robot.keepout import segment_zone_clearance
-from robot.wearer_body import BODY_PARTS, WearerBody, body_zones, zones_to_plate
+from robot.keepout import segment_zone_clearances
+from robot.wearer_body import BODY_PARTS, WearerBody, body_zone_axes
 from sim.episode import Episode
 
 __all__ = ["KEEPOUT_KEYS", "episode_keepout_metrics"]
@@ -50,26 +50,39 @@ def _body(info: dict[str, Any]) -> WearerBody:
 
 
 def _clearances(episode: Episode, body: WearerBody) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(c, own, zone_in), each (Nc, 4) over :data:`BODY_PARTS` (NaN where a zone is absent)."""
+    """(c, own, zone_in), each (Nc, 4) over :data:`BODY_PARTS` (NaN where a zone is absent), every step at once.
+
+    own_k = −n·ṗ_b with ṗ_b the backward difference of the closest blade point (needs step k − 1's tip);
+    zone_in_k = n·(a_k − a_k')/Δ, k' the zone's last earlier step with a finite blade."""
     n, dt = episode.t.size, float(episode.info.get("control_period_s", 0.01))
     c, own, zin = (np.full((n, len(BODY_PARTS)), np.nan) for _ in range(3))
-    tip, heel = episode.tip, episode.knife_heel
-    prev_z: dict[str, np.ndarray] = {}
-    for k in range(n):
-        if not (np.isfinite(tip[k]).all() and np.isfinite(heel[k]).all()):
+    tip, heel = np.asarray(episode.tip, dtype=float), np.asarray(episode.knife_heel, dtype=float)
+    blade = np.isfinite(tip).all(axis=1) & np.isfinite(heel).all(axis=1)
+    prev_tip = np.zeros(n, dtype=bool)
+    prev_tip[1:] = np.isfinite(tip[:-1]).all(axis=1)
+    d_tip, d_heel = np.full_like(tip, np.nan), np.full_like(heel, np.nan)
+    d_tip[1:], d_heel[1:] = tip[1:] - tip[:-1], heel[1:] - heel[:-1]
+    axes = body_zone_axes(body, episode.fork_pose[:n], episode.base_pose[:n])
+    for j, name in enumerate(BODY_PARTS):
+        a, b, radius = axes[name]
+        rows = np.flatnonzero(blade & np.isfinite(a).all(axis=1) & np.isfinite(b).all(axis=1))
+        if not rows.size:
             continue
-        zones = zones_to_plate(body_zones(body, episode.fork_pose[k], episode.base_pose[k]), episode.base_pose[k])
-        for z in zones:
-            j = BODY_PARTS.index(z.name)
-            cl = segment_zone_clearance(tip[k], heel[k], z)
-            c[k, j] = cl.distance
-            if k > 0 and np.isfinite(tip[k - 1]).all():
-                vb = ((1 - cl.s) * (tip[k] - tip[k - 1]) + cl.s * (heel[k] - heel[k - 1])) / dt
-                own[k, j] = -float(cl.normal @ vb)
-                if z.name in prev_z:
-                    zin[k, j] = float(cl.normal @ (z.a - prev_z[z.name])) / dt
-            prev_z[z.name] = z.a
+        dist, s, normal = segment_zone_clearances(tip[rows], heel[rows], a[rows], b[rows], radius)
+        c[rows, j] = dist
+        moved = prev_tip[rows]
+        vb = ((1 - s)[:, None] * d_tip[rows] + s[:, None] * d_heel[rows]) / dt
+        own[rows[moved], j] = -_dots(normal, vb)[moved]
+        last = np.concatenate([[-1], rows[:-1]])  # the zone's previous step with a finite blade
+        seen = moved & (last >= 0)
+        a_rows = a[rows]
+        step = np.where(seen[:, None], a_rows - a[np.maximum(last, 0)], np.nan)
+        zin[rows[seen], j] = (_dots(normal, step) / dt)[seen]
     return c, own, zin
+
+
+def _dots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
 
 
 def episode_keepout_metrics(episode: Episode, near_m: float = 0.05) -> dict[str, Any]:

@@ -28,7 +28,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["cutting_effort", "cutting_modes", "mode_costs", "price_order"]
+__all__ = ["beyond_the_wearer_alone", "cutting_effort", "cutting_modes", "mode_costs", "predicted_point",
+           "price_order", "prune_sets"]
 
 _EFFORT_FLOOR_RAD = 1e-3  # ε: a mode that costs the wearer no effort to lead has a finite price
 
@@ -110,3 +111,47 @@ def cutting_effort(costs: dict[str, Any], cutting: Sequence[int]) -> float | Non
     alone = sum(pj * e for pj, e in zip(p, ew))
     led = sum(pj * (ew[j] if j in set(cutting) else er[j]) for j, pj in enumerate(p))
     return float(led / alone) if alone > 0 else None
+
+
+def predicted_point(costs: dict[str, Any], wearer_modes: Sequence[int]) -> tuple[float, float] | None:
+    """(effort [rad], RMS [m]) of the whole-mode rule that hands the wearer ``wearer_modes`` and the robot the
+    rest, before the hand-overs' own cost: Σ_j p_j·E_j and √(Σ_j p_j·m_j) with (E_j, m_j) the wearer's or the
+    robot's figures of :func:`mode_costs`. None where a figure is missing."""
+    p, ew, er, rw, rr = (costs[k] for k in ("share", "effort_wearer_rad", "effort_robot_rad", "rms_wearer_mm",
+                                            "rms_robot_mm"))
+    if any(v is None for v in (*p, *ew, *er, *rw, *rr)):
+        return None
+    led = set(int(j) for j in wearer_modes)
+    effort = sum(pj * (ew[j] if j in led else er[j]) for j, pj in enumerate(p))
+    ms = sum(pj * ((rw[j] if j in led else rr[j]) * 1e-3) ** 2 for j, pj in enumerate(p))
+    return float(effort), float(np.sqrt(ms))
+
+
+def beyond_the_wearer_alone(costs: dict[str, Any], wearer_modes: Sequence[int]) -> bool:
+    """Whether the per-mode costs put the rule that hands the wearer ``wearer_modes`` at no less effort and no
+    less error than the wearer leading every mode (:func:`predicted_point` of both): the wearer would lead
+    where the robot tracks better and spend more for it. False for the empty set (the robot leads every
+    mode) and where a figure is missing."""
+    if not len(wearer_modes):
+        return False
+    mine, alone = predicted_point(costs, wearer_modes), predicted_point(costs, range(len(costs["share"])))
+    return mine is not None and alone is not None and mine[0] >= alone[0] and mine[1] >= alone[1]
+
+
+def prune_sets(costs: dict[str, Any], sets: Sequence[Sequence[int]], voluntary_effort: float, prune: bool = True
+               ) -> tuple[list[list[int]], list[dict[str, Any]]]:
+    """(the wearer-mode ``sets`` kept, a record per set left out): with ``prune``, those
+    :func:`beyond_the_wearer_alone` are left out, each recorded with its modes, :func:`predicted_point`
+    (effort as a share of ``voluntary_effort`` [rad], RMS [m]) and why in words."""
+    kept, pruned = [], []
+    for modes in sets:
+        if prune and beyond_the_wearer_alone(costs, modes):
+            effort, rms = predicted_point(costs, modes) or (float("nan"), float("nan"))
+            share = effort / voluntary_effort
+            pruned.append({"wearer_modes": list(modes), "predicted_effort_vs_voluntary": share,
+                           "predicted_rmse_m": rms,
+                           "why": f"{share:.2f}x the voluntary effort and {rms * 1e3:.1f} mm before the hand-overs' "
+                                  "cost, no better than the wearer alone on either"})
+        else:
+            kept.append(list(modes))
+    return kept, pruned

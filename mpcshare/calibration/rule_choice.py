@@ -19,7 +19,8 @@ not recorded), so :func:`choose_rule` measures it:
    criterion and the empty set with the robot's share 0.5 while it leads (:data:`ROBOT_ALPHAS`, the
    gate's ``robot_alphas``: at 0.5 a robot-led step is the mixture 0.5·û_r + 0.5·û_v, ``mix50``). The
    share changes only the robot-led steps, so it is tried on the sets that win without it rather than on
-   all of them: that halves the choice's cost;
+   all of them: that halves the choice's cost. A set the per-mode costs put at no less effort and error than
+   the wearer leading every mode is not simulated (:func:`mpcshare.calibration.mode_cost.prune_sets`);
 3. each candidate is simulated in the closed loop (hand-over costs included) and scored by its
    **line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to
    that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
@@ -44,7 +45,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
-from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
+from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
 from mpcshare.control.strategies.gate import DEFAULTS as GATE_DEFAULTS
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
@@ -232,7 +233,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
                 timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
-                log: Callable[[str], None] | None = None, pool: EpisodePool | None = None) -> dict[str, Any]:
+                log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
+                prune: bool = True) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
     ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
@@ -241,11 +243,12 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's
     shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
     with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
-    stage's episodes are one batch). Returns ``{"settings", "wearer_modes", "why",
-    "criterion", "candidates", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
-    "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
-    "seconds"}``. Raises ValueError when the bundle has no mode model or no
-    trial is given.
+    stage's episodes are one batch); ``prune``: leave out the wearer-mode sets the per-mode costs put at no
+    less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
+    ``"pruned"``). Returns ``{"settings", "wearer_modes", "why", "criterion", "candidates", "pruned", "voluntary",
+    "reactive", "mode_costs", "price_order", "cutting_modes", "cutting_effort_vs_voluntary"
+    (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s", "seconds"}``. Raises
+    ValueError when the bundle has no mode model or no trial is given.
     """
     if not len(trials):
         raise ValueError("choose_rule needs at least one held-out trial")
@@ -284,7 +287,10 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                     f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
                     f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
 
-    evaluate(_variants(candidate_sets(order, cutting, n_modes), list(timings), wearer_alphas, robot_alphas[:1]))
+    sets, pruned = prune_sets(costs, candidate_sets(order, cutting, n_modes), vol["voluntary_effort"], prune)
+    for r in pruned if log is not None else []:
+        log(f"  gate with wearer modes {r['wearer_modes']}: not simulated (the per-mode costs: {r['why']})")
+    evaluate(_variants(sets, list(timings), wearer_alphas, robot_alphas[:1]))
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
               for r in _second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
     best, why = _criterion(rows, vol, rea, max_effort)
@@ -297,7 +303,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
             "cutting_effort_vs_voluntary": task_effort,
             "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
-            "mode_costs": costs, "price_order": order, "cutting_modes": cutting,
+            "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
             "trials": [int(t) for t in trials], "duration_s": duration_s,
             "seconds": round(time.perf_counter() - t0, 1)}
 
@@ -343,6 +349,7 @@ def rule_markdown(choice: dict[str, Any]) -> str:
              f"{choice['seconds']:g} s: "
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
+             *_pruned_markdown(choice),
              *_costs_markdown(choice),
              "| run | wearer modes | hand-over | robot share while the wearer leads | robot share while it leads | "
              "RMS [mm] | effort vs voluntary | line ratio | stroke corr. |", "|---|---|---|---|---|---|---|---|---|"]
@@ -357,6 +364,11 @@ def rule_markdown(choice: dict[str, Any]) -> str:
                      f"{r['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
     return "\n".join(lines) + "\n"
+
+
+def _pruned_markdown(choice: dict[str, Any]) -> list[str]:  # the sets not simulated; none: no line
+    rows = [f"{r['wearer_modes']} ({r['why']})" for r in choice.get("pruned") or []]
+    return [f"Not simulated, from the per-mode costs: {'; '.join(rows)}.", ""] if rows else []
 
 
 def _f(row: dict[str, Any]) -> str:

@@ -66,13 +66,16 @@ def make_keepout_qp(robot, qp_config, dt: float, settings: KeepOutSettings | Non
                     ) -> tuple[QPController, "KeepOut | None"]:
     """The QP on ``robot``'s tip frame (a :class:`~robot.description.RobotDescription`; built by
     ``setup.make_qp``) and, when ``settings`` is given, the keep-out rows beside its torque limit; ``floor``
-    (a :class:`robot.floor.FloorLimit`, None: none): the knife's floor rows beside them."""
+    (a :class:`robot.floor.FloorLimit`, None: none): the knife's floor rows beside them, sharing its blade's
+    kinematics where the heel is the same."""
     qp = make_qp(robot, qp_config, dt)
     if settings is None and floor is None:
         return qp, None
     rows: list = [TorqueLimit(robot.limits)] + ([floor] if floor is not None else [])
+    shared = floor.blade if floor is not None and settings is not None and \
+        np.array_equal(floor.blade.heel_offset, np.asarray(settings.heel_offset, dtype=float)) else None
     limit = None if settings is None else KeepOutLimit(robot.model, robot.tip_frame, settings.heel_offset,
-                                                         settings.limit)
+                                                         settings.limit, blade=shared)
     qp = QPController(robot.model, robot.tip_frame, robot.limits, qp.config,
                       constraints=rows + ([limit] if limit is not None else []))
     return qp, None if limit is None else KeepOut(settings, limit)

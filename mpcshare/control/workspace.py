@@ -137,8 +137,12 @@ def check_base_pose(T: object) -> np.ndarray:
         raise ValueError(f"base_pose must be a (4, 4) homogeneous transform, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError("base_pose has non-finite entries")
-    R = a[:3, :3]
-    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or abs(np.linalg.det(R) - 1.0) > 1e-6 \
-            or np.abs(a[3] - (0.0, 0.0, 0.0, 1.0)).max() > 1e-12:
+    (r00, r01, r02, _), (r10, r11, r12, _), (r20, r21, r22, _), (l0, l1, l2, l3) = a.tolist()
+    # RᵀR − I and det R in plain floats: it runs at every control step
+    gram = max(abs(r00 * r00 + r10 * r10 + r20 * r20 - 1.0), abs(r01 * r01 + r11 * r11 + r21 * r21 - 1.0),
+               abs(r02 * r02 + r12 * r12 + r22 * r22 - 1.0), abs(r00 * r01 + r10 * r11 + r20 * r21),
+               abs(r00 * r02 + r10 * r12 + r20 * r22), abs(r01 * r02 + r11 * r12 + r21 * r22))
+    det = r00 * (r11 * r22 - r12 * r21) - r01 * (r10 * r22 - r12 * r20) + r02 * (r10 * r21 - r11 * r20)
+    if gram > 1e-6 or abs(det - 1.0) > 1e-6 or max(abs(l0), abs(l1), abs(l2), abs(l3 - 1.0)) > 1e-12:
         raise ValueError("base_pose is not a rigid transform (rotation not orthonormal or last row not 0 0 0 1)")
     return a

@@ -161,6 +161,10 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
         parts += ["## 4. Closed loop in MuJoCo", "", _section((out / "sim" / "comparison.md").read_text(), "sim")]
     parts += ["## Time per stage", "", "| stage | time [s] |", "|---|---|",
               *[f"| {k} | {v:.0f} |" for k, v in timings_s.items()], ""]
+    pruned = (training.get("rule_choice") or {}).get("pruned") or []
+    if pruned:  # what was not simulated, and why
+        parts += ["The hand-over rule's choice did not simulate: " + "; ".join(
+            f"the wearer leading modes {r['wearer_modes']} (the per-mode costs: {r['why']})" for r in pruned) + ".", ""]
     md = "\n".join(parts) + "\n"
     with atomic_open(out / "report.md", "w") as f:
         f.write(md)

@@ -7,7 +7,15 @@ import pinocchio as pin
 import pytest
 
 from robot.constraints import TorqueLimit
-from robot.keepout import KeepOutConfig, KeepOutLimit, Zone, closest_segment_points, retreat, segment_zone_clearance
+from robot.keepout import (
+    KeepOutConfig,
+    KeepOutLimit,
+    Zone,
+    closest_segment_points,
+    retreat,
+    segment_zone_clearance,
+    segment_zone_clearances,
+)
 from robot.limits import JointLimits
 from robot.model_files import build_pinocchio_model
 from robot.qp import QPController
@@ -22,6 +30,21 @@ def _brute(p0, p1, q0, q1, n=400):
     a = p0 + s[:, None] * (p1 - p0)
     b = q0 + s[:, None] * (q1 - q0)
     return float(np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1)).min())
+
+
+def test_batched_clearances_are_the_scalar_ones_row_by_row():
+    rng = np.random.default_rng(1)
+    tip, heel, a, b = rng.normal(size=(4, 60, 3))
+    heel[:10] = tip[:10]  # a point blade
+    b[5:20] = a[5:20]  # a sphere (both degenerate on rows 5-9)
+    heel[20:25] = tip[20:25] + 0.1 * (b[20:25] - a[20:25])  # parallel segments
+    a[25], b[25] = tip[25], heel[25]  # the blade on the zone's axis: the fallback normal
+    tip[30] = np.nan  # a lost sample stays NaN
+    dist, s, normal = segment_zone_clearances(tip, heel, a, b, 0.05)
+    assert np.isnan(dist[30]) and np.isnan(normal[30]).all()
+    for k in (k for k in range(60) if k != 30):
+        one = segment_zone_clearance(tip[k], heel[k], Zone("z", a[k], b[k], 0.05, np.zeros(3), 0.1))
+        assert dist[k] == one.distance and s[k] == one.s and np.array_equal(normal[k], one.normal), k
 
 
 def test_segment_distance_matches_brute_force():
@@ -66,6 +89,29 @@ def test_heel_frame_and_blade_jacobian_are_those_of_the_rigid_knife():
     minus = limit.knife(q - eps * v)[1]
     assert np.allclose(heel.J @ v, (plus.p - minus.p) / (2 * eps), atol=1e-6)
     assert np.allclose(heel.v, heel.J @ v, atol=1e-12)
+
+
+def test_a_blade_shared_with_the_floor_gives_the_rows_of_separate_blades():
+    from robot.floor import FloorLimit
+    from robot.state import StateEvaluator
+
+    model, _ = _superlimb()
+    floor = FloorLimit(model, TOOL_FRAME, HEEL)
+    floor.set_plane((0.0, 0.0, 1.0), -0.3)
+    shared, alone = KeepOutLimit(model, TOOL_FRAME, HEEL, blade=floor.blade), KeepOutLimit(model, TOOL_FRAME, HEEL)
+    evaluate = StateEvaluator(model, model.getFrameId(TOOL_FRAME))
+    rng = np.random.default_rng(2)
+    for k in range(6):
+        q = 0.5 * (P.lower + P.upper) + 0.3 * rng.normal(size=3)
+        state = evaluate(q, rng.normal(size=3) if k % 3 else np.zeros(3), 0.01)
+        zone = Zone("hand", state.p + 0.05, state.p + 0.05, 0.04, np.zeros(3), 0.15)
+        shared.set_zones([zone])
+        alone.set_zones([zone])
+        for _ in range(2):  # the second call of a state reuses its kinematics
+            rows = [floor.compute_qp_inequalities(state), shared.compute_qp_inequalities(state)]
+            assert np.array_equal(rows[1].G, alone.compute_qp_inequalities(state).G)
+            assert np.array_equal(rows[1].h, alone.rows.h)
+            assert shared.knife(state.q, state.v)[0] is floor.blade.knife(state.q, state.v)[0]
 
 
 def _loop(zone_at, target, steps, cfg=None):

@@ -6,7 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from robot.wearer_body import WearerBody, body_zones, hand_center, zones_to_plate
+from robot.superlimb import rpy_to_matrix
+from robot.wearer_body import BODY_PARTS, WearerBody, body_zone_axes, body_zones, hand_center, zones_to_plate
 from sim.episode import Episode
 from sim.keepout_metrics import episode_keepout_metrics
 from sim.scene import EatingScene
@@ -53,6 +54,39 @@ def test_a_hand_moving_onto_a_still_knife_is_not_driven_in():
     assert m["keepout_steps_driven_in"] == 0
     assert m["keepout_inside_zone_moving_s"] >= 0.1
     assert m["keepout_near_speed_mps"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_zones_of_every_step_at_once_are_those_of_each_step():
+    rng = np.random.default_rng(0)
+    n = 20
+    fork = FORK + 0.05 * rng.normal(size=(n, 6))
+    fork[3, 4] = np.nan  # a lost marker: no hand or forearm on that step
+    base = np.tile(np.eye(4), (n, 1, 1))
+    base[:, :3, 3] = 0.01 * rng.normal(size=(n, 3))
+    base[:, :3, :3] = [rpy_to_matrix(r) for r in 0.3 * rng.normal(size=(n, 3))]
+    axes = body_zone_axes(WearerBody(), fork, base)
+    for k in range(n):
+        zones = {z.name: z for z in zones_to_plate(body_zones(WearerBody(), fork[k], base[k]), base[k])}
+        for name in BODY_PARTS:
+            a, b, radius = axes[name]
+            if name not in zones:
+                assert k == 3 and np.isnan(a[k]).all() and np.isnan(b[k]).all()
+                continue
+            assert radius == zones[name].radius
+            np.testing.assert_allclose(a[k], zones[name].a, rtol=0, atol=1e-15)
+            np.testing.assert_allclose(b[k], zones[name].b, rtol=0, atol=1e-15)
+
+
+def test_lost_samples_leave_their_steps_out_and_the_next_speed_waits_for_a_whole_step():
+    n = 30
+    tip = np.tile(HAND + U * (R + 0.03), (n, 1))
+    tip[10:] -= 0.001 * np.arange(n - 10)[:, None] * U[None, :]  # then the knife comes at 0.1 m/s
+    fork = np.tile(FORK, (n, 1))
+    tip[15] = np.nan  # a lost tip: step 15 has no figures and step 16 no speeds
+    fork[20, 0] = np.nan  # a lost fork: no hand or forearm on step 20
+    m = episode_keepout_metrics(_episode(tip, fork))
+    assert m["keepout_near_speed_mps"] == pytest.approx(0.1, rel=1e-6)
+    assert m["keepout_min_clearance_by_zone_m"]["hand"] == pytest.approx(0.03 - 0.001 * (n - 11), abs=1e-9)
 
 
 def test_an_old_run_file_without_the_fork_pose_has_no_figures(tmp_path):

@@ -28,7 +28,7 @@ from typing import Any, Sequence
 
 from mpcshare.run_table import RANDOM_DRAWS, TUNABLE, strategy_code
 
-__all__ = ["BASELINES", "SETTING_STRATEGIES", "TIMING_KEYS", "EpisodeTask", "plan_tasks", "random_tasks",
+__all__ = ["BASELINES", "SETTING_STRATEGIES", "TIMING_KEYS", "EpisodeTask", "load_inputs", "plan_tasks", "random_tasks",
            "run_task", "task_key"]
 
 #: Strategies that can be swept (each gets a matched ``random_handover``): the registry's tunable ones.
@@ -114,6 +114,12 @@ def _demos(path: str) -> Any:
     from learning.data import load
 
     return load(path)
+
+
+def load_inputs(task: EpisodeTask) -> None:
+    """Load ``task``'s bundle and data into this process's caches (what a worker does once, not per episode)."""
+    _bundle(task.bundle_dir)
+    _demos(task.data_path)
 
 
 def run_task(task: EpisodeTask) -> dict[str, Any]:

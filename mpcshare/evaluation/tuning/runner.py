@@ -25,7 +25,14 @@ from typing import Any, Callable, Iterator, Sequence
 
 from learning.atomic import write_json
 from mpcshare.errors import MpcshareError
-from mpcshare.evaluation.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task, task_key
+from mpcshare.evaluation.tuning.episodes import (
+    EpisodeTask,
+    load_inputs,
+    plan_tasks,
+    random_tasks,
+    run_task,
+    task_key,
+)
 from mpcshare.run_table import RANDOM_DRAWS
 
 __all__ = ["BACKENDS", "RayMissing", "estimate_line", "open_backend", "run_tune"]
@@ -182,7 +189,8 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
             + (f"; {len(store.rows)} already done" if store.rows else ""))
     bundles = _bundles(demos, config, percentiles, out, progress)
     todo = [t for t in tasks if task_key(t) not in store.rows]
-    if todo:  # the first episode here, timed: what the rest will take
+    if todo:  # the first episode here, timed (its bundle and data loaded first, as a worker has): the rest's time
+        load_inputs(todo[0])
         t0 = time.perf_counter()
         store.add(run_task(todo[0]))
         seconds = time.perf_counter() - t0

@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order
+from mpcshare.calibration.mode_cost import (
+    beyond_the_wearer_alone,
+    cutting_effort,
+    cutting_modes,
+    mode_costs,
+    predicted_point,
+    price_order,
+    prune_sets,
+)
 
 
 class _Episode:
@@ -74,3 +82,37 @@ def test_the_effort_of_leaving_the_cutting_to_the_wearer_against_the_splice_of_t
     assert cutting_effort(c, []) is None
     unseen = mode_costs([_Episode(mode, zero, eff_w)], [_Episode(mode, zero, eff_r)], 4)  # mode 3 never seen
     assert cutting_effort(unseen, [0]) is None
+
+
+#: the per-mode costs of the demo's rule choice (default data, trials 10 and 11, 60 s each)
+DEMO_COSTS = {"share": [0.425, 0.27666666666666667, 0.11, 0.18833333333333332],
+              "rms_wearer_mm": [7.27134409399527, 9.158421290121057, 8.540558236249888, 26.06010641530786],
+              "rms_robot_mm": [23.8187180401594, 23.9165831573501, 24.57892527561725, 23.250436959728304],
+              "effort_wearer_rad": [0.05972740712972807, 0.06039666604116731, 0.1898296080887222, 0.12263350933857159],
+              "effort_robot_rad": [0.07972483106381997, 0.08097246554771512, 0.07300009240770138, 0.07347640735994043]}
+
+
+def test_the_predicted_point_of_a_rule_mixes_the_parties_figures_by_mode():
+    effort, rms = predicted_point(DEMO_COSTS, [0, 1, 2, 3])  # the wearer alone: the voluntary run's own figures
+    assert effort == pytest.approx(0.0860711267833812) and rms == pytest.approx(0.013476010220342954)
+    effort, rms = predicted_point(DEMO_COSTS, [2])
+    p = DEMO_COSTS["share"]
+    assert effort == pytest.approx(p[0] * 0.07972483106381997 + p[1] * 0.08097246554771512
+                                   + p[2] * 0.1898296080887222 + p[3] * 0.07347640735994043)
+    assert rms == pytest.approx(np.sqrt(p[0] * 23.8187180401594 ** 2 + p[1] * 23.9165831573501 ** 2
+                                        + p[2] * 8.540558236249888 ** 2 + p[3] * 23.250436959728304 ** 2) * 1e-3)
+    assert predicted_point({**DEMO_COSTS, "rms_robot_mm": [None, 1.0, 1.0, 1.0]}, [2]) is None
+
+
+def test_only_the_sets_beyond_the_wearer_alone_on_both_counts_are_pruned():
+    """On the demo's costs, leading the cutting mode 2 alone costs 1.06x the wearer's effort at 22.6 mm (the
+    wearer alone: 13.5 mm): left out; every other set saves effort; the empty set is never left out."""
+    sets = [[0], [0, 2], [0, 1], [0, 1, 2], [2], []]
+    kept, pruned = prune_sets(DEMO_COSTS, sets, 0.0860711267833812)
+    assert kept == [[0], [0, 2], [0, 1], [0, 1, 2], []] and [r["wearer_modes"] for r in pruned] == [[2]]
+    assert pruned[0]["predicted_effort_vs_voluntary"] == pytest.approx(1.0573, abs=1e-4)
+    assert pruned[0]["predicted_rmse_m"] == pytest.approx(0.02257, abs=1e-5) and "1.06x" in pruned[0]["why"]
+    assert prune_sets(DEMO_COSTS, sets, 0.086, prune=False) == (sets, [])
+    assert not beyond_the_wearer_alone(DEMO_COSTS, [])
+    cheap = {**DEMO_COSTS, "effort_wearer_rad": [0.10, 0.10, 0.19, 0.12]}  # leading mode 2 alone now saves effort
+    assert not beyond_the_wearer_alone(cheap, [2])
