@@ -34,7 +34,8 @@ SHORT = {"conformal_radius": "conformal", "forecast_revision": "revision", "shou
          "correction_against": "against", "correction_displacement": "displacement", "mode_hazard": "hazard",
          "mode_change_within_h": "change ≤ H", "time_in_mode": "time in mode",
          "forecaster_disagreement": "fast vs LSTM", "mode_entropy": "entropy", "novelty": "novelty",
-         "robot_past_error": "(robot's past error)", "combined_observable": "**combined**",
+         "robot_past_error": "(robot's past error)", "mode_posterior_only": "mode posterior",
+         "combined_observable": "**combined**",
          "combined_with_reference": "(combined + past error)"}
 
 

@@ -5,8 +5,10 @@ D_t = mean_{t<s≤t+H} ‖p_r(s) − p*(s)‖² − mean_{t<s≤t+H} ‖p_w(s) �
 robot alone (``reactive``), p_w that of the wearer alone (``voluntary``) on the same trial and sim seed,
 p* the wearer's intent. Signals are computed from the robot-alone run's record at steps ≤ t (:data:`SIGNALS`);
 each is scored by AUC for the label and Spearman's ρ against D_t, pooled over the world's trials, after a
-2 s warm-up. The combined signal is a logistic regression on the signals mapped to normal scores (quantile
-transform), cross-fitted (leave one trial out), scored on its held-out predictions.
+2 s warm-up. The combined signal is a logistic regression on the signals and the mode posterior mapped to
+normal scores (quantile transform), cross-fitted (leave one trial out), scored on its held-out predictions;
+``mode_posterior_only`` is that regression on the mode posterior alone (what a rule per estimated mode
+sees), the baseline the signals must beat.
 """
 
 from __future__ import annotations
@@ -144,7 +146,7 @@ def score_world(folder: Path) -> dict[str, Any]:
             d = labels(r, w, h)
             N = d.size
             keep = np.isfinite(d) & (r["t"][:N] - r["t"][0] >= WARMUP_S)
-            X.append(np.column_stack([sig[k][:N][keep] for k in SIGNALS]))
+            X.append(np.column_stack([sig[k][:N][keep] for k in SIGNALS] + [r["mode_proba"][:N][keep]]))
             D.append(d[keep])
             G.append(np.full(int(keep.sum()), i))
         Xa, Da, Ga = np.concatenate(X), np.concatenate(D), np.concatenate(G)
@@ -155,8 +157,11 @@ def score_world(folder: Path) -> dict[str, Any]:
             ok = np.isfinite(Xa[:, j])
             row["auc"][k] = auc(y[ok], Xa[ok, j]) if ok.any() else None
             row["spearman"][k] = float(stats.spearmanr(Xa[ok, j], Da[ok]).statistic) if ok.sum() > 2 else None
-        for name, cols in (("combined_observable", [list(SIGNALS).index(k) for k in OBSERVABLE]),
-                           ("combined_with_reference", list(range(len(SIGNALS))))):
+        n_s = len(SIGNALS)
+        modes = list(range(n_s, Xa.shape[1]))  # the mode posterior's columns
+        for name, cols in (("mode_posterior_only", modes),
+                           ("combined_observable", [list(SIGNALS).index(k) for k in OBSERVABLE] + modes),
+                           ("combined_with_reference", list(range(Xa.shape[1])))):
             Z = Xa[:, cols].copy()
             for c in range(Z.shape[1]):  # ±inf to the column's finite extremes, NaN to its median
                 col = Z[:, c]
