@@ -37,8 +37,10 @@ def _pooled(done: list[tuple[Any, dict[str, Any]]]) -> dict[str, Any]:
 
 
 def evaluate_world(world: str, duration_s: float = 30.0, n_eval: int = 2, root: Path = ROOT,
-                   log: Any = print) -> dict[str, Any]:
-    """The module docstring's table for one world (figures of sim seed 0, line ratios, p vs random)."""
+                   log: Any = print, runs: tuple[str, ...] = RUNS, placebo: bool = True) -> dict[str, Any]:
+    """The module docstring's table for one world (figures of sim seed 0, line ratios, p vs random):
+    ``runs`` (voluntary and reactive always), then ``fusion`` and ``fusion_lead``; ``placebo``: random
+    hand-overs matched to ``fusion``."""
     import torch
     from scipy import stats as st
 
@@ -68,33 +70,42 @@ def evaluate_world(world: str, duration_s: float = 30.0, n_eval: int = 2, root: 
     by_id = {t.trial_id: t for t in list(demos.trials) + extra}
     kw = dict(beta=0.5, duration_s=duration_s, seed=0, wearer=None, mode_names=mode_names)
     out: dict[str, Any] = {}
+    runs = ("voluntary", "reactive") + tuple(r for r in runs if r not in ("voluntary", "reactive"))
     fusion_eps = []
-    for name in RUNS + ("fusion",):
+    for name in runs + ("fusion", "fusion_lead"):
         done = []
         for tid in trials:
-            if name == "fusion":
-                done.append(simulate_episode(bundle, demos, by_id[tid], StrategyRun("fusion", "mix50"), {},
-                                             make_controller=fusion_controller(params), **kw))
-                fusion_eps.append(done[-1][0])
+            if name.startswith("fusion"):
+                done.append(simulate_episode(bundle, demos, by_id[tid], StrategyRun(name, "mix50"), {},
+                                             make_controller=fusion_controller(params, name == "fusion_lead"),
+                                             **kw))
+                if name == "fusion":
+                    fusion_eps.append(done[-1][0])
             else:
                 done.append(simulate_episode(bundle, demos, by_id[tid], StrategyRun(name, name), {}, **kw))
         out[name] = _pooled(done)
         log(f"{world} {name}: {1e3 * out[name]['rms_m']:.1f} mm")
     rand = []
-    for i, (tid, ep) in enumerate(zip(trials, fusion_eps)):
+    for i, (tid, ep) in enumerate(zip(trials, fusion_eps) if placebo else ()):
         scheds = random_schedules_from(schedule_record(ep), DRAWS, [0, i])
         rand.append([simulate_episode(bundle, demos, by_id[tid], StrategyRun("random_handover", "schedule"),
                                       {"schedule": s}, **kw) for s in scheds])
-    draws = [_pooled([rand[i][j] for i in range(len(trials))]) for j in range(DRAWS)]
-    out["random_handover"] = {k: float(np.mean([d[k] for d in draws])) for k in ("rms_m", "effort", "robot_share")}
-    out["random_handover"]["per_trial_rms_m"] = np.mean([d["per_trial_rms_m"] for d in draws], axis=0).tolist()
+    if placebo:
+        draws = [_pooled([rand[i][j] for i in range(len(trials))]) for j in range(DRAWS)]
+        out["random_handover"] = {k: float(np.mean([d[k] for d in draws])) for k in ("rms_m", "effort",
+                                                                                     "robot_share")}
+        out["random_handover"]["per_trial_rms_m"] = np.mean([d["per_trial_rms_m"] for d in draws],
+                                                            axis=0).tolist()
     vol = (out["voluntary"]["effort"], out["voluntary"]["rms_m"])
     rea = (out["reactive"]["effort"], out["reactive"]["rms_m"])
     for r in out.values():
         r["line_ratio"] = line_ratio(r["rms_m"], r["effort"], vol, rea)
         r["effort_vs_voluntary"] = r["effort"] / vol[0]
-    d = np.array(out["random_handover"]["per_trial_rms_m"]) - np.array(out["fusion"]["per_trial_rms_m"])
-    p = float(st.wilcoxon(d, alternative="greater").pvalue) if np.any(d != 0) else None
-    return {"world": world, "trials": trials, "fit_trials": fit_trials, "gate_choice": choice["settings"],
-            "fusion_params": params, "runs": out, "fusion_over_random": out["fusion"]["rms_m"] /
-            out["random_handover"]["rms_m"], "fusion_below_random_p": p, "pairs": int(d.size)}
+    res = {"world": world, "trials": trials, "fit_trials": fit_trials, "gate_choice": choice["settings"],
+           "fusion_params": params, "runs": out}
+    if placebo:
+        d = np.array(out["random_handover"]["per_trial_rms_m"]) - np.array(out["fusion"]["per_trial_rms_m"])
+        res.update(fusion_over_random=out["fusion"]["rms_m"] / out["random_handover"]["rms_m"], pairs=int(d.size),
+                   fusion_below_random_p=float(st.wilcoxon(d, alternative="greater").pvalue) if np.any(d != 0)
+                   else None)
+    return res

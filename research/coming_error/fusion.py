@@ -12,6 +12,11 @@ correction only while the robot leads (α ≥ 0.5: the simulated wearer corrects
 drives, and c̄ relaxes toward the mode's mean c_π = exp(π·log c) over ``relax_s``. α moves along the
 controller's hand-over ramp (at most 1/``handover_s`` per second): the wearer never inherits a step offset.
 
+With ``split`` (the ``fusion_lead`` variant), the wearer leads alone where the fusion would give the robot
+less than half (α* < 0.5 − ``band``), and the robot leads at share α* ≥ 0.5 where α* > 0.5 + ``band``
+(hysteresis in between): the simulated wearer drives their own plan below 0.5 whatever the robot's share,
+so a share below 0.5 adds the robot's error without saving the wearer's effort.
+
 :func:`fit_fusion` fits (r, g, s², w, log c) on recorded runs of the two parties alone (:mod:`.record`);
 :func:`fusion_controller` is a controller factory for :func:`mpcshare.experiments.episode.simulate_episode`
 that puts :class:`FusionPolicy` in the arbiter of a ``SharedController`` (a research candidate, not in the
@@ -78,7 +83,8 @@ class FusionPolicy:
 
     overrides = True
 
-    def __init__(self, params: dict[str, Any]) -> None:
+    def __init__(self, params: dict[str, Any], split: bool = False, band: float = 0.05) -> None:
+        self.split, self.band = bool(split), float(band)
         self.r = np.asarray(params["robot_log_var"], dtype=float)
         self.g = float(params["correction_gain"])
         self.s2 = float(params["log_resid_var"])
@@ -112,11 +118,14 @@ class FusionPolicy:
         var_r = math.exp(float(pi @ self.r) + self.g * math.log(self._c + EPS) + self.s2 / 2)
         var_w = float(pi @ self.w)
         a = var_w / (var_r + var_w)
+        if self.split:
+            robot_leads = a > 0.5 + self.band or (arbiter.alpha >= 0.5 and a >= 0.5 - self.band)
+            a = max(a, 0.5) if robot_leads else 0.0
         return Target(a, f"fusion: robot {1e3 * math.sqrt(var_r):.1f} mm, wearer {1e3 * math.sqrt(var_w):.1f} mm",
                       ramp=True, beta=1.0 - a)
 
 
-def fusion_controller(params: dict[str, Any]) -> Any:
+def fusion_controller(params: dict[str, Any], split: bool = False) -> Any:
     """A ``make_controller`` for ``simulate_episode``: a ``SharedController`` whose arbiter runs
     :class:`FusionPolicy` (built as ``mix50``, the policy then replaced; α starts at 0)."""
 
@@ -124,7 +133,7 @@ def fusion_controller(params: dict[str, Any]) -> Any:
         from mpcshare.control.controller import SharedController
 
         ctl = SharedController.from_bundle(bundle, **{**options, "strategy": "mix50"})
-        ctl.arbiter.policy = FusionPolicy(params)
+        ctl.arbiter.policy = FusionPolicy(params, split)
         ctl.arbiter.reset()
         return ctl
 

@@ -39,3 +39,16 @@ def test_alpha_is_the_minimum_variance_weight():
 def test_bad_parameters_are_refused():
     with pytest.raises(ValueError, match="one robot log-variance"):
         FusionPolicy({**PARAMS, "wearer_var": [1e-4]})
+
+
+def test_the_lead_variant_hands_over_whole_with_hysteresis():
+    r = math.log(4e-4) - 0.5 * math.log(0.01 + EPS) - 0.1  # σ_r² = 4e-4 at the prior's correction: α* = 0.2
+    pol = FusionPolicy({**PARAMS, "robot_log_var": [r, r]}, split=True)
+    step = SimpleNamespace(mode_proba=np.array([1.0, 0.0]), u_v=np.zeros(3))
+    assert FusionPolicy({**PARAMS, "robot_log_var": [r, r]}).decide(0.0, step, SimpleNamespace(alpha=1.0)).alpha \
+        == pytest.approx(0.2)
+    assert pol.decide(0.0, step, SimpleNamespace(alpha=1.0)).alpha == 0.0  # the wearer alone
+    good = FusionPolicy(PARAMS, split=True)
+    easy = SimpleNamespace(mode_proba=np.array([0.0, 1.0]), u_v=np.zeros(3))
+    a = good.decide(0.0, easy, SimpleNamespace(alpha=0.0))
+    assert a.alpha >= 0.5 and a.beta == pytest.approx(1 - a.alpha)  # α* > 0.55: the robot leads at its share
