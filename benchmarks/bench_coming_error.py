@@ -8,13 +8,16 @@ every signal of :data:`research.coming_error.score.SIGNALS` by AUC for "the robo
 over the next H s" (H = 0.3, 0.5, 1 s) and Spearman's ρ against the difference of their mean squared tip
 errors (:mod:`research.coming_error.score`). Prints one JSON line per world, then one JSON object: every
 world and, per signal and horizon, the median, min and max AUC over the worlds. ``--markdown`` prints the
-table of the 0.5 s horizon instead of the final object.
+tables per horizon instead of the final object. ``--fusion`` also runs the fusion candidates in the closed
+loop beside the mixes, ``gate`` and matched random hand-overs
+(:func:`research.coming_error.evaluate_fusion.evaluate_world`, one JSON line ``"fusion"`` per world; about
+25 episodes and the gate's rule choice a world).
 
 Cost: about 1.5 min of one core per family world (training ≈ 20 s, 16 episodes of 40 s, scoring ≈ 15 s),
 several minutes per data kind (training on 30–36 min of data).
 
 Usage: ``python benchmarks/bench_coming_error.py [--worlds 0 1 2] [--kinds default] [--root /tmp/coming-error]
-[--markdown]``; ``--worlds`` or ``--kinds`` with no value leaves that part out.
+[--markdown] [--fusion]``; ``--worlds`` or ``--kinds`` with no value leaves that part out.
 """
 
 from __future__ import annotations
@@ -69,7 +72,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--worlds", type=int, nargs="*", default=[0, 1, 2], help="family seeds (default 0 1 2)")
     p.add_argument("--kinds", nargs="*", default=["default"], choices=["default", "other_seed", "other_structure"])
     p.add_argument("--root", default="/tmp/coming-error", help="cache of bundles and run files")
-    p.add_argument("--markdown", action="store_true", help="print the 0.5 s table as markdown at the end")
+    p.add_argument("--markdown", action="store_true", help="print the tables as markdown at the end")
+    p.add_argument("--fusion", action="store_true", help="also evaluate the fusion candidates in the closed loop")
     a = p.parse_args(argv)
 
     from research.coming_error.record import record_world
@@ -85,6 +89,11 @@ def main(argv: list[str] | None = None) -> int:
         r["seconds"] = time.perf_counter() - tw
         results.append(r)
         print(json.dumps(r, default=float), flush=True)
+        if a.fusion:
+            from research.coming_error.evaluate_fusion import evaluate_world
+
+            f = evaluate_world(w, root=Path(a.root), log=lambda s: print(s, file=sys.stderr, flush=True))
+            print(json.dumps({"fusion": f}, default=float), flush=True)
     if a.markdown:
         for h in results[0]["horizons"]:
             print(f"\nH = {h} s\n\n" + markdown(results, h))
