@@ -163,11 +163,11 @@ def score_world(folder: Path) -> dict[str, Any]:
                            ("combined_observable", [list(SIGNALS).index(k) for k in OBSERVABLE] + modes),
                            ("combined_with_reference", list(range(Xa.shape[1])))):
             Z = Xa[:, cols].copy()
-            for c in range(Z.shape[1]):  # ±inf to the column's finite extremes, NaN to its median
+            for c in range(Z.shape[1]):  # ±inf to the column's finite extremes (within ±1e9), NaN to its median
                 col = Z[:, c]
                 fin = col[np.isfinite(col)]
                 lo, hi, med = (fin.min(), fin.max(), np.median(fin)) if fin.size else (0.0, 0.0, 0.0)
-                Z[:, c] = np.where(np.isnan(col), med, np.clip(col, lo, hi))
+                Z[:, c] = np.where(np.isnan(col), med, np.clip(col, max(lo, -1e9), min(hi, 1e9)))
             pred = np.full(y.size, np.nan)
             per_trial = []
             for g in np.unique(Ga):
