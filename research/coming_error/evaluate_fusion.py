@@ -22,7 +22,7 @@ DRAWS = 5
 
 
 def _pooled(done: list[tuple[Any, dict[str, Any]]]) -> dict[str, Any]:
-    from mpcshare.experiments.pooling import pool_metrics
+    from mpcshare.evaluation.pooling import pool_metrics
 
     ms = [m for _, m in done]
     p = pool_metrics(ms, [np.asarray(ep.step_time, dtype=float) for ep, _ in done],
@@ -44,11 +44,11 @@ def evaluate_world(world: str, duration_s: float = 30.0, n_eval: int = 2, root: 
     import torch
     from scipy import stats as st
 
-    from mpcshare.experiments.episode import simulate_episode
-    from mpcshare.experiments.handover import random_schedules_from, schedule_record
+    from mpcshare.calibration.rule_choice import choose_for_bundle
+    from mpcshare.evaluation.episode import simulate_episode
+    from mpcshare.evaluation.handover import random_schedules_from, schedule_record
     from mpcshare.line_ratio import line_ratio
     from mpcshare.run_table import StrategyRun
-    from mpcshare.training.rule_choice import choose_for_bundle
 
     torch.set_num_threads(1)
     folder = world_dir(world, root)

@@ -18,7 +18,7 @@ less than half (α* < 0.5 − ``band``), and the robot leads at share α* ≥ 0.
 so a share below 0.5 adds the robot's error without saving the wearer's effort.
 
 :func:`fit_fusion` fits (r, g, s², w, log c) on recorded runs of the two parties alone (:mod:`.record`);
-:func:`fusion_controller` is a controller factory for :func:`mpcshare.experiments.episode.simulate_episode`
+:func:`fusion_controller` is a controller factory for :func:`mpcshare.evaluation.episode.simulate_episode`
 that puts :class:`FusionPolicy` in the arbiter of a ``SharedController`` (a research candidate, not in the
 registry).
 """

@@ -120,7 +120,7 @@ class _Recorder:
 def record_episode(bundle: Any, demos: Any, trial: Any, strategy: str, duration_s: float | None,
                    mode_names: tuple[str, ...], seed: int = 0) -> dict[str, np.ndarray]:
     """One closed-loop episode of ``strategy`` (β 0.5, the default wearer) with the module docstring's arrays."""
-    from mpcshare.experiments.episode import simulate_episode
+    from mpcshare.evaluation.episode import simulate_episode
     from mpcshare.run_table import StrategyRun
 
     rec = _Recorder()
