@@ -282,4 +282,4 @@ def make(ctx: StrategyContext) -> ModeCostGate | PaperGate:
 
 SPECS = (StrategySpec("gate", "The default shared strategy: whole modes the robot cannot predict go to the wearer, "
                       "handed over before they begin and held after they end.", tunable=True, color="#1f77b4",
-                      factory=make, order=4),)
+                      factory=make, order=4, role="shared"),)

@@ -17,7 +17,7 @@ def mixture(alpha: float, order: float, color: str) -> StrategySpec:
     return StrategySpec(name, f"A constant mixture of the two parties: alpha = {alpha:g}, beta = 1 - alpha.",
                         tunable=False, color=color,
                         factory=lambda ctx: Fixed(alpha, 1.0 - alpha, f"constant mixture alpha {alpha:g}"),
-                        order=order)
+                        order=order, role="mix")
 
 
 SPECS = (mixture(0.25, 2.25, "#f7a6c9"), mixture(0.5, 2.5, "#bcbd22"), mixture(0.75, 2.75, "#8c564b"))
