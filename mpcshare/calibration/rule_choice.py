@@ -26,7 +26,7 @@ not recorded), so :func:`choose_rule` measures it:
    that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
 
 Criterion (:data:`CRITERION`): among the candidates whose effort is at most ``max_effort`` × the
-voluntary effort (the issue-28 target 0.75), those that saw while cutting (:func:`saws`: the
+voluntary effort (the effort target 0.75), those that saw while cutting (:func:`saws`: the
 task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line
 ratio; where the line is ill-posed (the robot alone costs the wearer at least ``max_effort`` × the
 effort of doing it alone), the lowest tracking RMS of those. When none is within the effort cap,

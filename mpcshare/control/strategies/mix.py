@@ -1,4 +1,4 @@
-"""Constant mixtures of the two parties, the points of the voluntary–reactive line (issue 28):
+"""Constant mixtures of the two parties, the points of the voluntary–reactive line:
 ``mix25``, ``mix50``, ``mix75`` with α = 0.25, 0.5, 0.75 and β = 1 − α, a convex combination
 û = α·û_r + (1 − α)·û_v of the ``reactive`` (α = 1, β = 0) and ``voluntary`` (α = 0, β = 1)
 commands, independent of the user's β. No overrides (as the line's ends)."""
