@@ -168,7 +168,7 @@ def _run(args: argparse.Namespace) -> int:
         save_bundle(bundle, out)
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
-    from mpcshare.calibration.rule_choice import rule_markdown
+    from mpcshare.reports.rule_choice import rule_markdown
     from mpcshare.reports.training import write_training_md
 
     extra = rule_markdown(choice) if choice is not None else \
