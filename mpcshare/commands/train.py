@@ -169,11 +169,11 @@ def _run(args: argparse.Namespace) -> int:
         save_bundle(bundle, out)
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
-    from mpcshare.reports.rule_choice import rule_markdown
+    from mpcshare.reports.rule_choice import rule_markdown, skipped_markdown
     from mpcshare.reports.training import write_training_md
 
     extra = rule_markdown(choice) if choice is not None else \
-        f"## Hand-over rule\n\nThe {skipped}.\n" if skipped else ""
+        skipped_markdown(skipped) if skipped else ""
     md = write_training_md(bundle.metrics, Path(out) / "training.md", extra=extra)
     print_metrics(bundle.metrics)
     if choice is not None:

@@ -1,12 +1,12 @@
 """The closed-loop choice of the hand-over rule (:mod:`mpcshare.calibration.rule_choice`) in words:
 a Markdown section of ``training.md`` (the choice, why, the sets not simulated, the per-mode costs and
-every candidate's figures)."""
+every candidate's figures), or why it was skipped."""
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["rule_markdown"]
+__all__ = ["rule_markdown", "skipped_markdown"]
 
 
 def rule_markdown(choice: dict[str, Any]) -> str:
@@ -32,6 +32,11 @@ def rule_markdown(choice: dict[str, Any]) -> str:
                      f"{r['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
     return "\n".join(lines) + "\n"
+
+
+def skipped_markdown(skipped: str) -> str:
+    """The section when the choice was skipped: ``skipped`` says why, e.g. "closed-loop choice was skipped: …"."""
+    return f"## Hand-over rule\n\nThe {skipped}.\n"
 
 
 def _pruned_markdown(choice: dict[str, Any]) -> list[str]:  # the sets not simulated; none: no line

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from mpcshare.reports.rule_choice import rule_markdown
+from mpcshare.reports.rule_choice import rule_markdown, skipped_markdown
 
 
 def _choice(**extra) -> dict:
@@ -37,3 +37,8 @@ def test_pruned_sets_and_the_cutting_modes_effort_are_said_when_present():
                                cutting_modes=[1], cutting_effort_vs_voluntary=0.8))
     assert "(whole trials, wearer default)" in md and "Not simulated, from the per-mode costs: [0] (no better)." in md
     assert "modes that carry the cutting: [1]. Leading them, the robot leading the rest, costs the wearer 0.80x" in md
+
+
+def test_a_skipped_choice_is_one_sentence_under_the_same_heading():
+    assert skipped_markdown("closed-loop choice was skipped: no knife") == \
+        "## Hand-over rule\n\nThe closed-loop choice was skipped: no knife.\n"
