@@ -1,6 +1,6 @@
 """Conflict scenarios: data transforms of a held-out trial that put the knife and the wearer at odds.
 
-``mpcshare sim --scenario NAME`` runs every strategy on the transformed trials (issue 30).
+``mpcshare sim --scenario NAME`` runs every strategy on the transformed trials.
 The hand is the centre of :func:`robot.wearer_body.hand_center` (the fork handle's upper
 end); event times are shares of the simulated duration so that short runs see them too.
 
@@ -35,7 +35,7 @@ TIP_CHANNELS = ("knife_x", "knife_y", "knife_z")
 __all__ = ["SCENARIOS", "Scenario", "ScenarioTrial"]
 
 SCENARIOS: tuple[str, ...] = ("push", "sweep", "face", "marker_lost", "predictor_fault")
-SWEEP_SPEED = 0.4  # [m/s] peak speed of the hand's sweep (issue 30)
+SWEEP_SPEED = 0.4  # [m/s] peak speed of the hand's sweep
 
 
 @dataclass

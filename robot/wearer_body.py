@@ -14,13 +14,13 @@ SuperLimb is worn on it), the *plate* frame is the data's frame; ``T_plate_torso
 * **torso** — a capsule fixed to the torso.
 
 Defaults (sizes [m] are the body part's own, the controller's margin comes on top):
-hand radius 0.045 (issue 30: a 4.5 cm sphere; a fist's half-breadth, hand breadth
+hand radius 0.045 (a 4.5 cm sphere; a fist's half-breadth, hand breadth
 ≈ 0.09 m in adult anthropometry, Winter, *Biomechanics and Motor Control of Human
 Movement*, 4th ed., table 4.1 proportions for a 1.75 m adult); forearm 0.25 m long
 (0.146·H for H = 1.75 m, Winter), radius 0.04; head radius 0.10 and trunk radius 0.14,
 as the scene draws them. Speed caps of the knife toward a body part near it: 0.15 m/s
 (hand, forearm, torso) and 0.06 m/s (head and face): the figures a robot-assisted
-feeding system uses away from and near the mouth (as quoted in issue 30; ADA, Nanavati
+feeding system uses away from and near the mouth (ADA, Nanavati
 et al., "An Adaptable, Safe, and Portable Robot-Assisted Feeding System", HRI 2024,
 arXiv:2403.04134). A lost fork marker gives the hand and forearm an uncertainty of the
 hand's top speed times the marker's age (:class:`robot.keepout.Zone`): 2.0 m/s, the approach

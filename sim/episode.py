@@ -15,11 +15,11 @@ from robot.shoulder import SHOULDER_CHANNELS, SHOULDER_TO_PLATE
 __all__ = ["CONTROL_KEYS", "OPTIONAL_KEYS", "PHYSICS_KEYS", "Episode", "run_file_bytes_estimate"]
 
 
-#: run-file arrays: physics rate, then control rate (the keys of issue 12, plus base_pose and novelty)
+#: run-file arrays: physics rate, then control rate (the run file's keys, ``docs/design.md``)
 PHYSICS_KEYS = ("t_physics", "q", "v", "tau")
 CONTROL_KEYS = ("t", "alpha", "beta", "mode", "tip", "tip_reference", "tip_intent", "voluntary", "status",
                 "step_time", "base_pose", "novelty")
-#: control-rate arrays of the keep-out (issue 30), absent from older run files
+#: control-rate arrays of the keep-out, absent from older run files
 OPTIONAL_KEYS = ("fork_pose", "knife_heel")
 
 #: the run file's size [bytes], measured on the project's runs (savez_compressed barely compresses float64

@@ -10,7 +10,7 @@ knife) and ṗ_b the knife's own velocity at the closest blade point (backward d
 * ``keepout_min_clearance_m`` = min_k,z c_k,z;  ``keepout_max_depth_m`` = max(0, −that);
 * ``keepout_time_inside_s`` = Δ·#{k: min_z c_k,z < 0};
 * ``keepout_steps_driven_in`` = #{k: some zone with c < 0 and the knife's own speed toward
-  it −n·ṗ_b > 0.05 m/s} (issue 30's "driven in");
+  it −n·ṗ_b > 0.05 m/s} ("driven in");
 * ``keepout_inside_zone_moving_s`` = Δ·#{inside steps where the zone comes toward the knife
   faster than the knife toward the zone} (the person's own sweep outran the arm);
 * ``keepout_near_speed_mps`` = max of the knife's own speed toward a zone over the steps
@@ -37,7 +37,7 @@ __all__ = ["KEEPOUT_KEYS", "episode_keepout_metrics"]
 KEEPOUT_KEYS = ("keepout_min_clearance_m", "keepout_max_depth_m", "keepout_time_inside_s",
                 "keepout_steps_driven_in", "keepout_inside_zone_moving_s", "keepout_near_speed_mps",
                 "keepout_min_clearance_by_zone_m", "knife_min_height_m")
-DRIVEN_SPEED = 0.05  # [m/s] issue 30: inside and moving toward the zone faster than this = driven in
+DRIVEN_SPEED = 0.05  # [m/s] inside and moving toward the zone faster than this = driven in
 
 
 def _body(info: dict[str, Any]) -> WearerBody:

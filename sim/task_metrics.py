@@ -176,7 +176,7 @@ PICKUP_WINDOW_S = 1.0
 
 def pickup_error(tip: np.ndarray, intent: np.ndarray, alpha: np.ndarray, dt: float,
                  window_s: float = PICKUP_WINDOW_S) -> dict[str, Any]:
-    """What the hand-overs to the wearer cost while they pick up (issue 28): over the ``window_s`` [s]
+    """What the hand-overs to the wearer cost while they pick up: over the ``window_s`` [s]
     after each step where α crosses below 0.5 (the robot led the step before, the wearer leads now),
 
         pickup_rms_m = √(mean ‖p − p*‖² over those steps),   pickup_s = their time [s],

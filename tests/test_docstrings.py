@@ -1,7 +1,8 @@
 """Docstrings name things that exist: every Sphinx-role reference to a first-party name
 (``:mod:``, ``:class:``, ``:func:``, ``:meth:``, ``:data:``, ``:attr:``, ``:exc:``) resolves, and every
 file of the repository a docstring names (``tests/….py``, ``docs/….md``, ``benchmarks/….py``,
-``examples/….py``) is there."""
+``examples/….py``) is there. No module cites an issue number: docstrings and comments are contracts,
+the history is in ``docs/``."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("learning", "robot", "sim", "mpcshare")
 ROLE = re.compile(r":(?:mod|class|func|meth|data|attr|exc):`~?((?:learning|robot|sim|mpcshare)(?:\.\w+)+)`")
 FILE = re.compile(r"\b((?:tests|docs|benchmarks|examples)/[\w/.-]+\.(?:py|md))\b")
+ISSUE = re.compile(r"\bissues?[\s-]+#?\d+", re.IGNORECASE)
 
 
 def _resolves(name: str) -> bool:
@@ -36,6 +38,12 @@ def _sources() -> list[Path]:
     return [p for package in PACKAGES for p in sorted((ROOT / package).rglob("*.py"))]
 
 
+def _issue_numbers(paths: list[Path]) -> list[str]:
+    """``file:line: text`` of each line that mentions an issue by number."""
+    return [f"{p.name}:{i}: {line.strip()}" for p in paths
+            for i, line in enumerate(p.read_text().splitlines(), 1) if ISSUE.search(line)]
+
+
 def test_references_in_docstrings_resolve():
     bad = [f"{p.relative_to(ROOT)} names {m.group(1)}"
            for p in _sources() for m in ROLE.finditer(p.read_text()) if not _resolves(m.group(1))]
@@ -46,6 +54,18 @@ def test_files_named_in_docstrings_exist():
     bad = [f"{p.relative_to(ROOT)} names {m.group(1)}"
            for p in _sources() for m in FILE.finditer(p.read_text()) if not (ROOT / m.group(1)).exists()]
     assert not bad, "\n".join(bad)
+
+
+def test_no_module_cites_an_issue_number():
+    bad = _issue_numbers(_sources())
+    assert not bad, "say what the code does; the history goes to docs/:\n" + "\n".join(bad)
+
+
+def test_the_issue_check_sees_a_planted_mention(tmp_path):
+    planted = 'X = 1  # the keys of Issue 12\n"""issue-7, issues #8"""\nI = "issues"  # 3 of them\n'
+    (tmp_path / "planted.py").write_text(planted)
+    assert _issue_numbers([tmp_path / "planted.py"]) == ["planted.py:1: X = 1  # the keys of Issue 12",
+                                                        'planted.py:2: """issue-7, issues #8"""']
 
 
 def test_the_checks_see_a_missing_name():

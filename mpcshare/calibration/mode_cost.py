@@ -1,4 +1,4 @@
-"""What each task mode costs under each party, measured in the closed loop (issue 28).
+"""What each task mode costs under each party, measured in the closed loop.
 
 The Lipschitz quotient says where the *data* are unpredictable; whether the robot or the wearer
 should lead a mode depends on how each *tracks* it and what leading costs the wearer, which the

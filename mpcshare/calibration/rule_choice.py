@@ -26,14 +26,15 @@ not recorded), so :func:`choose_rule` measures it:
    that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
 
 Criterion (:data:`CRITERION`): among the candidates whose effort is at most ``max_effort`` × the
-voluntary effort (the issue-28 target 0.75), those that saw while cutting (:func:`saws`: the
+voluntary effort (the effort target 0.75), those that saw while cutting (:func:`saws`: the
 task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line
 ratio; where the line is ill-posed (the robot alone costs the wearer at least ``max_effort`` × the
 effort of doing it alone), the lowest tracking RMS of those. When none is within the effort cap,
 the same without the cap (sawing first, the lowest line ratio; the lowest RMS where no line ratio is
 defined): the lowest RMS alone would pick the candidate that hands the wearer nearly everything (the
 early timing's, at 1.00x the effort, on the demo's choice trials). The choice, every candidate's
-figures, the per-mode costs and why are returned for the bundle's ``metrics`` and ``training.md``.
+figures, the per-mode costs and why are returned for the bundle's ``metrics`` (and, in words,
+:mod:`mpcshare.reports.rule_choice`).
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
            "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
-           "pooled_run", "pooled_runs", "rule_markdown", "saws"]
+           "pooled_run", "pooled_runs", "saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
              "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
@@ -339,58 +340,3 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     bundle.metrics["rule_settings"] = choice["settings"]
     bundle.metrics["rule_choice"] = choice
     return choice
-
-
-def rule_markdown(choice: dict[str, Any]) -> str:
-    """The choice as a Markdown section (for ``training.md``)."""
-    dur = "whole trials" if choice["duration_s"] is None else f"the first {choice['duration_s']:g} s"
-    lines = ["## Hand-over rule (closed-loop choice)", "",
-             f"Chosen on held-out trials {choice['trials']} ({dur}, wearer {choice.get('wearer', 'default')}) in "
-             f"{choice['seconds']:g} s: "
-             f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
-             f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
-             *_pruned_markdown(choice),
-             *_costs_markdown(choice),
-             "| run | wearer modes | hand-over | robot share while the wearer leads | robot share while it leads | "
-             "RMS [mm] | effort vs voluntary | line ratio | stroke corr. |", "|---|---|---|---|---|---|---|---|---|"]
-    for name in ("voluntary", "reactive"):
-        m = choice[name]
-        lines.append(f"| {name} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
-                     f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
-    for r in choice["candidates"]:
-        lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-        lines.append(f"| gate | {r['wearer_modes']} | {r.get('timing', 'prompt')} | {r.get('wearer_alpha', 0.0):g} | "
-                     f"{r.get('robot_alpha', 1.0):g} | "
-                     f"{r['tracking_rmse_m'] * 1e3:.1f} | "
-                     f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
-    return "\n".join(lines) + "\n"
-
-
-def _pruned_markdown(choice: dict[str, Any]) -> list[str]:  # the sets not simulated; none: no line
-    rows = [f"{r['wearer_modes']} ({r['why']})" for r in choice.get("pruned") or []]
-    return [f"Not simulated, from the per-mode costs: {'; '.join(rows)}.", ""] if rows else []
-
-
-def _f(row: dict[str, Any]) -> str:
-    return "n/a" if row.get("saw_correlation") is None else f"{row['saw_correlation']:.2f}"
-
-
-def _costs_markdown(choice: dict[str, Any]) -> list[str]:
-    """The per-mode costs table (:mod:`mpcshare.calibration.mode_cost`) and the order and cutting modes."""
-    c = choice["mode_costs"]
-    rows = ["What each mode costs (the controller's own mode estimate; price: squared error the wearer saves per "
-            "rad of effort):", "",
-            "| mode | share | wearer RMS [mm] | robot RMS [mm] | wearer effort [rad] | robot effort [rad] | "
-            "price [mm²/rad] |", "|---|---|---|---|---|---|---|"]
-    def f(key: str, j: int, digits: int) -> str:
-        return "n/a" if c[key][j] is None else f"{c[key][j]:.{digits}f}"
-
-    for j in range(len(c["share"])):
-        rows.append(f"| {j} | {f('share', j, 2)} | {f('rms_wearer_mm', j, 1)} | {f('rms_robot_mm', j, 1)} | "
-                    f"{f('effort_wearer_rad', j, 3)} | {f('effort_robot_rad', j, 3)} | "
-                    f"{f('price_mm2_per_rad', j, 0)} |")
-    task = choice.get("cutting_effort_vs_voluntary")
-    task_line = "" if task is None else (f" Leading them, the robot leading the rest, costs the wearer {task:.2f}x the "
-                                         "effort of doing the task alone (before any hand-over's cost).")
-    return rows + ["", f"Modes by price: {choice['price_order']}; modes that carry the cutting: "
-                   f"{choice['cutting_modes'] or 'none named'}.{task_line}", ""]

@@ -178,12 +178,14 @@ def _run_sweep(_bundle: Any, demos: Demonstrations, config: TrainConfig, folder:
     seconds; in any process (an :meth:`EpisodePool.call`, the bundle unused)."""
     from threadpoolctl import threadpool_limits
 
+    from mpcshare.reports.sweep import trend_sentence, write_sweep
     from mpcshare.training.sweep import run_sweep
 
     t0 = time.perf_counter()
     with threadpool_limits(limits=1, user_api="blas"):  # the same figures in this process and in a worker
-        result = run_sweep(demos, config, out=folder, progress=progress)
-    return {"rows": result.rows, "conclusion": result.conclusion}, time.perf_counter() - t0
+        result = run_sweep(demos, config, progress=progress)
+        write_sweep(result, folder)
+    return {"rows": result.rows, "conclusion": trend_sentence(result.rows)}, time.perf_counter() - t0
 
 
 def _start_sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainConfig, out: Path,

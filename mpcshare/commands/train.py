@@ -3,7 +3,7 @@
 - ``mpcshare train DATA --percentile 90 --out MODEL_DIR`` writes a bundle
   (:mod:`mpcshare.bundle`) and prints a summary of the held-out metrics;
 - ``mpcshare train DATA --sweep --out DIR`` writes ``sweep.json``, ``sweep.md`` and
-  ``sweep.png`` (:mod:`mpcshare.training.sweep`).
+  ``sweep.png`` (:mod:`mpcshare.training.sweep`, :mod:`mpcshare.reports.sweep`).
 
 ``--map NAME=CHANNEL`` renames the data's channels first (:mod:`mpcshare.channel_map`: the knife tip,
 the fork, the shoulder), recorded in the bundle for ``mpcshare sim``. Data that cannot drive the
@@ -150,10 +150,11 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(str(exc)) from None
     try:
         if args.sweep:
+            from mpcshare.reports.sweep import trend_sentence, write_sweep
             from mpcshare.training.sweep import run_sweep
-            result = run_sweep(demos, config, percentiles=args.percentiles, out=out,
-                               progress=not args.quiet)
-            print(result.conclusion)
+            result = run_sweep(demos, config, percentiles=args.percentiles, progress=not args.quiet)
+            write_sweep(result, out)
+            print(trend_sentence(result.rows))
             print(f"sweep: {out / 'sweep.md'}")
             return 0
         from mpcshare.training import train_bundle
@@ -168,11 +169,11 @@ def _run(args: argparse.Namespace) -> int:
         save_bundle(bundle, out)
     except BundleError as exc:
         raise CommandError(f"cannot write the bundle: {exc}") from None
-    from mpcshare.calibration.rule_choice import rule_markdown
+    from mpcshare.reports.rule_choice import rule_markdown, skipped_markdown
     from mpcshare.reports.training import write_training_md
 
     extra = rule_markdown(choice) if choice is not None else \
-        f"## Hand-over rule\n\nThe {skipped}.\n" if skipped else ""
+        skipped_markdown(skipped) if skipped else ""
     md = write_training_md(bundle.metrics, Path(out) / "training.md", extra=extra)
     print_metrics(bundle.metrics)
     if choice is not None:

@@ -44,7 +44,7 @@ class KeepOutSettings:
     """The controller's keep-out: the body, the rows' settings, the knife's heel offset in the
     tool frame [m] (the SuperLimb's blade: 9 cm back along the tool x axis), the parts kept out,
     and ``driven_speed`` [m/s]: a knife inside a margin moving toward the zone faster than this
-    was driven in (issue 30's definition); ``mpc_zones``: the MPC (when on) also holds the zones
+    was driven in; ``mpc_zones``: the MPC (when on) also holds the zones
     over its horizon, moving with the hand's forecast (:class:`robot.mpc.keepout_mpc.KeepOutTipMPC`)."""
 
     body: WearerBody = field(default_factory=WearerBody)

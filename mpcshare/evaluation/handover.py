@@ -15,7 +15,7 @@
   the closed loop, and the run keeps, per trial, the episode with the lowest tracking RMS among
   those replays *and the pure runs' own episodes* (the all-wearer and all-robot schedules). So
   per trial, and pooled (√ of weighted mean squares), it is never worse than the better party.
-* ``oracle_line`` (the upper bound on the line ratio, issue 28): :func:`line_oracle_schedules`, the
+* ``oracle_line`` (the upper bound on the line ratio): :func:`line_oracle_schedules`, the
   same search with the wearer's effort priced in. Per step the cost of a party is e_k² + μ·ε_k (ε_k
   the shoulder's ‖θ_k‖ [rad] in that party's run) with μ = c·(m_r − m_v)/(E_v − E_r), c times the
   line's own exchange rate of mean squared error for effort, for c in :data:`LINE_ORACLE_WEIGHTS`,
@@ -52,7 +52,7 @@ ORACLE_SWITCH_COSTS_S: tuple[float, ...] = (0.0, 0.5, 2.0, 8.0)
 LINE_ORACLE_WEIGHTS: tuple[float, ...] = (0.6, 1.0, 1.5)
 #: ``oracle_line``'s switch costs, in seconds of the parties' mean squared error.
 LINE_ORACLE_SWITCH_COSTS_S: tuple[float, ...] = (0.5, 1.5)
-#: ``oracle_line`` keeps replays costing at most this × the ``voluntary`` effort (issue 28's target).
+#: ``oracle_line`` keeps replays costing at most this × the ``voluntary`` effort (the effort target).
 LINE_ORACLE_MAX_EFFORT = 0.75
 #: The runs each scheduled run is computed from.
 SCHEDULE_SOURCES: dict[str, tuple[str, ...]] = {"random": (DEFAULT_STRATEGY,), "oracle": ("voluntary", "reactive"),

@@ -26,19 +26,17 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from mpcshare.control.strategies.mix import SPECS as _MIXES
+from mpcshare.control.strategies import by_role
 from mpcshare.line_ratio import add_line_ratios
 from sim.task_metrics import SAWING_CRITERION, saws
 
-__all__ = ["MIX_RUNS", "SHARED_STRATEGIES", "Headline", "better_mixes", "choice_note",
+__all__ = ["MIX_RUNS", "Headline", "better_mixes", "choice_note",
            "headline_lines", "headlines", "lag_words", "line_ratio", "shared_strategy", "trials_words"]
 
 EFFORT_TARGET = 0.75  # the shared strategy's effort, at most this share of the wearer's alone (docs/design.md)
-#: which run is "sharing" in the headline: the first of these present
-SHARED_STRATEGIES = ("gate", "paper_gate", "blend")
 _TIE = 0.02  # relative difference in tracking RMS (and effort) read as a tie
-#: the constant mixtures of the two parties (``mpcshare.control.strategies.mix``): what "mixing" is measured by
-MIX_RUNS: tuple[str, ...] = tuple(spec.name for spec in _MIXES)
+#: the constant mixtures of the two parties (the registry's ``mix`` role): what "mixing" is measured by
+MIX_RUNS: tuple[str, ...] = by_role("mix")
 
 
 @dataclass(frozen=True)
@@ -62,8 +60,9 @@ def _finite(x: Any) -> bool:
 
 
 def shared_strategy(strategies: dict[str, dict[str, Any]]) -> str | None:
-    """The run the headline calls *sharing*: the first of :data:`SHARED_STRATEGIES` present."""
-    return next((s for s in SHARED_STRATEGIES if s in strategies), None)
+    """The run the headline calls *sharing*: the first present of the registry's ``shared`` strategies
+    (:func:`mpcshare.control.strategies.by_role`, registry order), read at call time."""
+    return next((s for s in by_role("shared") if s in strategies), None)
 
 
 def line_ratio(strategies: dict[str, dict[str, Any]], name: str) -> float | None:

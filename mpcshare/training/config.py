@@ -23,7 +23,7 @@ DEFAULT_PERCENTILES: tuple[float, ...] = (100.0, 90.0, 80.0, 70.0, 60.0, 50.0)
 
 
 #: seconds simulated per held-out trial for the closed-loop choice of the hand-over rule
-#: (``mpcshare.calibration.rule_choice``; 30 s of one trial chose by noise: issue 28)
+#: (``mpcshare.calibration.rule_choice``; 30 s of one trial chose by noise)
 RULE_DURATION_S = 60.0
 
 @dataclass(frozen=True)

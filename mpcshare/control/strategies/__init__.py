@@ -2,7 +2,7 @@
 
 ``from mpcshare.control.strategies import REGISTRY``: an ordered mapping name →
 :class:`~mpcshare.control.strategies.base.StrategySpec` (``name``, ``description``, ``tunable``,
-``color``, ``factory``, ``user``, ``order``). Every module of this package except ``base`` is
+``color``, ``factory``, ``user``, ``order``, ``role``). Every module of this package except ``base`` is
 imported here and contributes its ``SPECS`` (a tuple of specs); the registry is ordered by
 ``order``. Adding a strategy is one module with ``SPECS`` (and its test): the Arbiter, the
 command line, ``tune``, the reports and the plots read the registry.
@@ -20,10 +20,18 @@ import pkgutil
 from types import MappingProxyType
 from typing import Mapping
 
-from mpcshare.control.strategies.base import ArbiterView, Policy, StepInputs, StrategyContext, StrategySpec, Target
+from mpcshare.control.strategies.base import (
+    ROLES,
+    ArbiterView,
+    Policy,
+    StepInputs,
+    StrategyContext,
+    StrategySpec,
+    Target,
+)
 
-__all__ = ["DEFAULT_STRATEGY", "REGISTRY", "ArbiterView", "Policy", "StepInputs", "StrategyContext", "StrategySpec",
-           "Target", "user_strategies"]
+__all__ = ["DEFAULT_STRATEGY", "REGISTRY", "ROLES", "ArbiterView", "Policy", "StepInputs", "StrategyContext",
+           "StrategySpec", "Target", "by_role", "user_strategies"]
 
 #: The default shared strategy.
 DEFAULT_STRATEGY = "gate"
@@ -52,3 +60,11 @@ REGISTRY: Mapping[str, StrategySpec] = _discover()
 def user_strategies() -> tuple[str, ...]:
     """The names a user may choose (every registered strategy but replays such as ``schedule``)."""
     return tuple(n for n, s in REGISTRY.items() if s.user)
+
+
+def by_role(role: str) -> tuple[str, ...]:
+    """The registered strategies of ``role`` (one of :data:`ROLES`), in registry order. Raises ValueError
+    for another role."""
+    if role not in ROLES:
+        raise ValueError(f"role {role!r} is not one of {', '.join(ROLES)}")
+    return tuple(n for n, s in REGISTRY.items() if s.role == role)

@@ -1,7 +1,7 @@
 """What a strategy is: its spec in the registry, what it is given, what it decides.
 
 A strategy is a :class:`StrategySpec` (name, one-sentence description, whether ``mpcshare tune``
-sweeps it, its plot colour, whether a user may choose it) with a ``factory`` that builds a
+sweeps it, its plot colour, whether a user may choose it, its role) with a ``factory`` that builds a
 per-episode decision object (a :class:`Policy`) from the :class:`StrategyContext` (the user's β,
 the arbitration settings, the bundle's per-mode figures). Every control step the
 :class:`~mpcshare.control.arbitration.Arbiter` gives the policy the step's
@@ -19,7 +19,12 @@ from typing import Any, Callable, Protocol
 
 import numpy as np
 
-__all__ = ["ArbiterView", "Policy", "StepInputs", "StrategyContext", "StrategySpec", "Target", "override_reason"]
+__all__ = ["ROLES", "ArbiterView", "Policy", "StepInputs", "StrategyContext", "StrategySpec", "Target",
+           "override_reason"]
+
+#: What a strategy is in the comparison: ``shared`` (decides who leads; the reports' *sharing*),
+#: ``baseline`` (one party alone), ``mix`` (a constant mixture of the two), ``replay`` (a given schedule).
+ROLES = ("shared", "baseline", "mix", "replay")
 
 
 @dataclass(frozen=True)
@@ -98,7 +103,8 @@ class StrategySpec:
 
     name; description (one sentence); tunable: swept by ``mpcshare tune``; color: a matplotlib
     colour; factory: StrategyContext → Policy; user: a user may choose it (False: replays or
-    tools, e.g. ``schedule``); order: position in the registry (ascending).
+    tools, e.g. ``schedule``); order: position in the registry (ascending; among the ``shared`` ones,
+    the reports name the first present); role: one of :data:`ROLES`. Raises ValueError for another role.
     """
 
     name: str
@@ -108,6 +114,11 @@ class StrategySpec:
     factory: Callable[[StrategyContext], Policy]
     user: bool = True
     order: float = 100.0
+    role: str = field(kw_only=True)
+
+    def __post_init__(self) -> None:
+        if self.role not in ROLES:
+            raise ValueError(f"strategy {self.name!r}: role {self.role!r} is not one of {', '.join(ROLES)}")
 
 
 def override_reason(inputs: StepInputs, novelty_threshold: float) -> str | None:

@@ -28,4 +28,4 @@ class Blend:
 
 
 SPECS = (StrategySpec("blend", "Policy blending: alpha rises linearly with the gate's probability.", tunable=True,
-                      color="#ff7f0e", factory=lambda ctx: Blend(ctx.blend_range), order=6),)
+                      color="#ff7f0e", factory=lambda ctx: Blend(ctx.blend_range), order=6, role="shared"),)

@@ -33,7 +33,7 @@ class Fixed:
 
 
 VOLUNTARY = StrategySpec("voluntary", "The wearer alone: alpha = 0, beta = 1.", tunable=False, color="#d62728",
-                         factory=lambda ctx: Fixed(0.0, 1.0, "voluntary baseline"), order=0)
+                         factory=lambda ctx: Fixed(0.0, 1.0, "voluntary baseline"), order=0, role="baseline")
 REACTIVE = StrategySpec("reactive", "The robot alone: alpha = 1, beta = 0.", tunable=False, color="#2ca02c",
-                        factory=lambda ctx: Fixed(1.0, 0.0, "reactive baseline"), order=1)
+                        factory=lambda ctx: Fixed(1.0, 0.0, "reactive baseline"), order=1, role="baseline")
 SPECS = (VOLUNTARY, REACTIVE)

@@ -1,6 +1,6 @@
 """``gate``: the default shared strategy, who leads decided by expected cost over whole modes.
 
-Issue 28's evidence: within a mode whose unpredictability is a matter of phase (a sawing
+Why: within a mode whose unpredictability is a matter of phase (a sawing
 stroke), the paper's per-point gate keeps or drops the stroke by chance, and a hand-over *at*
 a mode boundary costs about a second of large error while the wearer perceives the cue and
 picks up; the wearer leading the whole stroke mode, from before it begins until after it ends,
@@ -52,7 +52,7 @@ then the forecast probability of being in a wearer mode within ``lead_s``.
 wearer still reads that they lead) a wearer-led mode is the constant mixture û = a_w·û_r +
 (1 − a_w)·û_v rather than the wearer alone: where the robot's forecast and the wearer's plan err
 partly independently, the mixture's error a_w·e_r + (1 − a_w)·e_v has less variance than either
-(the constant ``mix25`` lies below the voluntary–reactive line on the project's data, issue 28).
+(the constant ``mix25`` lies below the voluntary–reactive line on the project's data).
 Where the robot is far worse than the wearer it only adds error, so the closed-loop choice decides.
 
 **The robot's share while it leads, per mode.** With ``robot_alphas`` a = (a_1 … a_K), a_j ∈ [0.5, 1]
@@ -61,7 +61,7 @@ with α = π·a, the share expected under the mode posterior π (smooth: no hand
 not change). Where the robot's forecast of a mode errs partly at random, shrinking its command toward
 the wearer's corrections (a_j < 1) lowers both the error and the corrections the wearer must make: the
 constant ``mix50`` lies below the voluntary–reactive line on the family of worlds where the robot
-leading every mode at full share lies above it (issue 28). Default: 1 in every mode (α = 1, the user's β).
+leading every mode at full share lies above it. Default: 1 in every mode (α = 1, the user's β).
 
 Settings (:data:`DEFAULTS`, ``wearer_modes`` and ``robot_alphas``) come from the controller's ``strategy_options``
 over the bundle's ``rule_settings``. A bundle without per-mode figures falls back to the paper's gate
@@ -282,4 +282,4 @@ def make(ctx: StrategyContext) -> ModeCostGate | PaperGate:
 
 SPECS = (StrategySpec("gate", "The default shared strategy: whole modes the robot cannot predict go to the wearer, "
                       "handed over before they begin and held after they end.", tunable=True, color="#1f77b4",
-                      factory=make, order=4),)
+                      factory=make, order=4, role="shared"),)

@@ -45,4 +45,4 @@ def make(ctx: StrategyContext) -> PaperGate:
 
 SPECS = (StrategySpec("paper_gate", "The paper's gate: the robot leads where the gate of the current mode says "
                       "predictable (with hysteresis, dwell and a ramp).", tunable=True, color="#17becf",
-                      factory=make, order=5),)
+                      factory=make, order=5, role="shared"),)

@@ -41,4 +41,4 @@ def make(ctx: StrategyContext) -> Replay:
 
 
 SPECS = (StrategySpec(SCHEDULE, "The replay of a given hand-over schedule (placebo and oracle runs).",
-                      tunable=False, color="#7f7f7f", factory=make, user=False, order=99),)
+                      tunable=False, color="#7f7f7f", factory=make, user=False, order=99, role="replay"),)

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from mpcshare.calibration import rule_choice
-from mpcshare.calibration.rule_choice import candidate_sets, choice_trials, choose_rule, line_ratio, rule_markdown
+from mpcshare.calibration.rule_choice import candidate_sets, choice_trials, choose_rule, line_ratio
 from mpcshare.control.strategies.gate import check_settings, wearer_indicator
+from mpcshare.reports.rule_choice import rule_markdown
 
 
 def test_candidates_are_price_prefixes_with_and_without_the_cutting_modes():

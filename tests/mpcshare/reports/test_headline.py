@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import pytest
 
-from mpcshare.reports.headline import MIX_RUNS, headline_lines, headlines, lag_words, line_ratio
+import mpcshare.control.strategies as strategies
+from mpcshare.control.strategies import REGISTRY, StrategySpec
+from mpcshare.reports.headline import MIX_RUNS, headline_lines, headlines, lag_words, line_ratio, shared_strategy
 from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 
 
@@ -51,6 +55,18 @@ def test_the_four_lines_come_in_order_and_nothing_without_a_shared_run():
     lines = headline_lines(_runs(15.7), markdown=False)
     assert [ln.split(":")[0] for ln in lines] == ["The task", "Sharing", "Effort", "Keep-out"]
     assert headline_lines({"voluntary": _m(6.7, 0.06)}) == []
+
+
+@pytest.mark.parametrize("order,first", [(3.5, "newshare"), (7.0, "gate")])
+def test_a_strategy_registered_as_shared_reaches_the_headline_in_registry_order(monkeypatch, order, first):
+    spec = StrategySpec("newshare", "A test strategy.", tunable=False, color="#000000",
+                        factory=REGISTRY["gate"].factory, order=order, role="shared")
+    specs = sorted([*REGISTRY.values(), spec], key=lambda s: (s.order, s.name))
+    monkeypatch.setattr(strategies, "REGISTRY", MappingProxyType({s.name: s for s in specs}))
+    runs = {**_runs(15.7), "newshare": _m(9.0, 0.03), "blend": _m(8.0, 0.03)}
+    assert shared_strategy(runs) == first
+    assert f"`{first}`" in headline_lines(runs)[1]
+    assert shared_strategy({"voluntary": _m(6.7, 0.06), "newshare": _m(9.0, 0.03)}) == "newshare"
 
 
 def _mixes(**mixes: tuple[float, float]) -> dict:

@@ -7,7 +7,6 @@ import pytest
 from learning.data import save
 from mpcshare.cli import main
 from mpcshare.commands.train import TRAIN_COMMAND
-from mpcshare.training.sweep import trend_sentence
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
 KEYS = {"percentile", "K", "rmse_reactive", "rmse_all", "voluntary_share", "voluntary_effort", "gate_accuracy"}
@@ -51,17 +50,3 @@ def test_reactive_rmse_falls_and_effort_rises_as_K_is_lowered(sweep_dir):
     assert at[50.0]["voluntary_effort"] > at[100.0]["voluntary_effort"] == 0.0
     assert at[50.0]["voluntary_share"] > 0.2
     assert at[50.0]["gate_accuracy"] > 0.6
-
-
-def _rows(rmse, effort, ps=(100, 80, 60)):
-    return [{"kind": "gate+predictor", "percentile": p, "rmse_reactive": r, "voluntary_effort": e}
-            for p, r, e in zip(ps, rmse, effort)] + [{"kind": "ridge", "percentile": None}]
-
-
-def test_trend_sentence_says_what_happened():
-    assert "as the paper expects" in trend_sentence(_rows([0.3, 0.2, 0.1], [0.0, 0.1, 0.2]))
-    s = trend_sentence(_rows([0.3, 0.35, 0.1], [0.0, 0.1, 0.2]))
-    assert "not at every step" in s and "100th and 80th" in s and "as the paper expects" in s
-    s = trend_sentence(_rows([0.1, 0.2, 0.3], [0.0, 0.1, 0.2]))
-    assert "does not fall" in s and "NOT what the paper expects" in s
-    assert "no trend" in trend_sentence(_rows([0.1], [0.0], ps=(100,)))

@@ -1,5 +1,6 @@
 """A new strategy is one module: dropped into the strategies package, it reaches the Arbiter, the
-command line (``sim --runs``, ``tune --strategies``), the run table, the Pareto set and the colours."""
+command line (``sim --runs``, ``tune --strategies``), the run table, the Pareto set, the colours and,
+declared ``shared``, the headline."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ PROBE = textwrap.dedent('''
     from mpcshare.control.strategies.fixed import Fixed
 
     SPECS = (StrategySpec("probe70", "A probe strategy for the registry test.", tunable=True, color="#123456",
-                          factory=lambda ctx: Fixed(0.7, 0.3, "probe"), order=4.5),)
+                          factory=lambda ctx: Fixed(0.7, 0.3, "probe"), order=4.5, role="shared"),)
 ''')
 
 # run in a fresh interpreter whose import system gives the strategies package the probe's folder as a
@@ -36,6 +37,7 @@ CHECK = textwrap.dedent('''
     from mpcshare import run_table
     from mpcshare.cli import build_parser
     from mpcshare.control.arbitration import Arbiter
+    from mpcshare.reports.headline import shared_strategy
     parser = build_parser()
     sim = parser.parse_args(["sim", "--model", "b", "--out", "o", "--runs", "probe70"])
     tune = parser.parse_args(["tune", "d", "--out", "o", "--strategies", "probe70"])
@@ -43,7 +45,8 @@ CHECK = textwrap.dedent('''
     print(json.dumps({"registry": list(module.REGISTRY), "runs": list(run_table.RUN_NAMES),
                       "tunable": list(run_table.TUNABLE), "pareto": list(run_table.REALISABLE),
                       "color": run_table.RUN_COLORS.get("probe70"), "sim": sim.runs, "tune": tune.strategies,
-                      "decision": [d.alpha, d.beta]}))
+                      "decision": [d.alpha, d.beta],
+                      "headline": shared_strategy({"paper_gate": {}, "probe70": {}, "blend": {}})}))
 ''')
 
 
@@ -56,3 +59,4 @@ def test_a_strategy_module_reaches_every_command_and_table(tmp_path):
     assert "probe70" in seen["runs"] and "probe70" in seen["tunable"] and "probe70" in seen["pareto"]
     assert seen["color"] == "#123456" and seen["sim"] == ["probe70"] and seen["tune"] == ["probe70"]
     assert seen["decision"] == [0.7, 0.3]
+    assert seen["headline"] == "probe70"  # shared, and before paper_gate in the registry

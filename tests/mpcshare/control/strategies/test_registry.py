@@ -6,7 +6,7 @@ import matplotlib.colors
 import pytest
 
 from mpcshare.control.arbitration import STRATEGIES, Arbiter, check_strategy
-from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, StrategySpec, user_strategies
+from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, ROLES, StrategySpec, by_role, user_strategies
 
 
 def test_the_registry_holds_the_named_strategies_in_order():
@@ -21,6 +21,17 @@ def test_the_registry_holds_the_named_strategies_in_order():
     assert len({s.color for s in REGISTRY.values()}) == len(REGISTRY)  # each its own colour in the plots
     with pytest.raises(TypeError):
         REGISTRY["x"] = REGISTRY["gate"]  # read-only
+
+
+def test_each_strategy_declares_its_role_and_the_shared_ones_come_in_todays_order():
+    assert by_role("shared") == ("gate", "paper_gate", "blend")  # the headline names the first present
+    assert by_role("baseline") == ("voluntary", "reactive")
+    assert by_role("mix") == ("mix25", "mix50", "mix75") and by_role("replay") == ("schedule",)
+    assert sorted(n for r in ROLES for n in by_role(r)) == sorted(REGISTRY)
+    with pytest.raises(ValueError, match="role 'helper' is not one of shared, baseline, mix, replay"):
+        by_role("helper")
+    with pytest.raises(ValueError, match="strategy 'x': role 'helper'"):
+        StrategySpec("x", "X.", tunable=False, color="k", factory=REGISTRY["gate"].factory, role="helper")
 
 
 def test_check_strategy_names_the_registry():

@@ -1,0 +1,69 @@
+"""The closed-loop choice of the hand-over rule (:mod:`mpcshare.calibration.rule_choice`) in words:
+a Markdown section of ``training.md`` (the choice, why, the sets not simulated, the per-mode costs and
+every candidate's figures), or why it was skipped."""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["rule_markdown", "skipped_markdown"]
+
+
+def rule_markdown(choice: dict[str, Any]) -> str:
+    """The choice as a Markdown section (for ``training.md``)."""
+    dur = "whole trials" if choice["duration_s"] is None else f"the first {choice['duration_s']:g} s"
+    lines = ["## Hand-over rule (closed-loop choice)", "",
+             f"Chosen on held-out trials {choice['trials']} ({dur}, wearer {choice.get('wearer', 'default')}) in "
+             f"{choice['seconds']:g} s: "
+             f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
+             f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
+             *_pruned_markdown(choice),
+             *_costs_markdown(choice),
+             "| run | wearer modes | hand-over | robot share while the wearer leads | robot share while it leads | "
+             "RMS [mm] | effort vs voluntary | line ratio | stroke corr. |", "|---|---|---|---|---|---|---|---|---|"]
+    for name in ("voluntary", "reactive"):
+        m = choice[name]
+        lines.append(f"| {name} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
+                     f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
+    for r in choice["candidates"]:
+        lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
+        lines.append(f"| gate | {r['wearer_modes']} | {r.get('timing', 'prompt')} | {r.get('wearer_alpha', 0.0):g} | "
+                     f"{r.get('robot_alpha', 1.0):g} | "
+                     f"{r['tracking_rmse_m'] * 1e3:.1f} | "
+                     f"{r['effort_vs_voluntary']:.2f} | {lr} | {_f(r)} |")
+    return "\n".join(lines) + "\n"
+
+
+def skipped_markdown(skipped: str) -> str:
+    """The section when the choice was skipped: ``skipped`` says why, e.g. "closed-loop choice was skipped: …"."""
+    return f"## Hand-over rule\n\nThe {skipped}.\n"
+
+
+def _pruned_markdown(choice: dict[str, Any]) -> list[str]:  # the sets not simulated; none: no line
+    rows = [f"{r['wearer_modes']} ({r['why']})" for r in choice.get("pruned") or []]
+    return [f"Not simulated, from the per-mode costs: {'; '.join(rows)}.", ""] if rows else []
+
+
+def _f(row: dict[str, Any]) -> str:
+    return "n/a" if row.get("saw_correlation") is None else f"{row['saw_correlation']:.2f}"
+
+
+def _costs_markdown(choice: dict[str, Any]) -> list[str]:
+    """The per-mode costs table (:mod:`mpcshare.calibration.mode_cost`) and the order and cutting modes."""
+    c = choice["mode_costs"]
+    rows = ["What each mode costs (the controller's own mode estimate; price: squared error the wearer saves per "
+            "rad of effort):", "",
+            "| mode | share | wearer RMS [mm] | robot RMS [mm] | wearer effort [rad] | robot effort [rad] | "
+            "price [mm²/rad] |", "|---|---|---|---|---|---|---|"]
+    def f(key: str, j: int, digits: int) -> str:
+        return "n/a" if c[key][j] is None else f"{c[key][j]:.{digits}f}"
+
+    for j in range(len(c["share"])):
+        rows.append(f"| {j} | {f('share', j, 2)} | {f('rms_wearer_mm', j, 1)} | {f('rms_robot_mm', j, 1)} | "
+                    f"{f('effort_wearer_rad', j, 3)} | {f('effort_robot_rad', j, 3)} | "
+                    f"{f('price_mm2_per_rad', j, 0)} |")
+    task = choice.get("cutting_effort_vs_voluntary")
+    task_line = "" if task is None else (f" Leading them, the robot leading the rest, costs the wearer {task:.2f}x the "
+                                         "effort of doing the task alone (before any hand-over's cost).")
+    return rows + ["", f"Modes by price: {choice['price_order']}; modes that carry the cutting: "
+                   f"{choice['cutting_modes'] or 'none named'}.{task_line}", ""]
