@@ -59,7 +59,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--model", required=True)
     ap.add_argument("--seconds", type=float, default=10.0)
-    ap.add_argument("--tick", choices=("schedule", "arm"), default="schedule",
+    ap.add_argument("--tick", choices=("schedule", "arm"), default="arm",
                     help="the configuration's tick: every period, or on the arm's joint states")
     args = ap.parse_args()
     domain = 200 + os.getpid() % 30
@@ -68,7 +68,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         cfg = Path(tmp) / "arm.toml"
         text = (ROOT / "examples/ros2/superlimb.toml").read_text().replace("domain_id = 0", f"domain_id = {domain}")
-        cfg.write_text(text.replace('tick = "schedule"', f'tick = "{args.tick}"'))
+        cfg.write_text(text.replace('tick = "arm"', f'tick = "{args.tick}"'))
         env = {k: v for k, v in os.environ.items() if k != "CYCLONEDDS_URI"}
         env["PYTHONPATH"] = str(ROOT)
         proc = subprocess.Popen([sys.executable, "-m", "mpcshare", "run", "--model", args.model, "--config",

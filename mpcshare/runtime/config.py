@@ -6,8 +6,8 @@ Tables (examples: ``examples/ros2/superlimb.toml``, ``examples/ros2/panda.toml``
     rate_hz = 100.0               # the control rate: the model's rate
     resume_after_s = 1.0          # after a protective stop for a silent input: resume once every required
                                   #   input has been fresh this long [s]
-    tick = "schedule"             # "schedule": every period of the monotonic clock; "arm": on each arriving
-                                  #   joint state within half a period of its tick (mpcshare.runtime.loop)
+    tick = "arm"                  # "arm": on each arriving joint state within half a period of its tick
+                                  #   (mpcshare.runtime.loop); "schedule": every period of the monotonic clock
     [network]                     # optional; default loopback: interface 127.0.0.1, peers [127.0.0.1],
     interface = "192.168.1.10"    #   multicast off, domain_id 0 (ROS_DOMAIN_ID). CYCLONEDDS_URI, when set,
     peers = ["192.168.1.2"]       #   replaces the whole table.
@@ -155,7 +155,7 @@ class RunConfig:
     status_topic: str
     status_qos: QosSettings
     resume_after_s: float = 1.0
-    tick: str = "schedule"
+    tick: str = "arm"
 
     @property
     def arm(self) -> InputSpec:
@@ -297,7 +297,7 @@ def parse_run_config(doc: dict[str, Any], source: str, folder: Path | None = Non
         status_topic=d.topic(status, "[outputs.status]") if "topic" in status else "/mpcshare/status",
         status_qos=d.qos(status, "[outputs.status]", QosSettings("reliable", 1)),
         resume_after_s=float(d.number(doc, "resume_after_s", "top level", 1.0)),
-        tick=d.text(doc, "tick", "top level", "schedule", TICKS))
+        tick=d.text(doc, "tick", "top level", "arm", TICKS))
 
 
 def load_run_config(path: str | Path) -> RunConfig:

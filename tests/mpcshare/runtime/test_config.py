@@ -62,7 +62,7 @@ BAD = [  # (replace {regex: text}, append, what the one line names)
     ({r'^strategy = "gate"': 'strategy = "coin"'}, "", "[controller]: "),
     ({}, "\n[extra]\nx = 1\n", "top level extra: unknown key"),
     ({r'^\[inputs.arm\]': "[inputs.arm"}, "", "not valid TOML"),
-    ({r'^tick = "schedule"': 'tick = "fork"'}, "",
+    ({r'^tick = "arm"': 'tick = "fork"'}, "",
      "top level tick: 'fork' is not one of schedule, arm"),
     ({r'^resume_after_s = 1.0': "resume_after_s = -1"}, "", "top level resume_after_s: must be a number > 0"),
 ]

@@ -185,7 +185,6 @@ def test_sim_time_ticks_on_the_clock_and_a_jump_back_starts_afresh(tmp_path):
 
 def test_ticking_on_the_arm_keeps_its_period_while_the_arm_is_silent(tmp_path):
     cfg = load_run_config(write_config(tmp_path, replace={
-        r'^tick = "schedule"': 'tick = "arm"',
         r'^topic = "/joint_trajectory_controller/joint_trajectory"': 'topic = "/test_tick_arm/commands"',
         r'^topic = "/mpcshare/status"': 'topic = "/test_tick_arm/status"'}))
     loop = RunLoop(cfg, Recorder(), Transport(NetworkSettings(domain_id=DOMAIN)), obs_names=OBS, vol_names=VOL)
