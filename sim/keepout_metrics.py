@@ -97,7 +97,8 @@ def episode_keepout_metrics(episode: Episode, near_m: float = 0.05) -> dict[str,
         driven = inside & (own > DRIVEN_SPEED)
         moving = inside & (zin > np.nan_to_num(own, nan=0.0))
         near = c < near_m
-    cmin = np.nanmin(c, axis=1) if np.isfinite(c).any() else np.full(c.shape[0], np.nan)
+    seen = np.isfinite(c)  # a lost sample's row is all NaN: its minimum is NaN, not a warning
+    cmin = np.where(seen.any(axis=1), np.min(np.where(seen, c, np.inf), axis=1), np.nan)
     finite = np.isfinite(cmin)
     min_c = float(np.min(cmin[finite])) if finite.any() else None
     near_own = own[near & np.isfinite(own)]
