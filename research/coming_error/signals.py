@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
+from sklearn.metrics import roc_auc_score
 
 __all__ = ["AdaptiveConformal", "GammaDwell", "auc", "dwell_runs", "entropy", "future_mean", "past_mean",
            "time_in_state"]
@@ -185,9 +186,6 @@ def auc(y: np.ndarray, score: np.ndarray) -> float | None:
     y, score = np.asarray(y, dtype=float), np.asarray(score, dtype=float)
     ok = np.isfinite(y) & np.isfinite(score)
     y, score = y[ok] > 0.5, score[ok]
-    n1 = int(y.sum())
-    n0 = y.size - n1
-    if n1 == 0 or n0 == 0:
+    if y.all() or not y.any():
         return None
-    r = stats.rankdata(score)
-    return float((r[y].sum() - n1 * (n1 + 1) / 2) / (n1 * n0))
+    return float(roc_auc_score(y, score))
