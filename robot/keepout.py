@@ -1,36 +1,23 @@
 """Keep-out zones as QP rows: the knife (tip and blade segment) stays out of moving capsules.
 
-A *zone* is a capsule (a sphere when its two ends coincide) with a velocity, in the
-model's world frame.  The knife is the segment from its tip to the blade's heel, two
-frames of any Pinocchio model (the heel is a frame added at a fixed offset from the tip
-frame).  For each zone the closest points of the blade segment and the zone's axis give
-the clearance and the unit normal n (zone → knife):
+A *zone* (:class:`Zone`) is a capsule (a sphere when its ends coincide) with a velocity v_z in the
+model's world frame; the blade is the segment p_b(s) = (1 − s)·p_tip + s·p_heel of one rigid body
+(:class:`Blade`; heel a frame at a fixed offset from the tip frame), so its Jacobian and drift are
+the same interpolation (exact). The closest points of blade and zone axis give the clearance and
+the unit normal n (zone → knife):  d = ‖p_b(s*) − c_z‖ − r_z − margin  [m].  With a constant a
+over dt, v_b⁺ = v_b + dt·(J_b·a + J̇_b·v). Two rows ``G·a ≤ h`` per zone (:class:`KeepOutLimit`):
 
-    d = ‖p_b(s*) − c_z‖ − r_z − margin            [m]   (s* the blade parameter, 0 = tip)
+* barrier (second-order, relative to the zone): s⁺ = −n·(v_b⁺ − v_z) ≤ u_A(d, s), the viable bound
+  of :func:`robot.constraints.viable_velocity_bound` with gap d (the knife can still stop at A);
+* speed and separation monitoring (ISO/TS 15066 5.5.4, Marvel & Norcross 2017):
+  −n·v_b⁺ ≤ max(0, min((d − v_h·T_h)/T_r, v_cap + max(0, d − d_near)/T_r)), v_h = max(0, n·v_z);
+  a zone's uncertainty counts as distance lost, and inside it the knife backs away:
+  −n·v_b⁺ ≤ max(−v_cap, d_u/T_r).
 
-The blade point p_b(s) = (1 − s)·p_tip + s·p_heel is a point of one rigid body, so its
-Jacobian, velocity and drift are the same interpolation of the tip's and heel's (exact).
-With a constant acceleration a over dt, the point's next velocity is
-v_b⁺ = v_b + dt·(J_b·a + J̇_b·v).  Two rows per zone (``G·a ≤ h``):
-
-* **barrier** (control barrier function on the distance, second order, with the zone's
-  velocity v_z): the approach speed s⁺ = −n·(v_b⁺ − v_z) must let the knife still stop
-  relative to the zone before d = 0 braking at A (the viable bound of
-  :func:`robot.constraints.viable_velocity_bound` with gap d):  s⁺ ≤ u_A(d, s);
-* **speed and separation monitoring** (ISO/TS 15066, 5.5.4, in the form of Marvel &
-  Norcross 2017, RCIM 44:144): the knife's *own* speed toward the zone
-  −n·v_b⁺ ≤ max(0, min((d − v_h·T_h)/T_r, v_cap + max(0, d − d_near)/T_r)), with
-  v_h = max(0, n·v_z) the body part's speed toward the knife, T_r the robot's reaction
-  and stopping time, T_h the time the body part is assumed to keep coming, v_cap the
-  zone's speed cap near the person; it reaches 0 (a protective stop) at d = 0. A zone's
-  uncertainty (a lost marker, :class:`Zone`) counts as distance lost and its growth as the
-  zone's approach speed; inside the uncertain region the knife backs away gently
-  (−n·v_b⁺ ≤ max(−v_cap, d_u/T_r), d_u < 0 the clearance to the uncertain region).
-
-Rows of zones farther than ``KeepOutConfig.active_distance`` are ``0·a ≤ 1e6`` (the
-row count is fixed: ``2·max_zones``).  :func:`retreat` is the safest feasible action
-when the rows cannot all be met: the QP with the keep-out rows softened (slack
-penalised far above the cost of stopping), the other limits hard.
+Zones beyond ``KeepOutConfig.active_distance`` give ``0·a ≤ 1e6`` (always ``2·max_zones`` rows).
+:func:`retreat` is the safest action when the rows cannot all be met (keep-out softened, other
+limits hard). Bad settings raise ``ValueError``; an unknown frame, a bad heel offset or too many zones
+raise :class:`robot.errors.ControllerConfigError` subclasses. Design: docs/design.md, "The person first".
 """
 
 from __future__ import annotations

@@ -1,38 +1,22 @@
 """Acceleration-level QP controller: knife-tip reference → joint commands within limits.
 
-Each control period dt [s] the controller solves, for the joint acceleration
-a [rad/s²],
+Each control period dt [s] it solves, for the joint acceleration a [rad/s²],
 
     minimise   Σ_tasks w·‖A_k·a − b_k‖²          (tip tracking, posture, damping, regularisation)
     subject to lo ≤ a ≤ hi                        (acceleration, velocity, viable position limits)
                −τ_max ≤ M(q)·a + h(q, v) ≤ τ_max  (torque limits, inverse dynamics)
 
-and returns a, the torque τ = M(q)·a + h(q, v) [N·m] and the state integrated
-over dt with constant a: v⁺ = v + a·dt, q⁺ = q + v·dt + ½·a·dt².
-
-Safe answers instead of exceptions in the loop (``QPResult.status``):
-
-* ``ok`` — every limit holds.
-* ``recovering`` — the state is outside a kinematic limit (e.g. a start beyond
-  a position limit): the box is built by :func:`robot.constraints.intersect_by_priority`
-  (acceleration > velocity > position) so the arm moves back at maximum
-  allowed effort; torque limits still hold.
-* ``relaxed`` — the box and the torque limits do not intersect: a second QP
-  with slack s ≥ 0 on the box (lo − s ≤ a ≤ hi + s, cost ρ₁·Σs + ½ρ₂·‖s‖²,
-  task cost normalised to ≤ 1) keeps the torque limits hard and relaxes the
-  kinematic box as little as possible; ``slack`` reports max s [rad/s²].
-* ``invalid_reference`` — non-finite reference: tracking is dropped, the
-  posture/damping tasks hold the arm.
-* ``invalid_state`` — non-finite q or v: a = 0, the last valid torque, q⁺ and
-  v⁺ equal to the last valid state.
-* ``solver_failed`` — both QPs failed: brake, a = clip(−v/dt) into the box,
-  torque clipped to its limits (the torque limits hold in every case).
-
-A singular pose needs nothing special (posture and regularisation keep the
-Hessian positive definite, the tip task becomes damped least squares); it is
-reported in ``reason`` when the manipulability √det(J·Jᵀ) is below
-``QPConfig.singular_threshold``.  Misuse (unknown frame, wrong shapes, bad
-gains) raises :class:`robot.errors.ControllerConfigError` subclasses.
+and returns a, τ = M(q)·a + h(q, v) [N·m] and the state after dt at constant a:
+v⁺ = v + a·dt, q⁺ = q + v·dt + ½·a·dt². It never raises in the loop; ``QPResult.status`` says
+what held: ``ok`` (every limit); ``recovering`` (state outside a kinematic limit: the box by
+:func:`robot.constraints.intersect_by_priority`, acceleration > velocity > position);
+``relaxed`` (box and torque limits disjoint: slack s ≥ 0 on the box, cost ρ₁·Σs + ½ρ₂·‖s‖²,
+torque limits hard, ``slack`` = max s [rad/s²]); ``invalid_reference`` (non-finite reference:
+posture and damping hold the arm); ``invalid_state`` (non-finite q or v: a = 0, the last valid
+torque and state); ``solver_failed`` (brake, a = clip(−v/dt) into the box, torque clipped). The
+torque limits hold in every case. A singular pose (√det(J·Jᵀ) < ``QPConfig.singular_threshold``)
+is only reported in ``reason``. Misuse (unknown frame, wrong shapes, bad gains) raises
+:class:`robot.errors.ControllerConfigError` subclasses.
 """
 
 from __future__ import annotations

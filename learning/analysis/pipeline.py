@@ -1,29 +1,22 @@
 """The predictability analysis of Song & Asada, end to end, on any data set.
 
-1. preprocessing: downsample, standardise (fitted on the data), causal windows
-   normalised by √L (:func:`learning.preprocessing.preprocess.causal_windows` with ``rms=True``);
-2. HMM task modes fitted on the per-sample observations (not the windows: see
-   :mod:`learning.modes`); then point-wise quotients q_i without modes (K at
-   percentiles 50…100) and within the random groupings, all in one pass over the pairs
+1. preprocessing: downsample, standardise (fitted on the data), causal windows normalised by √L
+   (:func:`learning.preprocessing.preprocess.causal_windows` with ``rms=True``);
+2. HMM task modes on the per-sample observations; quotients q_i = max_j ‖Δu‖/‖Δo‖ without modes
+   (K at percentiles 50…100) and within the random groupings in one pass over the pairs
    (:func:`learning.lipschitz.pointwise_quotients_multi`);
-3. quotients within modes, within the time-free reference
-   grouping of the same features (a Gaussian mixture by default) and within random
-   groups of equal sizes (the paper's reference); two claims, each a one-sided Wilcoxon
-   signed-rank test over *trials* of per-trial median quotients
-   (:mod:`learning.analysis.reference`): "modes help" (HMM vs random groups, the paper's)
-   and "the temporal model adds information" (HMM vs reference and vs random groups);
-4. the voluntary share per trial at each K, without modes, within modes, within the
-   reference and within random groups, with the paired one-sided Wilcoxon test over
-   trials (modes vs reference);
-5. a search for missing information (:mod:`learning.analysis.search`): every (window
-   length, number of modes) candidate ranked by how far its modes lower the per-trial
-   median quotients *beyond* the time-free reference grouping.
+3. quotients within modes and within the time-free reference grouping; the two claims "modes
+   help" and "the temporal model adds information", each a one-sided Wilcoxon signed-rank test
+   over trials (:mod:`learning.analysis.reference`);
+4. the voluntary share (fraction of windows with q > K) per trial at each K, without modes, within
+   modes, the reference and random groups; paired one-sided Wilcoxon test, modes vs reference;
+5. a search for missing information (:mod:`learning.analysis.search`): (window length, number of
+   modes) candidates ranked by how far their modes lower the per-trial median q beyond the reference.
 
 :func:`analyze` returns an :class:`AnalysisResult`: the findings as an
-:class:`~learning.analysis.report.AnalysisReport` (``summary``; ``report`` is its
-JSON-ready dict, the schema is in docs/design.md) and the arrays the plots need.
-Plotting and files live in :mod:`mpcshare.reports.analysis` (matplotlib is not a dependency
-of ``learning``).
+:class:`~learning.analysis.report.AnalysisReport` (schema: docs/design.md) and the arrays the plots
+need (drawn by :mod:`mpcshare.reports.analysis`). Data it cannot analyse with the settings (rate
+below ``target_hz``, trials too short for the window) raise :class:`AnalysisError`.
 """
 
 from __future__ import annotations

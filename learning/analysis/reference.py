@@ -1,54 +1,21 @@
 """The calibrated claims "modes help" and "the temporal model adds information": random groups,
 a time-free reference grouping and per-trial inference.
 
-Question (Song & Asada): does the task mode add information *beyond where the
-observation already is*? Any grouping that is coherent in observation space lowers
-the quotients q_i = max_{j in group(i)} ‖Δy‖/‖Δx‖ relative to random groups, with or
-without hidden regimes; so the reference is a grouping of the *same* per-sample
-features with the *same* number of groups that uses no temporal information:
+Quotients q_i = max_{j in group(i)} ‖Δy‖/‖Δx‖ within the HMM modes (a) are compared with those
+within a reference (b) of the same windows: random groups of the modes' sizes
+(:func:`random_labelings`), or a grouping of the same per-sample features with as many groups
+and no temporal information (:func:`reference_segmentation`): ``"gmm"`` (default, a
+full-covariance Gaussian mixture: the HMM's emission model without the Markov chain),
+``"kmeans-sized"`` (k-means held to the modes' group sizes, :func:`size_matched_kmeans`) or
+``"kmeans"``. Test (:func:`trial_test`), over trials, the independent units: per-trial medians
+a_t, b_t; effect = median_t ln(b_t/a_t) (> 0: modes lower q) with a seeded percentile-bootstrap
+interval; one-sided Wilcoxon signed-rank test (scipy) of ln(b_t/a_t) − δ > 0, δ the smallest
+effect of interest (``min_effect``; H0: modes lower q by at most the factor e^δ). With n trials
+the smallest p is 2⁻ⁿ; below :func:`min_trials_for` the claim is unreachable (``reachable=False``).
+Bad shapes, an unknown reference, alpha outside (0, 1) or δ < 0 raise ``ValueError``.
 
-- ``"gmm"`` (default): a full-covariance Gaussian mixture with as many components
-  (scikit-learn, seeded, 2 inits): the HMM's own emission model without the Markov chain,
-  so the comparison isolates what the temporal model adds.
-- ``"kmeans-sized"``: k-means (k-means++, seeded) whose assignment step is constrained to
-  the HMM's group sizes (greedy transportation: all (point, centre) pairs in order of
-  squared distance, each point to the nearest centre with room left), alternated with
-  centroid updates (Lloyd) until no label changes; the maximum in q_i grows with the
-  group size, so matching sizes removes that confound.
-- ``"kmeans"``: plain k-means (sizes free).
-
-Choice, by the calibration study (``benchmarks/bench_calibration.py``: 50 regime-free
-data sets, 6–20 trials of 1–2 min, 31 with enough trials to claim): claims against the
-mixture and random groups 0/50, against size-matched k-means and random groups 1/50,
-against random groups alone (the paper's reference) 3/50 at the smallest effect ln 1.1 and
-0/50 at ln 1.25 and ln 1.5, the smallest effect of the separate claim "modes help"
-(``help_effect``). That claim's margin is thin: grouping a 1-D latent by location lowers the
-quotients of a nonlinear action map systematically (local slopes differ along the latent),
-and on such regime-free sets the median effect against random groups reached 0.32 in the
-study and 0.37–0.42 in sets of 10–20 trials of 45 s (every trial 0.22–0.54: claimed at
-ln 1.25 = 0.22, not at ln 1.5 = 0.41). The median per-trial effect
-against the mixture was 0.003 (5–95 %: −0.03 … 0.02; max 0.16, nonlinear maps); against
-k-means the 95th percentile was 0.12, since full-covariance HMM states fit a curved
-observation manifold better than Voronoi cells, with or without time. On the default
-demonstrations (``sim.demonstrator``), whose modes a single observation reveals (fork
-pose and force cues), the mixture finds the same groups as the HMM (effect 0.000): the
-modes are information the observation already holds, and the calibrated test does not
-claim that the temporal model adds to it (the power table of the study).
-
-Inference is over independent units, the trials: per-trial medians of the quotients
-within HMM modes (a) and within the reference (b), one-sided Wilcoxon signed-rank test
-(scipy, exact for n ≤ 50 without ties) of a < b. The smallest attainable one-sided p with
-n trials is 2⁻ⁿ; with fewer than :func:`min_trials_for` trials the claim cannot be made
-and the result says so (``reachable=False``). Effect size: the median over trials of
-ln(b_t / a_t) (> 0: modes lower q) with a seeded 95 % percentile bootstrap interval
-over trials.
-
-Smallest effect of interest: the null hypothesis is "modes lower the per-trial median q
-by at most a factor e^δ" (``min_effect`` δ; the analysis uses δ = ln 1.1, 10 %), tested
-as the signed-rank test of ln(b_t/a_t) − δ. A systematic difference of a few per cent
-between two groupings is found in every trial of a long data set, regime or not, and
-would make the exact test "significant"; a mode that adds information lowers the
-quotients by far more (against random groups: 30–130 % on the default demonstrations).
+Why this reference and these δ, and the calibration study behind them: docs/design.md,
+"Conventions of the analysis"; docs/results.md, "Modes: the two claims, calibration, discovery".
 """
 
 from __future__ import annotations

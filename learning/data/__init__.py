@@ -1,34 +1,21 @@
 """Demonstration data: trials of fork observations and knife actions.
 
-A *trial* is one continuous demonstration; a :class:`Demonstrations` set is an
-ordered list of trials sharing channel names and sample rate. Loading checks
-everything once, by the rules of :mod:`learning.data.checks`, and raises
-:class:`DataFormatError` naming file, field and row; saving is atomic.
+A *trial* is one continuous demonstration; a :class:`Demonstrations` set is an ordered list of
+trials sharing channel names and sample rate [Hz]. Loading checks everything once, by the rules of
+:mod:`learning.data.checks`, and raises :class:`DataFormatError` naming file, field and row (rows
+count from 0: an index into the stacked NPZ arrays, or the CSV data row, with its 1-based file line);
+saving is atomic.
 
-Modules: :mod:`~learning.data.model` (``Trial``, ``Demonstrations``),
-:mod:`~learning.data.checks` (the rules), :mod:`~learning.data.npz` and
-:mod:`~learning.data.csv` (the formats), :mod:`~learning.data.splits`
-(train/test splits by trial or subject).
+Formats: an NPZ file (``obs`` (T, d_o), ``act`` (T, d_u), ``trial`` int (T,); optional ``subject``,
+``mode`` (−1 = unknown), ``voluntary`` (T, d_v), ``t`` [s], ``obs_names`` / ``act_names`` /
+``vol_names``, ``rate_hz``; one of ``t`` and ``rate_hz`` required, any other field an error), or a
+folder of ``trial_<id>.csv`` files (columns ``t`` [s], ``obs_<name>``, ``act_<name>``, optional
+``mode``, ``subject``, ``vol_<name>``; header order is channel order). A trial's median sample
+interval must match 1 / ``rate_hz`` within 5 %. The full table: docs/design.md, "Data format".
 
-Conventions
------------
-* Rows are counted from 0. In an NPZ file a row is an index into the stacked
-  arrays (``obs[row]``); in a CSV file it is the data row (the first line after
-  the header is row 0; the message also gives the 1-based file line).
-* NPZ fields: ``obs`` (T, d_o), ``act`` (T, d_u), ``trial`` int (T,) (required);
-  ``subject`` int (T,), ``mode`` int (T,) (−1 = unknown), ``voluntary`` (T, d_v),
-  ``t`` (T,) [s], ``obs_names`` / ``act_names`` / ``vol_names`` string arrays,
-  ``rate_hz`` scalar [Hz] (optional). Without ``t`` the time is built from
-  ``rate_hz`` (each trial starts at 0 s); without ``rate_hz`` it is inferred from
-  ``t`` (1 / median sample interval); one of the two is required. Any other field
-  is an error.
-* CSV folder: one file per trial named ``trial_<id>.csv`` (``<id>`` an integer,
-  the trial id; ``trial_007.csv`` → 7; other ``*.csv`` files are an error, other
-  files are ignored). Columns: ``t`` [s] (required), ``obs_<name>`` and
-  ``act_<name>`` (at least one each), optional ``mode``, ``subject`` (constant in
-  a file) and ``vol_<name>``. Header order defines channel order; every file must
-  have the same columns. The rate is inferred from ``t``.
-* A trial's sample interval must match ``1 / rate_hz`` within 5 % (median).
+Modules: :mod:`~learning.data.model` (``Trial``, ``Demonstrations``), :mod:`~learning.data.checks`
+(the rules), :mod:`~learning.data.npz` and :mod:`~learning.data.csv` (the formats),
+:mod:`~learning.data.splits` (train/test splits by trial or subject).
 """
 
 from __future__ import annotations

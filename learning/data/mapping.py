@@ -1,34 +1,23 @@
 """The mapping from ROS topics to data-set channels: a TOML file, parsed and checked.
 
-A mapping file has the tables ``[obs]``, ``[act]`` (both required, non-empty) and
-``[voluntary]`` (optional). Each line maps one channel, by its physical name, to
-``"TOPIC FIELD.PATH"``::
+The tables ``[obs]`` and ``[act]`` (required, non-empty) and ``[voluntary]`` (optional) map each
+channel, by its physical name, to ``"TOPIC FIELD.PATH"``; ``[map]`` renames a channel
+(``NAME = "CHANNEL"``, as ``--map NAME=CHANNEL`` of ``mpcshare train`` and ``sim``)::
 
     time = "header"                      # or "receive" (the time the recorder got it)
     subject = 3                          # or "s(\\d+)" (a regular expression on the bag's name),
                                          # or a table [subject] of bag name = id
     [obs]
-    fork_x = "/fork/pose pose.position.x"
     fork_roll = "/fork/pose pose.orientation@roll"   # @roll, @pitch, @yaw: ZYX angles of a quaternion
-    fork_fx = "/fork/wrench wrench.force.x"
     [act]
     knife_x = "/knife/pose pose.position.x"
     [voluntary]
     shoulder_elevation = "/shoulder/joint_states position[0]"   # [i]: an element of an array
-    [map]                                # optional: NAME = "CHANNEL" renames a channel above to NAME
-    knife_x = "blade_x"                  # (the roles the simulator needs; as ``mpcshare train --map``)
 
-The ``[map]`` table renames channels of the tables above (each entry ``NAME = "CHANNEL"``, as
-``--map NAME=CHANNEL`` of ``mpcshare train`` and ``sim``): the data set holds the new names, so a
-mapping file that keeps its own channel names still gives the channels the simulator looks for.
-
-A field path is attribute names separated by dots, each optionally followed by
-``[i]`` indices; it ends at a number, or at a quaternion followed by ``@roll``,
-``@pitch`` or ``@yaw``. The angles are those of tf2's ``Matrix3x3::getRPY``
-(rotation = Rz(yaw)·Ry(pitch)·Rx(roll)) of the normalised quaternion.
-
-Errors are :class:`~learning.data.DataFormatError` naming the mapping file and the
-entry (``MAP.toml, field '[obs] fork_x': ...``).
+A field path is attribute names separated by dots, each optionally followed by ``[i]``; it ends
+at a number, or at a quaternion with ``@roll``, ``@pitch`` or ``@yaw`` (tf2's ``getRPY`` of the
+normalised quaternion: R = Rz(yaw)·Ry(pitch)·Rx(roll)). Errors are
+:class:`~learning.data.DataFormatError` naming the file and entry (``MAP.toml, field '[obs] fork_x': ...``).
 """
 
 from __future__ import annotations

@@ -1,33 +1,23 @@
 """Per-mode gates h_j: window → {0, 1} — "is the wearer's intent predictable here?".
 
-Song & Asada train one binary classifier per task mode j on the labels
-``Z_t = 1[q_{s_j}(t) ≤ K]`` (the within-mode Lipschitz quotient at or below the
-threshold K). :class:`ModeGates` holds those classifiers:
+Song & Asada train one binary classifier per task mode j on ``Z_t = 1[q_{s_j}(t) ≤ K]`` (the
+within-mode Lipschitz quotient at or below the threshold K). :class:`ModeGates` holds them:
 
-- default ``kernel="rbf"``: ``Pipeline(StandardScaler, CalibratedClassifierCV(SVC(rbf,
-  class_weight="balanced"), method="sigmoid", cv=n_folds))`` — the scaler is fitted on the
-  mode's training rows, then Platt scaling (one SVM + sigmoid per fold, each sigmoid fitted
-  on the fold it did not train on, probabilities averaged over the folds) so that the
-  arbitration can use a probability margin, not only a 0/1 decision;
-- ``kernel="nystroem"``: the same with ``Pipeline(Nystroem(rbf), LinearSVC)`` in place of
-  the exact SVC (the approximation the issue allows where the SVM is too slow);
-- a mode with fewer than ``min_class_count`` points of one class gets a *constant*
-  gate (its majority value); a mode without any training point gets the constant 0
-  (hand over to the wearer — the safe choice). Both are recorded with the reason in
-  ``constant_modes_``.
+- ``kernel="rbf"`` (default): ``Pipeline(StandardScaler, CalibratedClassifierCV(SVC(rbf,
+  class_weight="balanced"), method="sigmoid", cv=n_folds))`` — Platt scaling per fold, the
+  probabilities averaged, so the arbitration can use a probability margin;
+- ``kernel="nystroem"``: ``Pipeline(Nystroem(rbf), LinearSVC)`` in place of the exact SVC;
+- a mode with fewer than ``min_class_count`` points of one class gets a constant gate (its majority
+  value), a mode without training points the constant 0 (hand over to the wearer); both recorded
+  with the reason in ``constant_modes_``. Each mode is subsampled (stratified, seeded) to
+  ``max_samples_per_mode`` rows, since the SVM costs O(n²–n³) (accuracy cost:
+  ``benchmarks/bench_learned.py``).
 
-Fit time: the SVM is O(n²–n³) in the points of a mode, so each mode is subsampled
-(stratified, seeded) to ``max_samples_per_mode`` rows; ``benchmarks/bench_learned.py``
-measures the accuracy cost of that against larger subsamples and the Nyström model.
-
-:meth:`ModeGates.proba_one` is the 10 Hz control-tick path. scikit-learn's per-call
-validation costs far more than the arithmetic for one row, so the fitted pipelines are
-evaluated in NumPy (written here because sklearn has no per-row fast path):
-``z = (x − μ)/σ``; per fold k ``f_k = Σ_i a_ki exp(−γ‖z − s_i‖²) + b_k`` over the
-support vectors (RBF; vectors shared by folds evaluated once) or over the Nyström
-components with weights ``Nᵀw_k`` (``N`` = ``normalization_``);
-``p = mean_k 1/(1 + exp(A_k f_k + B_k))``. It is tested equal to :meth:`predict_proba`
-to 1e-9.
+:meth:`ModeGates.proba_one`, the control-tick path, evaluates the fitted pipeline in NumPy:
+z = (x − μ)/σ; per fold k, f_k = Σ_i a_ki·exp(−γ‖z − s_i‖²) + b_k over the support vectors (or the
+Nyström components, weights Nᵀw_k); p = mean_k 1/(1 + exp(A_k·f_k + B_k)); equal to
+:meth:`ModeGates.predict_proba` to 1e-9. Bad settings, shapes, non-finite training rows, modes out
+of range or labels other than 0/1 raise ``ValueError``.
 """
 
 from __future__ import annotations

@@ -1,30 +1,22 @@
 """Conservative screening features and leaf boxes for exact Lipschitz quotients.
 
-Lower bound on ‖x_i − x_j‖ (what a library k-d tree cannot give us with the
-error guarantees we need). With the centred point v = x − m, an orthonormal
-basis P (k × d) of leading principal directions and the residual
+Lower bound on ‖x_i − x_j‖: with the centred point v = x − m, an orthonormal basis P (k × d) of
+leading principal directions (fitted on a subsample; any orthonormal P is valid) and the residual
 r = v − PᵀPv, Pythagoras gives
 
     ‖x_i − x_j‖² = ‖P(v_i − v_j)‖² + ‖r_i − r_j‖² ≥ ‖P(v_i − v_j)‖² + (‖r_i‖ − ‖r_j‖)²,
 
-so the K = k + 1 features z = [Pv, ‖r‖] satisfy ‖z_i − z_j‖ ≤ ‖x_i − x_j‖ for
-any orthonormal P (the basis only has to be good, not optimal, so it is fitted
-on a subsample).
+so the K = k + 1 features z = [Pv, ‖r‖] satisfy ‖z_i − z_j‖ ≤ ‖x_i − x_j‖. A pair (i, j) can
+matter for row i (lower bound L_i on q_i) only if ‖Δy‖ ≥ L_i‖Δx‖; it is pruned when
 
-Screening in float32 (see ``screen_matrix_features``): for a row i with current
-lower bound L_i on its quotient, the pair (i, j) can matter only if
-‖y_i − y_j‖ ≥ L_i‖x_i − x_j‖, and we test the sufficient-to-prune condition
-    S_ij = ub(‖Δy‖²) − T_i · lb(‖Δx‖²) < 0,   T_i ≤ L_i²,
-as ONE matrix product of augmented features:
-    row  = [−2ŵ_i, 1, 2T_iẑ_i, −T_i, b_i − T_i a_i]
-    col  = [ŵ_j, b_j, ẑ_j, a_j, 1]
-with ŵ, ẑ the float32 (power-of-two-scaled) centred y and z, b = (1 + c)‖ŵ‖²,
-a = (1 − c)‖ẑ‖². The margin c = 2 (K' + 16) u covers the rounding of the
-inputs to float32, of the product of length K' (γ_K' ≤ K'u/(1 − K'u)), of the
-norms and of the final additions (each a few u relative to ‖·‖² of the pair),
-so S ≥ 0 whenever the true quotient reaches L_i. u is the unit roundoff of the
-matrix product: 2⁻²⁴ for IEEE float32, larger when a backend is allowed
-reduced-precision products (TF32/bf16), see ``unit_roundoff``.
+    S_ij = ub(‖Δy‖²) − T_i·lb(‖Δx‖²) < 0,   T_i ≤ L_i²,
+
+ONE float32 matrix product of row [−2ŵ_i, 1, 2T_iẑ_i, −T_i, b_i − T_i·a_i] and column
+[ŵ_j, b_j, ẑ_j, a_j, 1] (:func:`row_features`; ŵ, ẑ the power-of-two-scaled centred y and z,
+b = (1 + c)‖ŵ‖², a = (1 − c)‖ẑ‖²). The margin c = 2(K' + 16)·u (:func:`margin_constant`) covers
+the rounding of the inputs, of the product of length K' and of the final additions, so S ≥ 0
+whenever the true quotient reaches L_i; u is the product's unit roundoff (2⁻²⁴ for float32, larger
+for TF32/bf16 backends). A PCA basis that is not orthonormal raises ``FloatingPointError``.
 """
 
 from __future__ import annotations
@@ -45,7 +37,7 @@ __all__ = [
 F32_UNIT_ROUNDOFF = 2.0 ** -24
 _F64_U = 2.0 ** -53
 _T_MAX = 2.0 ** 100  # cap on T so T·‖z‖² stays far inside float32 range (‖z‖ ≤ 1 after scaling)
-_DEFAULT_K = 12  # principal components of the screen, at least (measured: 10–16 within noise at N = 50k)
+_DEFAULT_K = 12  # principal components of the screen, at least
 _MAX_K = 32  # ... and at most (see ``choose_components``)
 _RESID_TARGET = 0.05  # residual variance fraction above which components are added
 _NORM_FLOOR = 2.0 ** -60  # absolute floor on scaled squared norms: covers float32 subnormals
@@ -138,11 +130,9 @@ def choose_components(evals_desc: np.ndarray, max_k: int) -> int:
     at least ``_DEFAULT_K`` (12), more while the residual variance exceeds 5 %, at most
     ``_MAX_K`` (32) and ``max_k``.
 
-    The bound ‖z_i − z_j‖ ≤ ‖x_i − x_j‖ loses what the residual norm does not capture; on
-    windows of noisier data with more latent motions (``bench_lipschitz --data
-    windowed-other``: 21 % residual variance at k = 12, 4 % at 24) k = 24 cut the exact
-    pairs 13-fold and the time by half; on the demonstrations (0.5 % at 12) and the
-    default windowed data (2 %) k stays 12, so the screen stays short.
+    The bound ‖z_i − z_j‖ ≤ ‖x_i − x_j‖ loses what the residual norm does not capture, so data
+    with a large residual get more components and the others keep a short screen (measured:
+    docs/results.md, "Benchmarks").
     """
     d = len(evals_desc)
     lo = min(d, _DEFAULT_K, max_k)

@@ -1,24 +1,17 @@
 """Compiled (numba) loops of the exact search: exact pair quotients, the running maximum
 with its partner, and the crediting of one exact pair to many labelings.
 
-Why hand-written: no library computes point-wise Lipschitz quotients. The exact stage
-gathers two rows per pair and reduces their differences (the pairs are scattered, so
-it is no matrix product); numpy does this with temporaries and costs about 250–300 ns
-a pair at d = 90, the loop below a few tens of ns. scipy's ``cdist`` computes dense
-blocks, not lists of pairs, and sklearn's neighbour searches answer nearest-neighbour
-questions, not maxima of ratios.
-
-Arithmetic (what "exact" means in this package): ‖a − b‖ is the square root of the
-sum of squared direct differences in float64, accumulated in four interleaved partial
-sums (columns c ≡ 0, 1, 2, 3 mod 4, then (s0 + s1) + (s2 + s3)): a fixed order, so a
-pair's quotient is the same bits wherever it is evaluated, and r_ij == r_ji. Sums that
-may have under- or overflowed (norm < 1e-150 or > 1e150) are recomputed scaled by the
-largest |difference|. Conventions (``_exact``): 0/0 (identical in x and y) → NaN
-(skipped), y/0 → inf.
+Arithmetic (what "exact" means in this package): ‖a − b‖ is the square root of the sum of squared
+direct differences in float64, accumulated in four interleaved partial sums (columns c ≡ 0, 1, 2,
+3 mod 4, then (s0 + s1) + (s2 + s3)): a fixed order, so a pair's quotient is the same bits wherever
+it is evaluated, and r_ij == r_ji. Sums that may have under- or overflowed (norm < 1e-150 or
+> 1e150) are recomputed scaled by the largest |difference|. Conventions (``_exact``): 0/0
+(identical in x and y) → NaN (skipped), y/0 → inf.
 
 All functions are ``nogil`` (the search runs them in its own threads) and cached on disk
-(``cache=True``), so the compile cost (measured in ``benchmarks/bench_lipschitz.py``)
-is paid once per machine.
+(``cache=True``), so the compile cost is paid once per machine. Why hand-written loops (no library
+computes maxima of ratios over scattered pairs): docs/design.md, "Conventions of the analysis";
+their cost: docs/results.md, "Benchmarks".
 """
 
 from __future__ import annotations

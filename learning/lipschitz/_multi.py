@@ -4,24 +4,18 @@ For labelings g¹ … gᴸ of the same N points (L × N labels),
 
     Q[l, i] = max_{j ≠ i, gˡ_j = gˡ_i} ‖y_i − y_j‖ / ‖x_i − x_j‖      [units of y per unit of x]
 
-is, for every l, exactly what ``pointwise_quotients(X, Y, groups=gˡ)`` returns (same
-bits, same partner: the smallest index on ties), but every unordered pair is screened
-once for all labelings: a pair is kept when its float32 bound reaches the smallest
-current lower bound ``t_i = min_l Q[l, i]`` of either point, recomputed exactly once
-(``_compiled``) and credited to every labeling in which both points share a group.
-The bounds are those of the symmetric pass (``_search.symmetric_pass``); a pair that
-attains Q[l, i] has ratio ≥ Q[l, i] ≥ t_i, so it survives whatever the bounds were.
+is, for every l, exactly what ``pointwise_quotients(X, Y, groups=gˡ)`` returns (same bits, same
+partner: the smallest index on ties), but every unordered pair is screened once for all
+labelings: a pair is kept when its float32 bound reaches the smallest current lower bound
+``t_i = min_l Q[l, i]`` of either point, recomputed exactly once (``_compiled``) and credited to
+every labeling in which both points share a group. The bounds are those of the symmetric pass
+(``_search.symmetric_pass``); a pair that attains Q[l, i] has ratio ≥ Q[l, i] ≥ t_i, so it
+survives whatever the bounds were.
 
-When it pays: labelings whose quotients are alike, e.g. random groupings of equal sizes
-(the reference of the segmentation test) together with no grouping (measured on the
-107k windows of 3 × 60 min demonstrations, 2 cores: no grouping and 20 random
-groupings in one pass 24.6 s, one ``pointwise_quotients`` call each 107.3 s, identical
-results; ``benchmarks/bench_analyze.py --baseline``). A labeling whose
-quotients are far below the others' (task modes, a clustering: within-group maxima
-miss the conflicting neighbours of other groups) lowers ``t_i`` for all, and every pair
-above it is evaluated; give such a labeling its own ``pointwise_quotients`` call
-(measured on the eating demonstrations, 30k windows: pairs with ratio ≥ t_i per point,
-mean 9 for no grouping with 5 random groupings, 1,770 once the true modes are added).
+It pays for labelings whose quotients are alike (random groupings of equal sizes with no
+grouping); a labeling whose quotients are far below the others' (task modes, a clustering)
+lowers t_i for all and should get its own ``pointwise_quotients`` call (measured:
+docs/results.md, "Benchmarks"). Labelings that are not (L, N) with L ≥ 1 raise ``ValueError``.
 """
 
 from __future__ import annotations

@@ -2,27 +2,19 @@
 
     q_i = max_{j ≠ i, g_j = g_i} ‖y_i − y_j‖ / ‖x_i − x_j‖      [units of y per unit of x]
 
-Euclidean norms; pairs identical in both x and y are skipped; identical x with
-different y give ``inf``; a point with no partner gets 0. The result equals a
-float64 direct-difference computation (every quotient that can be the maximum
-is recomputed by direct differences), while almost all pairs are discarded by
-conservative bounds: a float32 matrix-product screen on a principal-component
-lower bound of ‖Δx‖ with a proven rounding margin (``_bounds``),
-applied once per unordered pair against lower bounds of both points' quotients
-(``_search.symmetric_pass``). The lower bounds come from time neighbours (exact), and
-from a warm-up of full-dimensional float32 bounds of each k-d leaf against itself
-(or its nearest leaves, ``SearchOptions.warmup_leaves``) and a sample of points spread
-over the group (the maximiser is often far away in x). Survivors are recomputed by a
-compiled loop (``_compiled``, numba).
-Many labelings of the same points share one pass: :func:`pointwise_quotients_multi`
-(``_multi``).
+Euclidean norms; pairs identical in both x and y are skipped; identical x with different y give
+``inf``; a point with no partner gets 0. The result equals a float64 direct-difference computation:
+conservative float32 screens (``_bounds``) discard pairs against lower bounds of the points'
+quotients (from time neighbours and a warm-up, ``_search``), and every pair that can be a maximum
+is recomputed exactly by a compiled loop (``_compiled``). Many labelings of the same points share
+one pass: :func:`pointwise_quotients_multi` (``_multi``).
 
-Memory is O(N·(d + block)) — the float32 copy of X, a float64 copy of X and Y in the
-order of the pass (contiguous reads in the exact stage) and a few (tile × chunk)
-screening matrices per thread; time is N²/2 × (one short float32 product) plus
-the exact recomputation of the few survivors on windowed time series, and about
-half a blocked brute force on i.i.d. data, where no bound can prune (measured
-figures: ``benchmarks/bench_lipschitz.py``).
+Memory O(N·(d + block)): a float32 and a float64 copy of X, Y in pass order, a few (tile × chunk)
+screening matrices per thread. Time: N²/2 short float32 products plus the exact recomputation of
+the survivors (few on windowed time series; about half a blocked brute force on i.i.d. data, where
+no bound prunes; figures: docs/results.md, "Benchmarks"). Inputs that are empty, not 1-D or 2-D,
+not real, not finite, of unequal rows, or bad ``groups`` raise ``ValueError``; options that are not
+a :class:`SearchOptions` raise ``TypeError``.
 """
 
 from __future__ import annotations
@@ -68,14 +60,11 @@ class SearchOptions:
             the symmetric pass is tested against.
         small_group: groups up to this size are done densely (all pairs, exactly).
         time_neighbours: initial bounds from rows k±1 … k±time_neighbours of a group.
-        warmup_leaves: leaves in the warm-up of the symmetric pass (1 = own leaf). With
-            the spread sample below, more leaves cost more full-dimensional screens than
-            they save exact pairs (measured at N = 50k, paired runs, 1 against 4: 0.84×
-            the time on windowed data, 0.91× on the demonstrations, 0.95× on windows of
-            another structure, 0.99× i.i.d.; 0.92× within HMM modes of 53k windows).
+        warmup_leaves: leaves in the warm-up of the symmetric pass (1 = own leaf; with the
+            spread sample below, more leaves cost more screens than they save).
         multi_warmup_leaves: the same for the shared pass of many labelings
-            (:func:`pointwise_quotients_multi`), whose bounds serve every labeling at
-            once; there 4 is better (1 took 1.15–1.42× the time, 107k windows, 10 labelings).
+            (:func:`pointwise_quotients_multi`), whose bounds serve every labeling at once.
+            Both defaults are measured: docs/results.md, "Benchmarks".
         warmup_sample: points spread over the group that every leaf is also bounded
             against in the warm-up (``_search.spread_sample``: maximisers are often far away).
         tile: rows per tile of the symmetric pass.

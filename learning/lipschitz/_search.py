@@ -1,39 +1,23 @@
-"""Exact branch-and-bound search of point-wise Lipschitz quotients in one group.
+"""Exact branch-and-bound search of point-wise Lipschitz quotients q_i = max_j ‖Δy‖/‖Δx‖ in one group.
 
-Default path (``pointwise_quotients`` with ``SearchOptions(search="symmetric")``):
+Every search keeps a lower bound L_i ≤ q_i per point (an exact quotient found so far) and discards
+a pair only when a conservative float32 bound (``_bounds``) proves its ratio below the bound it is
+screened against, so the maximiser is never lost; survivors are recomputed exactly in float64
+(``_exact``, ``_compiled``) and raise L.
 
-1. ``warm_leaf``: each k-d leaf raises the lower bounds ``lb`` of its rows from
-   its ``SearchOptions.warmup_leaves`` nearest leaves (itself by default) and a
-   sample of points spread over the group, with full-dimensional two-sided float32
-   bounds (no exact work; lb_i ≤ q_i is all that is needed);
-2. ``symmetric_pass``: every unordered pair is screened once with the float32
-   z screen (a single product per tile) against ``min(T_i, T_j)``, points in
-   ascending ``lb`` so that this is almost always the row's own threshold;
-   survivors are recomputed exactly and credited to both points. Where the z
-   screen keeps too much (chosen per chunk of columns; i.i.d.-like rows for the
-   rest of their tile), the chunk goes through the full-dimensional two-sided
-   screen, which also raises both points' bounds.
-   Tile-level bounds are not used there: on windowed data they skip almost
-   nothing (measured: ≥ 95 % of 64-row × leaf blocks needed even with the final q).
+* Symmetric (``SearchOptions(search="symmetric")``, the default): :func:`warm_leaf` raises each
+  k-d leaf's bounds against its nearest leaves and a sample spread over the group
+  (:func:`spread_sample`); :func:`symmetric_pass` then screens every unordered pair once against
+  min(T_i, T_j), rows in ascending bound, and credits a survivor to both points. A chunk whose
+  one-product z screen keeps too much is screened again with the full-dimensional bound
+  (:class:`ChunkScreen`).
+* Per leaf (``search="per_leaf"``, the reference the symmetric pass is tested against, and the
+  warm-up of groups without full-d features): :func:`search_leaf` visits, for leaf A, the leaves B
+  with box bound ub_AB ≥ min_{i∈A} L_i in decreasing ub_AB, screening chunks against the raised L.
 
-One-sided path (``search="per_leaf"``: ``search_leaf`` alone; also the warm-up for groups without full-d features).
-Per leaf A (rows of a k-d leaf in the feature space of ``_bounds``):
-
-1. bound every leaf pair (A, B) by ``ub_AB ≥ ‖Δy‖/‖Δx‖`` from the boxes; visit
-   the leaves B with ``ub_AB ≥ min_{i∈A} L_i`` in decreasing ``ub_AB``, where
-   ``L_i`` is the best exact quotient found so far for point i (a lower bound
-   of q_i, so pruning with ``ub < L_i`` never loses the maximiser);
-2. for a chunk of such leaves, keep only the rows with ``L_i ≤ ub`` and screen
-   all their pairs with one float32 product (``S_ij ≥ 0``; conservative by
-   construction); when many survive, screen again with the full-dimensional
-   float32 product, which is much tighter;
-3. recompute the survivors exactly in float64 (``_exact``) and raise
-   ``L``; the next chunk is screened against the raised bounds.
-
-Rows of A are written only by the task of A, so leaves run in parallel threads
-(numpy releases the GIL in products and ufuncs) and the result does not depend
-on the schedule. The kernel isolates the array library: numpy in ``_kernel``, torch in
-``_torch``.
+Rows of a leaf or tile are written only by its own task, so tasks run in threads (numpy releases
+the GIL) and the result does not depend on the schedule. Kernels: numpy ``_kernel``, torch ``_torch``.
+Why no tile-level bounds, and the measured defaults: docs/results.md, "Benchmarks".
 """
 
 from __future__ import annotations
@@ -221,10 +205,9 @@ def warm_leaf(ctx: LeafContext, a: int, m: int = 1, extra: np.ndarray | None = N
 def spread_sample(n: int, k: int, seed: int = 0) -> np.ndarray:
     """``k`` distinct positions out of ``n`` (sorted, seeded): the far partners of the warm-up.
 
-    The point attaining q_i is often far from x_i (measured on the eating
-    demonstrations, 30k windows: its rank among the x-neighbours of x_i has median
-    1,472 and 95th percentile 26,800), out of reach of the nearest leaves; for such
-    points many distant pairs have quotients close to q_i, and a sample finds one.
+    The point attaining q_i is often far from x_i, out of reach of the nearest leaves; many
+    distant pairs then have quotients close to q_i, and a sample finds one (how far:
+    docs/results.md, "Benchmarks").
     """
     if k <= 0:
         return np.zeros(0, dtype=np.int64)
@@ -330,18 +313,13 @@ class _SymmetricTiles:
 class ChunkScreen:
     """The screen of one chunk of a tile's columns in a pass (``symmetric_pass``, ``_multi``).
 
-    The z screen or the full-d screen is chosen per chunk, not once for all tiles:
-    rows are in ascending lower bound and the first columns of a tile are the points of
-    nearby bound, which lie close by, so the first chunks of a tile can keep many
-    pairs where its later chunks keep almost none (measured on the eating
-    demonstrations: 2.3× faster than one switch for all tiles, windowed and
-    i.i.d. data unchanged). A chunk whose z screen keeps more than ``full_fraction``
-    is to be screened again with the full-d screen: an exact evaluation costs about 40
-    full-d screens (measured, d = 90: 7 ns a pair for the full-d screen, 1.2 ns for the
-    z screen, 300 ns for an exact pair), so above ~2 % survivors the full-d screen is
-    cheaper than evaluating them. After two such chunks in a row off the diagonal
-    (i.i.d.-like rows) the rest of the tile skips the z screen.
-    One object per tile task, so the counters do not depend on the thread schedule.
+    The z screen or the full-d screen is chosen per chunk, not once for all tiles (the first
+    chunks of a tile, points of nearby bound that lie close by, can keep many pairs where later
+    chunks keep almost none). A chunk whose z screen keeps more than ``full_fraction`` is
+    screened again with the full-d screen, which is cheaper than evaluating that many pairs
+    exactly; after two such chunks in a row off the diagonal (i.i.d.-like rows) the rest of
+    the tile skips the z screen. One object per tile task, so the counters do not depend on
+    the thread schedule. Costs behind the threshold: docs/results.md, "Benchmarks".
     """
 
     def __init__(self, kern, has_full: bool, full_fraction: float) -> None:

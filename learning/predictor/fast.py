@@ -1,28 +1,21 @@
 """The two-rate forecast: a linear correction at the control rate on top of the slow LSTM forecast.
 
-The LSTM (:mod:`learning.predictor.lstm`) runs at the model rate (10 Hz) on the causally
-anti-aliased fork, whose 4 Hz Butterworth and 10 Hz hold put ~150 ms of delay in front of it.
-The fast model runs at every raw-rate (control) step ``i`` on inputs with a few ms of delay:
-
-* ``P_i`` the fork's Kalman position and ``V_i`` its Kalman velocity (standardised with the obs
-  standardiser: ``(x − μ)/s`` and ``ẋ·τ_v/s``, τ_v = :data:`VELOCITY_SCALE_S`);
-* ``p_j`` the mode posterior of the last model tick j (held between ticks);
-* ``S_i[h]`` the last tick's slow forecast of the tip at ``t_i + h·Δ_m`` (h = 0 … H, Δ_m the model
-  step), linearly interpolated between its points (:func:`interpolate_slow`).
-
-Features (:func:`fast_design`, one row per step)::
+The LSTM (:mod:`learning.predictor.lstm`) runs at the model rate (10 Hz) behind the fork's 4 Hz
+anti-aliasing and 10 Hz hold (~150 ms of delay). The fast model runs at every raw-rate (control)
+step i on inputs with a few ms of delay: ``P_i``, ``V_i`` the fork's Kalman position and velocity
+(standardised: ``(x − μ)/s`` and ``ẋ·τ_v/s``, τ_v = :data:`VELOCITY_SCALE_S` [s]); ``p_j`` the mode
+posterior of the last model tick j; ``S_i[h]`` that tick's slow forecast at ``t_i + h·Δ_m``
+(h = 0 … H, Δ_m the model step [s]), interpolated linearly (:func:`interpolate_slow`). Features
+(:func:`fast_design`) and the forecast, a ridge regression of the slow forecast's residual::
 
     b_i = [1, P_i, P_i − P_{i−l_1}, …, P_i − P_{i−l_n}, V_i]          (lags l in raw steps)
     φ_i = [vec(p_j ⊗ b_i), vec(S_i)]                                   (a per-mode affine map)
-
-The forecast is the slow forecast plus a ridge regression of its residual::
-
     F_i[h] = S_i[h] + W_h φ_i + c_h,   min Σ_i ‖Y_{i+h·f} − S_i[h] − W_h φ_i − c_h‖² + λ‖W‖²
 
-(``Y`` the standardised tip actions at the raw rate, f = raw steps per model step). The lags
-before a trial's start repeat its first sample, online and offline alike.
-:class:`FastInputStream` builds φ one step at a time for the controller; the offline
-:func:`fast_design` gives the same rows (tests/learning/predictor/test_fast.py).
+(``Y`` the standardised tip actions at the raw rate, f raw steps per model step). Lags before a
+trial's start repeat its first sample. :class:`FastInputStream` builds φ one step at a time for
+the controller, equal to the offline rows (tests/learning/predictor/test_fast.py). Bad settings
+(λ < 0, lags < 1), mis-shaped or non-finite inputs and too few steps to fit raise ``ValueError``.
 """
 
 from __future__ import annotations

@@ -1,37 +1,21 @@
 """The reactive predictor π̂: an LSTM from (observation, mode posterior) to the knife action.
 
 At every 10 Hz step t of a trial the input is ``x_t = concat(o_t, p_t)`` (standardised
-observation sample, causal mode posterior) and the output is the standardised action
-``û_t`` (all action channels). The network is one LSTM layer (PyTorch gate order
-i, f, g, o) and a linear read-out:
+observation, causal mode posterior); one LSTM layer (PyTorch gate order i, f, g, o) and a linear
+read-out give the standardised action:
 
     i, f, g, o = σ(W_i x + U_i h + b_i), σ(·_f), tanh(·_g), σ(·_o)
     c_t = f ⊙ c_{t−1} + i ⊙ g,   h_t = o ⊙ tanh(c_t),   û_t = W_y h_t + b_y
 
-Training (Song & Asada's defaults: 28 hidden units, batch size 64, Adam, early stopping
-on validation *trials*): sequences are cut into chunks of ``chunk_len`` steps, each
-preceded by up to ``burn_in`` earlier steps that warm the state but carry no loss; the
-loss is the mean squared error over the steps where the mask is True (the reactive
-subset R) — masked-out steps feed the state but never the gradient. After each epoch
-the masked MSE of the validation trials (run whole, from the zero state, as
-:meth:`ReactivePredictor.predict` does) decides early stopping; the best epoch's
-weights are kept.
-
-Forecast (``horizons = H > 0``): the read-out gives the action now and at the next H
-model steps, ``[û_{t}, û_{t+1}, …, û_{t+H}]`` (d_u·(H+1) outputs, one head). The targets
-are the trial's own actions shifted by h steps (the last sample repeated past the trial's
-end); the loss weight of step t (the mask) applies to all its horizons. The forecast lets
-the controller aim where the knife will be after the pipeline's latency, interpolate
-between model ticks and preview the MPC's horizon (:meth:`ReactivePredictor.forecast`).
-
-Online, :meth:`ReactivePredictor.make_stream` gives a
-:class:`learning.predictor.stream.PredictorStream` that applies the equations above in
-NumPy (float64) one step at a time, carrying (h, c); it equals
-:meth:`ReactivePredictor.predict` over the same sequence (tested to 1e-5).
-
-Reproducibility: the weights' initialisation and the chunk order come from ``seed``
-(torch's CPU generator inside ``torch.random.fork_rng``, so the global RNG is left
-alone); on the CPU the same seed gives the same weights.
+With ``horizons = H > 0`` the read-out gives ``[û_t, û_{t+1}, …, û_{t+H}]`` (targets: the trial's
+actions shifted by h steps, the last sample repeated). Training: masked MSE over the steps where
+the mask (the reactive subset R) is True, on chunks of ``chunk_len`` steps after up to ``burn_in``
+warm-up steps without loss; Adam; early stopping on the masked MSE of whole validation trials,
+the best epoch kept. Online, :meth:`ReactivePredictor.make_stream` applies the same equations in
+NumPy one step at a time (:class:`learning.predictor.stream.PredictorStream`, equal to
+:meth:`ReactivePredictor.predict` to 1e-5). The same ``seed`` gives the same weights on the CPU
+(torch's global RNG is left alone). Bad settings, shapes, values beyond ``MAX_ABS_VALUE`` or an
+empty mask raise ``ValueError``; a loss that turns non-finite raises ``RuntimeError``.
 """
 
 from __future__ import annotations

@@ -1,54 +1,22 @@
 """The tip-tracking optimal control problem of :class:`robot.mpc.tip_mpc.TipMPC`, in CasADi.
 
-Decision variables: the joint accelerations a_0 … a_{H−1} [rad/s²], piecewise
-constant over dt [s].  The state x_k = (q_k, v_k) follows exactly (the
-dynamics are a double integrator in joint space, linear)
+Decision variables: joint accelerations a_0 … a_{H−1} [rad/s²], constant over dt [s]; from the
+measured x_0 = (q_0, v_0):  v_{k+1} = v_k + a_k·dt,  q_{k+1} = q_k + v_k·dt + ½·a_k·dt².  Cost (a sum
+of squares, Gauss–Newton ready; p [m] the tip in the model's world frame, a_{−1} = a_prev):
 
-    v_{k+1} = v_k + a_k·dt,      q_{k+1} = q_k + v_k·dt + ½·a_k·dt²
+    Σ_{k=1}^{H−1} w_p‖p(q_k) − p_ref,k‖² + w_T‖p(q_H) − p_ref,H‖² + w_a Σ_k ‖a_k‖² + w_j Σ_k ‖a_k − a_{k−1}‖²
 
-from the measured x_0.  Cost, a sum of squares r(w)ᵀr(w) (Gauss–Newton ready):
+Constraints: torque −τ_max ≤ M(q_k)·a_k + h(q_k, v_k) ≤ τ_max (k < H); |a_k| ≤ a_max; for k = 1 … H
+|v_k| ≤ v_max and the viable position, per joint with braking deceleration A [rad/s²]:
 
-    Σ_{k=1}^{H−1} w_p‖p(q_k) − p_ref,k‖² + w_T‖p(q_H) − p_ref,H‖²
-      + w_a Σ_k ‖a_k‖² + w_j Σ_k ‖a_k − a_{k−1}‖²                (a_{−1} = a_prev)
+    q_k + v₊²/(2A) + v₊·dt/2 + A·dt²/8 ≤ q_max,  v₊ = max(v_k, 0)   (mirrored for q_min)
 
-Constraints (every node):
-
-* torque  −τ_max ≤ M(q_k)·a_k + h(q_k, v_k) ≤ τ_max,   k = 0 … H−1;
-* velocity  |v_k| ≤ v_max,                              k = 1 … H;
-* acceleration  |a_k| ≤ a_max;
-* viable position (k = 1 … H), per joint with braking deceleration A [rad/s²]:
-
-      φ⁺ = q_k + v₊²/(2A) + v₊·dt/2 + A·dt²/8 ≤ q_max,   v₊ = max(v_k, 0)
-      φ⁻ = q_k − v₋²/(2A) − v₋·dt/2 − A·dt²/8 ≥ q_min,   v₋ = max(−v_k, 0)
-
-  (continuously differentiable).  It implies the QP's viable position limit
-  (:func:`robot.constraints.viable_velocity_bound`: q + v²/(2A) + A·dt²/8 ≤
-  q_max for v > 0, q ≤ q_max otherwise), so the MPC's first step is always
-  admissible for the QP, and it is invariant under the discrete braking law
-  a = max(−A, −v/dt) (v > 0; mirrored for v < 0): with a = −A, φ⁺ drops by
-  A·dt²/2; with a = −v/dt (v⁺ = 0), by v²/(2A).
-
-Recursive feasibility (of the exact problem, model = plant): if the previous
-plan is feasible, the shifted plan with one braking step appended is feasible
-now — braking keeps φ± within the limits (above), does not increase |v|,
-uses |a| ≤ A ≤ a_max, and |a_i| ≤ A_i is torque-feasible at every q within
-the limits and |v| ≤ v_max (the SuperLimb's braking accelerations are chosen
-so; ``tests/robot/test_superlimb.py::test_braking_is_always_torque_feasible``).
-With a real-time iteration the constraints hold to the linearisation error of
-one SQP step (measured in the tests and the benchmark).
-
-Two forms of the same problem are built here:
-
-* :class:`CondensedProblem` — per-node CasADi functions (values and small
-  Jacobians) plus the constant state sensitivities S = ∂X/∂w of the linear
-  dynamics; the Gauss–Newton QP in the nH accelerations is assembled with
-  numpy (block products), the structure-exploiting way.  Letting CasADi
-  differentiate the fully condensed expression instead gives a 416 000
-  instruction graph (3.3 ms per evaluation; 390 s to compile with gcc -O1,
-  still 1.9 ms) — measured and rejected.
-* :func:`multiple_shooting_nlp` — the NLP over (x_0, a_0, x_1, …, x_H) with the
-  dynamics as equality constraints, in the stage order fatrop's structure
-  detection expects, for the ``nlpsol`` solvers (IPOPT, fatrop, sqpmethod).
+which implies the QP's bound (:func:`robot.constraints.viable_velocity_bound`) and is invariant
+under braking, so the problem is recursively feasible (argument: docs/design.md, "The tip MPC").
+:class:`CondensedProblem` gives per-node CasADi functions and the constant sensitivities ∂X/∂w for
+a Gauss–Newton QP in the nH accelerations assembled with numpy; :class:`robot.mpc.nlp.NlpSolver`
+poses the same problem as a multiple-shooting NLP for CasADi's ``nlpsol`` solvers.
+Negative weights, or zero acceleration and jerk weights together, raise ``ValueError``.
 """
 
 from __future__ import annotations

@@ -1,30 +1,23 @@
 """Any arm's kinematics and rigid-body dynamics as CasADi functions, generated from its Pinocchio model.
 
-Pinocchio's CasADi bindings (``pinocchio.casadi``) are not in the pip wheel, so the model
-the MPC needs is generated here from the numbers the Pinocchio model of a
-:class:`robot.description.RobotDescription` holds: joint placements, joint types and
-axes, body inertias (links fixed to a joint already lumped in), armature, gravity and the
-tool frame's placement. q [rad], v [rad/s], a [rad/s²]; positions in the model's world frame.
+The pip wheel of Pinocchio has no ``pinocchio.casadi``, so :class:`SymbolicArm` builds the model
+from the numbers of a :class:`robot.description.RobotDescription` (joint placements, types and
+axes, body inertias, armature, gravity, the tool frame). q [rad], v [rad/s], a [rad/s²]; positions
+in the model's world frame. Recursive Newton–Euler (Featherstone 2008, Table 5.1) in each joint
+frame, spatial vectors as (linear, angular) pairs; joint i with parent λ, placement (R, p) (child →
+parent) times the joint motion, motion subspace S_i = (0, s) (revolute) or (s, 0) (prismatic):
 
-Derivation: **recursive Newton–Euler** (Featherstone 2008, Table 5.1) in each body's
-joint frame, with spatial vectors written as pairs of 3-vectors. Joint i with parent λ,
-placement ``ᵏX_λ`` = (R, p) (child → parent: x_λ = R·x_i + p) times the joint motion
-(revolute: rotation about the unit axis s, R·Rot(s, q_i); prismatic: translation s·q_i),
-motion subspace S_i = (0, s) or (s, 0) (linear, angular):
+    ω_i = Rᵀω_λ (+ s·v_i revolute),   ν_i = Rᵀ(ν_λ + ω_λ × p) (+ s·v_i prismatic)
+    a_i = ᵢX_λ·a_λ + S_i·a_i + v_i ×ₘ S_i·v_i,   a_0 = (−g, 0)   (gravity as a base acceleration)
+    f_i = I_i·a_i + v_i ×* I_i·v_i,   τ_i = S_iᵀ·f_i + I_a,i·a_i,   f_λ += (R·f, R·n + p × R·f)
 
-    v_i = ᵢX_λ·v_λ + S_i·v̇ᵢ… i.e.  ω_i = Rᵀω_λ (+ s·v_i),   ν_i = Rᵀ(ν_λ + ω_λ × p) (+ s·v_i)
-    a_i = ᵢX_λ·a_λ + S_i·a_i + v_i ×ₘ S_i·v_i,                 a_0 = (−g, 0)  (gravity as a base acceleration)
-    f_i = I_i·a_i + v_i ×* I_i·v_i,    I·(ν, ω) = (m(ν + ω × c), I_c·ω + c × m(ν + ω × c))
-    τ_i = S_iᵀ·f_i + I_a,i·a_i,        f_λ += ᵏX_λ*·f_i = (R·f, R·n + p × R·f)
+(×ₘ, ×*: motion and force cross products; I_i from mass, centre of mass and inertia in the joint frame).
 
-(motion cross (ν, ω) ×ₘ (ν', ω') = (ω × ν' + ν × ω', ω × ω'); force cross
-(ν, ω) ×* (f, n) = (ω × f, ω × n + ν × f); m, c, I_c: mass, centre of mass and inertia
-about it, in the joint frame). So ``inverse_dynamics(q, v, a) = M(q)·a + h(q, v)``; M is
-its Jacobian with respect to a (exact, τ is linear in a), h = τ(q, v, 0) (Pinocchio's
-``nonLinearEffects``) and ``forward_dynamics`` = M⁻¹(τ − h) (Pinocchio's ABA). The tip
-Jacobian is ∂p/∂q (world-aligned, the translational rows of Pinocchio's
-``LOCAL_WORLD_ALIGNED`` frame Jacobian). Checked against Pinocchio's RNEA, CRBA and ABA on
-random states in ``tests/robot/mpc/test_symbolic.py`` for the SuperLimb and a second arm.
+So ``inverse_dynamics(q, v, a) = M(q)·a + h(q, v)``; M = ∂τ/∂a (exact, τ is linear in a),
+h = τ(q, v, 0) (Pinocchio's ``nonLinearEffects``), ``forward_dynamics`` = M⁻¹(τ − h) (ABA); the tip
+Jacobian ∂p/∂q is world-aligned (``LOCAL_WORLD_ALIGNED``, translational rows). Equal to Pinocchio's
+RNEA, CRBA and ABA to 1e-9 (``tests/robot/mpc/test_symbolic.py``). A ``robot`` that is neither a
+description, a ``SuperLimbParams`` nor None raises ``TypeError``.
 """
 
 from __future__ import annotations

@@ -1,34 +1,23 @@
 """Knife-tip MPC: joint accelerations over a short horizon, within every joint limit.
 
-:class:`TipMPC` plans H piecewise-constant joint accelerations (dt [s]) that
-track a knife-tip reference p_ref (H+1, 3) [m] in the Pinocchio model's world
-frame, subject to position (viable, with braking), velocity, acceleration and
-torque limits at every node; the problem, the terminal/braking condition and
-the recursive-feasibility argument are in :mod:`robot.mpc.problem`.
+:class:`TipMPC` plans H piecewise-constant joint accelerations (dt [s]) that track a knife-tip
+reference p_ref (H+1, 3) [m] in the Pinocchio model's world frame, within the position (viable,
+with braking), velocity, acceleration and torque limits at every node; the problem, its terminal
+and braking condition and why it stays feasible are in :mod:`robot.mpc.problem`.
 
-Solvers (``solver=``, chosen by measurement, see ``benchmarks/bench_mpc.py``):
+Solvers (``solver=``):
 
-* ``"rti-<qp>"`` — real-time iteration: Gauss–Newton SQP on the condensed
-  problem, warm-started from the previous plan shifted by one step (a braking
-  step appended), ``max_iterations`` QP solves per call (1 = RTI, default),
-  stopping early when the step is below ``tolerance``.  ``<qp>``: ``daqp``
-  (the DAQP package directly, warm-started working set), or a CasADi ``conic``
-  plugin through zero-copy buffers: ``qpoases``, ``osqp``, ``casadi-daqp``.
-* ``"ipopt"``, ``"fatrop"``, ``"sqpmethod"`` — CasADi ``nlpsol`` on the
-  multiple-shooting NLP, solved to convergence from the shifted warm start.
+* ``"rti-<qp>"`` — real-time iteration: Gauss–Newton SQP on the condensed problem, warm-started
+  from the previous plan shifted by one step (a braking step appended), ``max_iterations`` QP
+  solves per call (1 = RTI), stopping early when the step is below ``tolerance``. ``<qp>``:
+  ``daqp`` (the DAQP package, warm-started working set; the default ``rti-daqp``), or a CasADi
+  ``conic`` plugin through zero-copy buffers: ``qpoases``, ``osqp``, ``casadi-daqp``.
+* ``"ipopt"``, ``"fatrop"``, ``"sqpmethod"`` — CasADi ``nlpsol`` on the multiple-shooting NLP,
+  solved to convergence from the shifted warm start.
 
-Measured (``benchmarks/bench_mpc.py``, closed loop, 400 steps, the shared
-2-core machine at load 4–6): ``rti-daqp`` median 0.64–0.94 ms, p99 1.4–9 ms
-(preemption), 27–43× faster than IPOPT in the same process (17–38 ms), the
-same executed steps as every other RTI variant (tracking median < 0.01 mm,
-p95 1.8 mm at the 3 cm reference jumps), executed step within every limit,
-later plan nodes within 2 % (linearisation); qpOASES 1.3×, CasADi's DAQP
-plugin 1.9×, OSQP 18× slower; fatrop converges but takes 6× IPOPT's time,
-sqpmethod does not converge.  Hence the default ``rti-daqp``.
-
-``solve`` never raises for runtime data (non-finite or mis-shaped inputs,
-solver failures, time-outs): it returns ``ok=False`` and a status saying why;
-the controller then lets the QP of :mod:`robot.qp` track alone.
+The default was chosen by measurement (``benchmarks/bench_mpc.py``; docs/results.md, "Benchmarks").
+``solve`` never raises for runtime data (non-finite or mis-shaped inputs, solver failures, time-outs):
+it returns ``ok=False`` and a status saying why. Bad settings (solver, horizon, dt) raise ``ValueError``.
 """
 
 from __future__ import annotations

@@ -1,9 +1,7 @@
 """SuperLimb description: one parametric source for URDF, MJCF and Pinocchio.
 
-The arm of Song & Asada: a 3-DOF arm on a rigid base on a vest, worn on the
-right side of the wearer's torso, holding a knife.
-
-Kinematic chain (all lengths [m], angles [rad])::
+The arm of Song & Asada: a 3-DOF arm on a rigid base on a vest, worn on the right side of the
+wearer's torso, holding a knife. Kinematic chain (lengths [m], angles [rad])::
 
     world ──mount (fixed)──▶ base_link
       base_link ──base_yaw (revolute z, right-angle drive)──▶ turret_link
@@ -12,18 +10,14 @@ Kinematic chain (all lengths [m], angles [rad])::
       forearm_link ──knife_mount (fixed, pitched down)──▶ knife_link
       knife_link ──knife_tip_joint (fixed)──▶ knife_tip       (the tool frame)
 
-``world`` is the wearer's torso frame: x forward, y to the wearer's left,
-z up.  At q = 0 the upper arm and forearm point forward (+x); a positive
-shoulder or elbow angle pitches the arm down (rotation about +y).
-
-Every number lives in :class:`SuperLimbParams` (and the nested dataclasses);
-the joint position, velocity, acceleration and torque limits are *derived* from
-the actuator and transmission figures in :meth:`JointParams.torque_limit` and
-friends, and any of them can be overridden by setting the corresponding
-``*_override`` field.  :mod:`robot.superlimb.model_files` turns it into URDF, MJCF and a
-Pinocchio model (``to_urdf``, ``to_mjcf``, ``build_pinocchio_model``), all from the
-same object, so the three descriptions cannot drift; ``python -m robot``
-regenerates the files in ``robot/assets/`` and a test checks they are up to date.
+``world`` is the wearer's torso frame (x forward, y to the wearer's left, z up); at q = 0 the arm
+points forward (+x), a positive shoulder or elbow angle pitches it down (about +y). Every number
+lives in :class:`SuperLimbParams`; joint position, velocity, acceleration and torque limits are
+derived from the actuator and transmission figures (:meth:`JointParams.torque_limit` and friends)
+unless a ``*_override`` field is set. :mod:`robot.superlimb.model_files` turns it into URDF, MJCF
+and a Pinocchio model from the same object, so they cannot drift; ``python -m robot`` regenerates
+``robot/assets/`` and a test checks the files are up to date. Inconsistent parameters (joint and
+link counts, limits out of order or not positive, braking above the acceleration limit) raise ``ValueError``.
 """
 
 from __future__ import annotations
