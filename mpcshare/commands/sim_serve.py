@@ -110,9 +110,10 @@ def serve_controller(args: argparse.Namespace, bundle: Any) -> tuple[Callable[..
         from robot.default_arm import as_description
 
         robot = options.get("robot") or as_description(None)
-        if list(robot.joint_names) != list(config.arm.joints):
-            raise CommandError(f"{path}, [inputs.arm] joints: {list(config.arm.joints)} are not the simulated "
-                               f"arm's {list(robot.joint_names)}")
+        try:
+            remote.bind(robot)
+        except RunConfigError as exc:
+            raise CommandError(str(exc)) from None
         if args.live and remote.live is None and remote.live_error is None:
             from mpcshare.runtime.live import LiveView
 
