@@ -13,16 +13,25 @@ goes silent, then SIGTERM. Figures (wall clock; the machine may be shared):
   tick, so a joint state waits up to one period for its tick;
 * ``stop_after_silence_s``: the first ``protective_stop`` status after the fork's last message
   (its stop_after_s is 0.5 s; target ≤ 0.5 s + 2 periods);
-* ``run_summary``: the process's own last line (step median and p99, late ticks).
+* ``late_ticks``: the ticks ``run`` skipped (it overran 1.5 periods); ``run_timing``: ``run``'s own
+  profile (``mpcshare run --timing``, :mod:`mpcshare.runtime.tick_profile`): periods, phases, garbage
+  collections, and ``causes``: each period longer than T + 2 ms by cause (``late_ticks`` by cause too);
+* ``feeder``: this process's own lateness publishing the inputs (its sends after their schedule: p99,
+  max, and how many were more than 2 ms late); its garbage collector is frozen after setup, so that
+  the feeder's pauses do not count against ``run``;
+* ``run_summary``: the process's own last lines (step median and p99, late ticks, long periods).
 
-Usage: ``python benchmarks/bench_run.py --model MODEL [--seconds 10] [--tick arm]``.
+Usage: ``python benchmarks/bench_run.py --model MODEL [--seconds 10] [--tick arm] [--gc managed|python]``
+(a 10-minute run: ``--seconds 600``).
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -61,6 +70,7 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--tick", choices=("schedule", "arm"), default="arm",
                     help="the configuration's tick: every period, or on the arm's joint states")
+    ap.add_argument("--gc", choices=("managed", "python"), default="managed", help="`mpcshare run --gc`")
     args = ap.parse_args()
     domain = 200 + os.getpid() % 30
     trial = generate_demonstrations(1, max(0.2, args.seconds / 60 + 0.05), seed=11,
@@ -71,8 +81,10 @@ def main() -> None:
         cfg.write_text(text.replace('tick = "arm"', f'tick = "{args.tick}"'))
         env = {k: v for k, v in os.environ.items() if k != "CYCLONEDDS_URI"}
         env["PYTHONPATH"] = str(ROOT)
+        timing = Path(tmp) / "timing.json"
         proc = subprocess.Popen([sys.executable, "-m", "mpcshare", "run", "--model", args.model, "--config",
-                                 str(cfg)], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                 str(cfg), "--gc", args.gc, "--timing", str(timing)], env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
         t = Transport(NetworkSettings(domain_id=domain))
         arm, fork = t.writer("/joint_states", JointState), t.writer("/mocap/fork/pose", PoseStamped)
         wrench, shoulder = t.writer("/fork/wrench", WrenchStamped), t.writer("/shoulder/joint_states", JointState)
@@ -81,9 +93,14 @@ def main() -> None:
         P = SuperLimbParams()
         q = 0.5 * (P.lower + P.upper)
         got, stops, latency, k, k0, silent = [], [], [], 0, None, None
+        gc.collect()
+        gc.freeze()
+        feeder_late: list[float] = []
         nxt = time.monotonic()
         while proc.poll() is None:
             now = time.monotonic()
+            if k0 is not None and silent is None:
+                feeder_late.append(now - nxt)
             stamp = ros_time(time.time())
             arm.write(JointState(Header(stamp, ""), ["base_yaw", "shoulder", "elbow"], [float(x) for x in q],
                                  [0.0] * 3, []))
@@ -116,6 +133,7 @@ def main() -> None:
             time.sleep(max(0.0, nxt - time.monotonic()))
         proc.send_signal(signal.SIGTERM)
         out, err = proc.communicate(timeout=30)
+        profile = json.loads(timing.read_text()) if timing.exists() else None
     live = np.array([(a, s) for a, s, fed in got if fed])
     period = np.diff(live[:, 1]) * 1e3
     delivery = (live[:, 0] - live[:, 1]) * 1e3
@@ -130,7 +148,16 @@ def main() -> None:
         "stop_after_silence_s": float(stops[0]) if stops else None,
         "tick": args.tick,
         "exit_status": proc.returncode,
-        "run_summary": out.strip().splitlines()[-1] if out.strip() else err.strip()[-300:],
+        "late_ticks": int(m.group(1)) if (m := re.search(r"(\d+) late ticks", out)) else None,
+        "late_tick_causes": profile["late_ticks"] if profile else None,
+        "long_period_causes": profile["causes"] if profile else None,
+        "max_period_ms": float(period.max()),
+        "run_timing": profile,
+        "feeder": {"late_p99_ms": float(np.percentile(feeder_late, 99) * 1e3),
+                   "late_max_ms": float(np.max(feeder_late) * 1e3),
+                   "late_over_2ms": int(np.sum(np.array(feeder_late) > 2e-3))} if feeder_late else None,
+        "gc": args.gc,
+        "run_summary": out.strip().splitlines()[-2:] if out.strip() else err.strip()[-300:],
         "load_average": os.getloadavg(),
     }, indent=2))
 

@@ -6,7 +6,13 @@ Runs ``run`` (its own DDS domain, loopback only) and the stand-in as two process
 difference (target: within 5 %), limit violations and steps driven into a body zone (target: 0), the
 largest difference of the knife tip between the two loops, the steps without a command, and wall times.
 
-Usage: ``python benchmarks/bench_serve.py --model MODEL --data DATA [--trials 2] [--duration S]``.
+Another arm: ``--config examples/ros2/panda.toml --arm "--robot panda --velocity-limit 1.5
+--acceleration-limit 6.0"`` (``--arm``: ``sim``'s arm options, given to both sims). The simulator sways
+the arm's base with the wearer's torso, so a configuration without a torso input gets one (optional,
+``/mocap/torso/pose``) here; otherwise ``run`` would hold the base at rest while the simulated one moves.
+
+Usage: ``python benchmarks/bench_serve.py --model MODEL --data DATA [--trials 2] [--duration S] [--config
+ARM.toml] [--arm "SIM ARM OPTIONS"]``.
 """
 
 from __future__ import annotations
@@ -14,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -37,15 +44,24 @@ def main() -> None:
     ap.add_argument("--data", required=True)
     ap.add_argument("--trials", type=int, default=2)
     ap.add_argument("--duration", type=float, default=None, help="seconds per trial (default: whole trials)")
+    ap.add_argument("--config", default=str(ROOT / "examples/ros2/superlimb.toml"), help="the arm's configuration")
+    ap.add_argument("--arm", default="", help="sim's arm options for both sims, e.g. \"--robot panda\"")
     args = ap.parse_args()
     env = {k: v for k, v in os.environ.items() if k != "CYCLONEDDS_URI"}
     env["PYTHONPATH"] = str(ROOT)
-    common = ["--model", args.model, "--data", args.data, "--trials", str(args.trials)] + \
+    common = ["--model", args.model, "--data", args.data, "--trials", str(args.trials), *shlex.split(args.arm)] + \
         ([] if args.duration is None else ["--duration", str(args.duration)])
     with tempfile.TemporaryDirectory() as tmp:
         cfg = Path(tmp) / "arm.toml"
-        cfg.write_text((ROOT / "examples/ros2/superlimb.toml").read_text().replace(
-            "domain_id = 0", f"domain_id = {200 + os.getpid() % 30}"))
+        text = Path(args.config).read_text()
+        text = text.replace("domain_id = 0", f"domain_id = {200 + os.getpid() % 30}") if "domain_id = 0" in text \
+            else text.replace("[network]\n", f"[network]\ndomain_id = {200 + os.getpid() % 30}\n", 1)
+        if "[inputs.torso]" not in text:
+            text += '\n[inputs.torso]\ntopic = "/mocap/torso/pose"\noptional = true\nframe = "plate"\n'
+        file = 'file = "example-robot-data:'
+        if 'file = "' in text and file not in text:  # a relative robot file: as seen from the configuration
+            text = text.replace('file = "', f'file = "{Path(args.config).resolve().parent}/', 1)
+        cfg.write_text(text)
         t0 = time.perf_counter()
         run = _mpcshare(["run", "--model", args.model, "--config", str(cfg), "--sim-time"], env)
         stand = _mpcshare(["sim", *common, "--out", f"{tmp}/across", "--serve", "--config", str(cfg)], env)

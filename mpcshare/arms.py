@@ -26,7 +26,7 @@ from robot.presets import arm_preset, is_preset_name
 from sim.arm_mounts import arm_mount
 from sim.scene import SceneConfig
 
-__all__ = ["ACCELERATION_REFERENCE", "TaskArm", "task_arm"]
+__all__ = ["ACCELERATION_REFERENCE", "TaskArm", "rest_base_pose", "task_arm"]
 
 ACCELERATION_REFERENCE = 10.0  # [rad/s²] the acceleration cap scaled down with the file's speeds (braking at half)
 N_STATES = 500  # sampled configurations with the tip in the workspace box
@@ -34,13 +34,23 @@ N_STATES = 500  # sampled configurations with the tip in the workspace box
 
 @dataclass(frozen=True)
 class TaskArm:
-    """The scene with the arm, the caps' one-line ``summary`` and how they were set (``chosen``)."""
+    """The scene with the arm, the caps' one-line ``summary`` and how they were set (``chosen``); its controller's
+    mount is :func:`rest_base_pose` of ``scene``."""
 
     scene: SceneConfig
     summary: str
     chosen: bool
     ratio: float
     n_states: int
+
+
+def rest_base_pose(scene: SceneConfig | None = None) -> np.ndarray:
+    """T_plate_torso (4×4) with the wearer's torso at rest in ``scene`` (default: the eating scene): the plate
+    at ``plate_position`` in the torso frame, axes aligned. Every arm's description has its mount in the
+    torso frame, so this is the base pose its controller is given when no torso pose is measured."""
+    T = np.eye(4)
+    T[:3, 3] = -np.asarray((scene or SceneConfig()).plate_position, dtype=float)
+    return T
 
 
 def _describe(robot: str, tip_frame: str | None, mount: Sequence[float] | None, mount_rpy: Sequence[float] | None,

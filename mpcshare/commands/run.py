@@ -13,10 +13,14 @@ caps (another arm than the SuperLimb), one line when it starts and one summary l
 from __future__ import annotations
 
 import argparse
+import json
 import signal
 import threading
+from pathlib import Path
 
 import numpy as np
+
+from mpcshare.runtime.gc_policy import GC_POLICIES
 
 from .base import Command, CommandError, positive_float
 
@@ -38,6 +42,12 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
                         "'mpcshare[live]') and record the same channels in FILE.mcap")
     p.add_argument("--live-port", type=int, default=8765, metavar="PORT",
                    help="the live view's port on 127.0.0.1 (default 8765; 0: any free port)")
+    p.add_argument("--gc", choices=GC_POLICIES, default="managed",
+                   help="the garbage collector while ticking: managed (default; setup's objects frozen, the young "
+                        "generations collected in the ticks' slack) or python (Python's automatic collection)")
+    p.add_argument("--timing", default=None, metavar="FILE.json",
+                   help="write the ticks' timing at the end: periods, phases, garbage collections, and the cause "
+                        "of each period longer than T + 2 ms")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -50,6 +60,8 @@ def _run(args: argparse.Namespace) -> int:
     from mpcshare.runtime.loop import RunLoop
     from mpcshare.runtime.setup import configured_arm, make_controller, rest_base_pose
 
+    if args.timing is not None and not Path(args.timing).resolve().parent.is_dir():
+        raise CommandError(f"--timing {args.timing}: no such folder")
     try:
         config = load_run_config(args.config)
         bundle = load_bundle(args.model)
@@ -77,7 +89,7 @@ def _run(args: argparse.Namespace) -> int:
         transport = Transport(config.network)
         loop = RunLoop(config, controller, transport, obs_names=list(bundle.obs_names),
                        vol_names=list(bundle.vol_names), sim_time=args.sim_time, live=live,
-                       rest_base_pose=rest_base_pose())
+                       rest_base_pose=rest_base_pose(), gc_policy=args.gc)
         net = "CYCLONEDDS_URI" if transport.user_config else \
             f"interface {config.network.interface}, peers {', '.join(config.network.peers)}"
         clock = "; ticks on /clock (sim time)" if args.sim_time else ""
@@ -89,12 +101,23 @@ def _run(args: argparse.Namespace) -> int:
             signal.signal(s, h)
         if live is not None:
             live.close()
+    profile = {**loop.profile.report(), "gc_policy": loop.collector.report()}
+    if args.timing is not None:
+        try:
+            with open(args.timing, "w") as f:
+                json.dump(profile, f, indent=2)
+        except OSError as exc:
+            raise CommandError(f"--timing {args.timing}: cannot write ({exc.strerror or exc})") from None
     steps = np.array(summary.step_times) * 1e3
     timing = f"step median {np.median(steps):.2f} ms, p99 {np.percentile(steps, 99):.2f} ms" if steps.size else \
         "no step"
     print(f"mpcshare run: stopped after {summary.ticks} ticks ({summary.commands} commands, {summary.late_ticks} "
           f"late ticks skipped, {summary.resumes} resumes after a stop; {timing})"
           + (f"; protective stop: {summary.stop_reason}" if summary.stop_reason else ""), flush=True)
+    if profile["causes"]:
+        causes = ", ".join(f"{n} {c}" for c, n in sorted(profile["causes"].items(), key=lambda x: -x[1]))
+        print(f"mpcshare run: {sum(profile['causes'].values())} periods over T + 2 ms ({causes}); max period "
+              f"{profile['period_ms']['max']:.1f} ms", flush=True)
     if loop.live_error:
         print(f"mpcshare run: the live view stopped: {loop.live_error}", flush=True)
     return 0

@@ -4,13 +4,15 @@ The same episodes as ``mpcshare sim`` (the MuJoCo arm, the fork and shoulder of 
 simulated wearer), but the controller is ``mpcshare run`` in another process: the closed-loop runner is
 given a :class:`mpcshare.runtime.remote.RemoteController`, which publishes the arm's joint states, the
 fork, the shoulder and the torso on the topics of ``--config`` (default ``examples/ros2/superlimb.toml``)
-and follows the joint command that comes back. By default it publishes ``/clock`` and steps in lockstep
-with ``mpcshare run --sim-time`` (reproducible); ``--realtime`` paces the physics with the wall clock for a
-``run`` without ``--sim-time``. ``--drop INPUT:START:END`` silences an input over a window of each episode,
-``--restart INPUT:START:END`` deletes its publisher at START and creates a new one at END. ``--live`` streams
-the steps to Foxglove on 127.0.0.1 and records them in ``OUT/live.mcap`` (:mod:`mpcshare.runtime.live`). The
-run is the configuration's ``[controller]`` strategy; the run files and the comparison are those of
-``mpcshare sim``.
+and follows the joint command that comes back, in the configuration's form (a ``JointTrajectory``, or a
+``Float64MultiArray`` of positions, velocities or efforts: :mod:`mpcshare.runtime.stand_in_command`);
+another arm is ``sim``'s ``--robot`` with a configuration naming its joints (``examples/ros2/panda.toml``).
+By default it publishes ``/clock`` and steps in lockstep with ``mpcshare run --sim-time`` (reproducible);
+``--realtime`` paces the physics with the wall clock for a ``run`` without ``--sim-time``. ``--drop
+INPUT:START:END`` silences an input over a window of each episode, ``--restart INPUT:START:END`` deletes its
+publisher at START and creates a new one at END. ``--live`` streams the steps to Foxglove on 127.0.0.1 and
+records them in ``OUT/live.mcap`` (:mod:`mpcshare.runtime.live`). The run is the configuration's
+``[controller]`` strategy; the run files and the comparison are those of ``mpcshare sim``.
 """
 
 from __future__ import annotations
@@ -110,9 +112,10 @@ def serve_controller(args: argparse.Namespace, bundle: Any) -> tuple[Callable[..
         from robot.default_arm import as_description
 
         robot = options.get("robot") or as_description(None)
-        if list(robot.joint_names) != list(config.arm.joints):
-            raise CommandError(f"{path}, [inputs.arm] joints: {list(config.arm.joints)} are not the simulated "
-                               f"arm's {list(robot.joint_names)}")
+        try:
+            remote.bind(robot)
+        except RunConfigError as exc:
+            raise CommandError(str(exc)) from None
         if args.live and remote.live is None and remote.live_error is None:
             from mpcshare.runtime.live import LiveView
 

@@ -57,8 +57,8 @@ from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.preview import PreviewPlan, mpc_preview
 from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc, shoulder_map
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
-from mpcshare.control.workspace import DEFAULT_BASE_POSE, bound_reference, check_base_pose
-from mpcshare.errors import ControllerTypeError
+from mpcshare.control.workspace import bound_reference, check_base_pose
+from mpcshare.errors import ControllerSetupError, ControllerTypeError
 from robot.default_arm import as_description
 from robot.description import RobotDescription
 from robot.floor import FloorLimit
@@ -83,19 +83,24 @@ def _finite(x: np.ndarray) -> bool:
 class SharedController:
     """Shared control of an arm's knife tip from a trained bundle (module docstring); ``robot``: any
     ``RobotDescription`` (a ``SuperLimbParams`` or None: the SuperLimb). Build with :meth:`from_bundle`.
-    Misuse at construction raises ``mpcshare.errors.ControllerSetupError`` (a ValueError;
-    ``ControllerTypeError``: also a TypeError) naming what is wrong (channels, strategy, β, shapes …).
+    ``base_pose``: the arm's mount, T_plate_torso (4×4) with the torso at rest (``mpcshare.arms.rest_base_pose``),
+    used until a step gives one; None: the steps must give it (a step before any was given holds the
+    arm, status ``invalid_base_pose``). Misuse at construction raises ``mpcshare.errors.ControllerSetupError``
+    (a ValueError; ``ControllerTypeError``: also a TypeError) naming what is wrong (channels, strategy, β,
+    shapes, the base pose …).
     """
-
-    default_base_pose = DEFAULT_BASE_POSE
 
     def __init__(self, bundle: ModelBundle, *, robot: RobotDescription | None = None, strategy: str = "gate",
                  beta: float = DEFAULT_BETA, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
                  config: ControllerConfig | None = None, preview: TipTrajectory | None = None,
-                 schedule: Callable[[float], float] | None = None) -> None:
+                 schedule: Callable[[float], float] | None = None, base_pose: np.ndarray | None = None) -> None:
         check_strategy(strategy, scheduled=schedule is not None)
+        try:
+            self.base_pose = None if base_pose is None else check_base_pose(base_pose)
+        except ValueError as exc:
+            raise ControllerSetupError(str(exc)) from None
         self.beta_user = check_beta(beta)
         self.config = cfg = config or ControllerConfig()
         self.layout: BundleLayout = check_bundle(bundle, tip_channels, fork_channels)
@@ -151,7 +156,8 @@ class SharedController:
         tip positions when they are not knife_x/y/z, fork_x/y/z), ``mpc`` (an MPC object),
         ``config`` (:class:`ControllerConfig`), ``preview`` (a known tip trajectory that replaces
         the predictor's forecast: the ``oracle_preview`` upper bound, not realisable), ``schedule``
-        (t → α ∈ {0, 1} with strategy ``schedule``: a replayed hand-over schedule).
+        (t → α ∈ {0, 1} with strategy ``schedule``: a replayed hand-over schedule), ``base_pose`` (the
+        mount, T_plate_torso at rest: see the class).
         """
         check_strategy(strategy, scheduled=options.get("schedule") is not None)
         check_beta(beta)
@@ -194,7 +200,7 @@ class SharedController:
         self._p_pred = np.full(3, np.nan)
         self._p_ref: np.ndarray | None = None  # plate frame
         self._last_t = -math.inf
-        self._pose = np.array(self.default_base_pose, dtype=float)
+        self._pose = None if self.base_pose is None else self.base_pose.copy()
         self._set_floor()
         self._fork_vel = np.zeros(self.layout.d_o)
         self._last: ControlCommand | None = None
@@ -202,7 +208,7 @@ class SharedController:
     # ------------------------------------------------------------------ helpers
     def _set_floor(self) -> None:
         """The floor z_plate ≥ floor_z in the model frame: n = Rᵀ·e_z, n·p ≥ floor_z − t_z."""
-        if self.floor is not None:
+        if self.floor is not None and self._pose is not None:
             self.floor.set_plane(self._pose[2, :3], self.config.floor_z - self._pose[2, 3])
 
     def _to_model(self, p: np.ndarray) -> np.ndarray:
@@ -273,6 +279,9 @@ class SharedController:
                 self._set_floor()
             except ValueError as exc:
                 faults.append(("invalid_base_pose", f"{exc}: last valid pose kept"))
+        if self._pose is None:
+            faults.append(("invalid_base_pose", "no base pose yet (none given to the constructor or a step): holding"))
+            return self._hold(q, v, faults, timings, t0)
 
         ta = time.perf_counter()  # 1. front end
         fe = sense(t, obs, faults, frontend=self.frontend, d_o=self.layout.d_o,

@@ -25,7 +25,7 @@ mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
 invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
 missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
 keepout_stale_zone          fork marker lost: the hand and forearm zones grow with its age
-invalid_base_pose           the last valid base pose is kept
+invalid_base_pose           the last valid base pose is kept (none yet: the arm is held)
 reference_unreachable       the reference is clamped to the workspace box / reach shell
 ==========================  ==========================================================
 """

@@ -2,11 +2,8 @@
 
 * The **base pose** ``T`` (4×4) is the arm's model world frame (the torso frame of
   ``robot.superlimb``) expressed in the plate frame: ``p_plate = R·p_model + t``, so
-  ``p_model = Rᵀ·(p_plate − t)``. :data:`DEFAULT_BASE_POSE` is the fixed mount used when
-  no torso motion is given: the plate's centre 0.22 m in front of the torso origin and
-  0.12 m to the wearer's right (the arm's side), at the torso origin's height, axes
-  aligned (plate x away from the wearer = torso x forward, z up). With it the knife
-  positions of the demonstrations lie near the middle of the arm's joint ranges.
+  ``p_model = Rᵀ·(p_plate − t)``. The controller has no default: its caller gives it
+  (``mpcshare.arms.rest_base_pose``, the torso at rest in the eating scene, or the measured pose).
 * The **workspace box** (plate frame) bounds the integrated tip reference:
   x ∈ [−0.10, 0.30], y ∈ [−0.25, 0.20], z ∈ [−0.03, 0.25] m by default — the plate
   (radius ≈ 0.12 m) with a margin, from 3 cm below its surface to 25 cm above it; the
@@ -29,13 +26,8 @@ import numpy as np
 
 from mpcshare.errors import ControllerSetupError
 
-__all__ = ["DEFAULT_BASE_POSE", "DEFAULT_WORKSPACE", "WorkspaceBox", "bound_reference", "check_base_pose",
+__all__ = ["DEFAULT_WORKSPACE", "WorkspaceBox", "bound_reference", "check_base_pose",
            "project_box_shell"]
-
-DEFAULT_BASE_POSE = np.eye(4)
-DEFAULT_BASE_POSE[:3, 3] = (-0.22, 0.12, 0.0)
-DEFAULT_BASE_POSE.setflags(write=False)
-
 
 @dataclass(frozen=True)
 class WorkspaceBox:

@@ -33,8 +33,8 @@ from mpcshare.runtime.messages import (
     Time,
 )
 
-__all__ = ["OK", "WARN", "ERROR", "STALE", "command_message", "joint_state", "pose_matrix", "read_path",
-           "status_message"]
+__all__ = ["OK", "WARN", "ERROR", "STALE", "command_message", "controller_values", "joint_state", "pose_matrix",
+           "read_path", "status_message"]
 
 #: diagnostic_msgs/DiagnosticStatus levels.
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
@@ -99,6 +99,27 @@ def command_message(kind: str, interface: str, joints: Sequence[str], stamp: Tim
     data = {"position": q, "velocity": v, "effort": tau}[interface]
     n = len(joints)
     return Float64MultiArray(MultiArrayLayout([MultiArrayDimension("joints", n, n)], 0), [float(x) for x in data])
+
+
+def controller_values(cmd: Any, keepout: Any = None) -> dict[str, object]:
+    """The status's values of a ``ControlCommand``: α, β, who leads (robot when α ≥ 0.5), the most probable
+    mode (-1: none), its probabilities, novelty, the fault reasons, the step's time [s], the tip reference
+    [m]; with the controller's ``keepout``, the clearance to each body zone and the least of them [m]."""
+    alpha = float(cmd.alpha)
+    proba = np.asarray(cmd.mode_proba, dtype=float)
+    out: dict[str, object] = {"alpha": alpha, "beta": float(cmd.beta),
+                              "leader": "robot" if alpha >= 0.5 else "wearer",
+                              "mode": int(np.argmax(proba)) if proba.size and np.isfinite(proba).all() else -1,
+                              "mode_proba": proba, "novelty": float(cmd.novelty),
+                              "reasons": " | ".join(cmd.reasons),
+                              "step_s": float(cmd.timings.get("total", math.nan)),
+                              "tip_reference": np.asarray(getattr(cmd, "tip_reference", (math.nan,) * 3),
+                                                          dtype=float)}
+    if keepout is not None and keepout.limit.clearances:
+        dist = [float(c.distance) for c in keepout.limit.clearances]
+        out["clearance_m"] = min(dist)
+        out.update({f"clearance_{z.name}_m": d for z, d in zip(keepout.limit.zones, dist)})
+    return out
 
 
 def status_message(stamp: Time, name: str, hardware_id: str, level: int, message: str,

@@ -19,7 +19,7 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from mpcshare.control.workspace import DEFAULT_BASE_POSE
+from mpcshare.arms import rest_base_pose
 from robot.description import RobotDescription
 from sim.closed_loop import FORK_CHANNELS
 from sim.run_mcap import SCHEMAS, TOPICS, status_log, step_messages
@@ -77,11 +77,11 @@ class LiveView:
     def step(self, ns: int, *, q: np.ndarray, v: np.ndarray, base: np.ndarray | None, obs: dict[str, float],
              voluntary: np.ndarray, command: Any, status: str, step_time_s: float) -> None:
         """Log one control step at ``ns`` [ns]: measured ``q``, ``v`` [rad, rad/s], ``base`` (T_plate_torso;
-        None: the controller's default), ``obs`` by channel name (the fork's channels used), ``voluntary``,
-        ``command`` (anything with ``tip_reference``, ``alpha``, ``beta``, ``mode_proba``, ``novelty``; None:
-        no command)."""
+        None or not finite: the torso at rest, :func:`mpcshare.arms.rest_base_pose`), ``obs`` by channel name
+        (the fork's channels used), ``voluntary``, ``command`` (anything with ``tip_reference``, ``alpha``,
+        ``beta``, ``mode_proba``, ``novelty``; None: no command)."""
         q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
-        base = np.asarray(DEFAULT_BASE_POSE if base is None or not np.isfinite(base).all() else base, dtype=float)
+        base = rest_base_pose() if base is None or not np.isfinite(base).all() else np.asarray(base, dtype=float)
         fork = np.array([obs.get(c, math.nan) for c in FORK_CHANNELS], dtype=float)
         fork_q = Rotation.from_euler("ZYX", fork[[5, 4, 3]]).as_quat() if np.isfinite(fork).all() else None
         proba = np.asarray(getattr(command, "mode_proba", ()), dtype=float).reshape(-1)

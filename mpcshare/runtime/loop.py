@@ -11,7 +11,9 @@ new ``/clock`` message's time instead):
    pose kept); the status names the stale inputs;
 3. ``SharedController.step(t_k, obs, voluntary, q, v, base_pose)``, then the command (stamped with the
    wall clock, ROS time; with ``sim_time`` the clock's time) and the status are published;
-4. sleep until t_{k+1}; a tick that is already past is skipped (counted as ``late_ticks``). With the
+4. collect the garbage due if the slack allows (:mod:`~mpcshare.runtime.gc_policy`; under the default
+   policy the heap set up before the loop is frozen), then sleep until t_{k+1} (the last 0.2 ms spun);
+   a tick that is already past is skipped (counted as ``late_ticks``). With the
    configuration's ``tick = "arm"``, tick k+1 runs as soon as a joint state of the arm arrives after
    t_{k+1} − T/2, and at t_{k+1} + T/2 at the latest; a tick on a joint state moves the schedule so that
    t_k is that tick's time (phase-locked to the arm's publisher: a joint state waits for its tick only
@@ -19,6 +21,9 @@ new ``/clock`` message's time instead):
    ``sim_time``: wait for the next ``/clock`` message (``rosgraph_msgs/msg/Clock``, as a ROS 2 node with
    ``use_sim_time``); a clock that jumps back (a new episode of the simulator) resets the controller,
    the watchdog and the latest inputs.
+
+Each tick's phases and the garbage collections are recorded in ``RunLoop.profile``
+(:class:`~mpcshare.runtime.tick_profile.TickProfile`: the causes of long periods).
 
 **Protective stop** (a required input older than its ``stop_after_s``, a non-finite command, or the end
 of the run): the controller is not called; every tick publishes the stop command (hold the last
@@ -47,12 +52,15 @@ from mpcshare.runtime.convert import (
     STALE,
     WARN,
     command_message,
+    controller_values,
     joint_state,
     pose_matrix,
     read_path,
     status_message,
 )
+from mpcshare.runtime.gc_policy import CollectorPolicy
 from mpcshare.runtime.messages import MESSAGE_TYPES, Clock, DiagnosticArray, ros_time, seconds
+from mpcshare.runtime.tick_profile import TickProfile
 from mpcshare.runtime.transport import QosSettings, Transport
 from mpcshare.runtime.watchdog import Deadline, Watchdog
 
@@ -88,14 +96,19 @@ class RunLoop:
     ``obs_names``, ``vol_names``: the controller's channel order; ``clock`` monotonic [s], ``wall`` ROS time [s];
     ``sim_time``: both are the ``/clock`` topic's time instead (module docstring); ``rest_base_pose``: the
     base pose (T_plate_torso) given to the controller while no torso pose is configured or has arrived
-    (None: none, the controller's own default); ``live``: a
-    :class:`mpcshare.runtime.live.LiveView` given every tick (its failure ends it, named in ``live_error``)."""
+    (None: none, the controller's own mount, given at its construction); ``live``: a
+    :class:`mpcshare.runtime.live.LiveView` given every tick (its failure ends it, named in ``live_error``);
+    ``gc_policy``: :data:`mpcshare.runtime.gc_policy.GC_POLICIES` (ValueError naming them otherwise)."""
 
     def __init__(self, config: RunConfig, controller: Any, transport: Transport, *, obs_names: list[str],
                  vol_names: list[str], clock: Callable[[], float] = time.monotonic,
                  wall: Callable[[], float] = time.time, sim_time: bool = False, live: Any = None,
-                 rest_base_pose: np.ndarray | None = None) -> None:
+                 rest_base_pose: np.ndarray | None = None, gc_policy: str = "managed") -> None:
         self.sim_time, self.live = sim_time, live
+        self.collector = CollectorPolicy(gc_policy)
+        self.profile = TickProfile(config.period_s)
+        self._t_poll = self._t_step = self._t_live = 0.0
+        self._sent = math.nan
         self.rest_base_pose = None if rest_base_pose is None else np.array(rest_base_pose, dtype=float)
         self.live_error: str | None = None
         self._live_in: tuple | None = None
@@ -123,6 +136,7 @@ class RunLoop:
 
     def _stamp(self) -> Any:
         """Now as ROS time: the wall clock, or with ``sim_time`` the last clock message's stamp itself."""
+        self._sent = time.perf_counter()  # the profile's time of the command
         return self._sim_stamp if self.sim_time else ros_time(self.wall())
 
     def _restart(self, start: float) -> None:
@@ -194,7 +208,10 @@ class RunLoop:
         """Control tick k at time ``t`` (default k·T; module docstring, 1–3); returns the published status."""
         t_k = k * self.config.period_s if t is None else t
         self._live_in = None
+        self._t_step = self._t_live = 0.0
+        p0 = time.perf_counter()
         self.poll()
+        self._t_poll = time.perf_counter() - p0
         now = self.clock()
         watch = self.watchdog.check(now)
         values: dict[str, object] = {"tick": k, "t": t_k}
@@ -230,7 +247,8 @@ class RunLoop:
         obs, vol = self._values(self._obs, watch.stale), self._values(self._vol, watch.stale)
         t0 = time.perf_counter()
         cmd = self.controller.step(t_k, obs, vol, q, v, base)
-        self.summary.step_times.append(time.perf_counter() - t0)
+        self._t_step = time.perf_counter() - t0
+        self.summary.step_times.append(self._t_step)
         self._live_in = (q, v, base, dict(zip((c.name for c in self._obs), obs)), vol, cmd,
                          self.summary.step_times[-1])
         arrays = [np.asarray(getattr(cmd, a, np.nan), dtype=float) for a in ("q_cmd", "v_cmd", "a_cmd", "tau")]
@@ -245,30 +263,12 @@ class RunLoop:
                                                   self.joints, stamp, self.config.period_s, *arrays))
         self.summary.commands += 1
         status = str(cmd.status)
-        values.update(self._controller_values(cmd))
+        values.update(controller_values(cmd, getattr(self.controller, "keepout", None)))
         stale_note = "; stale: " + ", ".join(f"{n} ({self.config.inputs[n].topic}, {watch.ages[n]:.3f} s)"
                                              for n in watch.stale) if watch.stale else ""
         level = OK if status == "ok" and not watch.stale else WARN if status in WARN_STATUSES or status == "ok" \
             else ERROR
         return self._status(stamp, level, status, f"{status}{stale_note}", values)
-
-    def _controller_values(self, cmd: Any) -> dict[str, object]:
-        alpha = float(cmd.alpha)
-        proba = np.asarray(cmd.mode_proba, dtype=float)
-        out: dict[str, object] = {"alpha": alpha, "beta": float(cmd.beta),
-                                  "leader": "robot" if alpha >= 0.5 else "wearer",
-                                  "mode": int(np.argmax(proba)) if proba.size and np.isfinite(proba).all() else -1,
-                                  "mode_proba": proba, "novelty": float(cmd.novelty),
-                                  "reasons": " | ".join(cmd.reasons),
-                                  "step_s": float(cmd.timings.get("total", math.nan)),
-                                  "tip_reference": np.asarray(getattr(cmd, "tip_reference", (math.nan,) * 3),
-                                                              dtype=float)}
-        keepout = getattr(self.controller, "keepout", None)
-        if keepout is not None and keepout.limit.clearances:
-            dist = [float(c.distance) for c in keepout.limit.clearances]
-            out["clearance_m"] = min(dist)
-            out.update({f"clearance_{z.name}_m": d for z, d in zip(keepout.limit.zones, dist)})
-        return out
 
     def _status(self, stamp, level: int, status: str, message: str, values: dict[str, object]) -> str:
         values = {"status": status, "stamp": f"{stamp.sec}.{stamp.nanosec:09d}", **values}
@@ -276,7 +276,9 @@ class RunLoop:
                                                 message, values))
         self.summary.statuses[status] = self.summary.statuses.get(status, 0) + 1
         if self.live is not None:
+            t0 = time.perf_counter()
             self._live_step(stamp, status)
+            self._t_live = time.perf_counter() - t0
         return status
 
     def _live_step(self, stamp: Any, status: str) -> None:
@@ -297,26 +299,31 @@ class RunLoop:
         Returns the summary."""
         if self.sim_time:
             return self._run_sim_time(duration_s, should_stop)
-        T, k, origin, triggered = self.config.period_s, 0, self.start, False
+        self.collector.start()  # a full collection first: the schedule starts after it
+        self.profile.install()
+        self._restart(self.clock())
+        T, k, origin, triggered, skipped = self.config.period_s, 0, self.start, False, False
         slack = T / 2 if self.config.tick == "arm" else 0.0  # how far from its time a tick may run
         try:
             while not should_stop():
                 if duration_s is not None and k * T >= duration_s:
                     break
-                t_tick = self.clock()
+                t_tick, wall = self.clock(), self.wall()
                 self.tick(k)
+                self._profile_tick(wall, skipped)
                 self.summary.ticks += 1
                 if triggered:  # phase-locked to the arm: the next window is centred one period after this tick
                     origin = t_tick - k * T
                 now = self.clock() - origin
                 nxt = k + 1
-                if now >= nxt * T + slack:  # overran: skip to the next tick still ahead
+                skipped = now >= nxt * T + slack
+                if skipped:  # overran: skip to the next tick still ahead
                     late = int((now - slack) // T) + 1
                     self.summary.late_ticks += late - nxt
                     nxt = late
                 opens = origin + nxt * T - slack
-                while (wait := opens - self.clock()) > 0 and not should_stop():
-                    time.sleep(min(wait, 0.005))
+                self.collector.idle(opens - self.clock())
+                self._sleep_until(opens, should_stop)
                 triggered = False
                 if slack:  # then on the arm's next joint state, or at the window's end
                     arm = self.readers["arm"]
@@ -326,9 +333,23 @@ class RunLoop:
                             break
                 k = nxt
         finally:
+            self.collector.stop()
+            self.profile.uninstall()
             self.shutdown()
         self.summary.stop_reason = self._stop_reason
         return self.summary
+
+    def _sleep_until(self, end: float, should_stop: Callable[[], bool]) -> None:
+        """Sleep until ``end`` on the loop's clock: in steps of ≤ 5 ms, the last 0.2 ms spun."""
+        while (wait := end - self.clock()) > 0 and not should_stop():
+            if wait > 2e-4:
+                time.sleep(min(wait - 2e-4, 0.005))
+
+    def _profile_tick(self, wall: float, skipped: bool) -> None:
+        arm = self.latest.get("arm")
+        arm_stamp = seconds(arm.header.stamp) if arm is not None else math.nan
+        publish = time.perf_counter() - self._sent - self._t_live
+        self.profile.tick(wall, arm_stamp, self._sent, (self._t_poll, self._t_step, publish, self._t_live), skipped)
 
     def _run_sim_time(self, duration_s: float | None, should_stop: Callable[[], bool]) -> RunSummary:
         end = math.inf if duration_s is None else time.monotonic() + duration_s

@@ -16,18 +16,21 @@ Two clocks:
 - **wall clock**: the step sleeps until the episode's start + t, publishes the inputs stamped with the wall
   clock and takes the newest command that arrives within 0.8 periods.
 
+The command, in each form ``run`` sends, becomes the runner's segment over the period
+(:mod:`mpcshare.runtime.stand_in_command`). A ``Float64MultiArray`` has no header: its status (same stamp
+as the command, published after it) says whether a command went out (``alpha`` or ``stop_command = 1``),
+and the newest command received is taken.
 No command for a step: ``None`` (the runner holds the arm, as ros2_control's trajectory controller holds
 once its ``cmd_timeout`` passes). An :class:`Outage` silences an input over a time window: ``drop`` stops
 writing, ``restart`` deletes its DDS writer at the start and creates a new one at the end (a publisher
-restarted). The command must be a ``JointTrajectory``: a ``Float64MultiArray`` lacks the velocities and
-accelerations the runner's servo follows.
+restarted).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
@@ -42,7 +45,6 @@ from mpcshare.runtime.messages import (
     DiagnosticArray,
     Header,
     JointState,
-    JointTrajectory,
     Point,
     Pose,
     PoseStamped,
@@ -51,6 +53,7 @@ from mpcshare.runtime.messages import (
     ros_time,
     seconds,
 )
+from mpcshare.runtime.stand_in_command import RemoteCommand, command_segment, remote_command
 from mpcshare.runtime.transport import QosSettings, Transport, Writer
 
 __all__ = ["Outage", "RemoteCommand", "RemoteController", "parse_outage"]
@@ -78,29 +81,6 @@ def parse_outage(text: str, restart: bool = False) -> Outage:
     if not (math.isfinite(start) and math.isfinite(end) and 0.0 <= start < end):
         raise ValueError(f"{text!r}: need 0 <= START < END")
     return Outage(parts[0], start, end, restart)
-
-
-@dataclass
-class RemoteCommand:
-    """One command of ``mpcshare run`` as the runner reads it (the fields of ``ControlCommand`` it logs; from
-    the status of the same stamp: ``no_status`` and NaN when that status did not arrive)."""
-
-    q_cmd: np.ndarray
-    v_cmd: np.ndarray
-    a_cmd: np.ndarray
-    status: str = "ok"
-    alpha: float = math.nan
-    beta: float = math.nan
-    novelty: float = math.nan
-    tip_reference: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
-    mode_proba: np.ndarray = field(default_factory=lambda: np.zeros(0))
-
-
-def _floats(text: str) -> np.ndarray:
-    try:
-        return np.array([float(x) for x in text.split(",") if x], dtype=float)
-    except ValueError:
-        return np.zeros(0)
 
 
 def _set(message: Any, path: FieldPath, value: float) -> None:
@@ -175,9 +155,6 @@ class RemoteController:
                  vol_names: Sequence[str], sim_time: bool = True, outages: Sequence[Outage] = (),
                  first_timeout_s: float = 60.0, timeout_s: float = 2.0, lost_timeout_s: float = 0.02,
                  live: Any = None) -> None:
-        if config.command.type != "trajectory_msgs/msg/JointTrajectory":
-            raise RunConfigError(f"{config.source}, [outputs.command] type: the stand-in follows a "
-                                 f"trajectory_msgs/msg/JointTrajectory command, not {config.command.type}")
         names = {"obs": list(obs_names), "voluntary": list(vol_names)}
         by_input: dict[str, list[tuple[str, str, FieldPath]]] = {}
         for c in config.channels:
@@ -198,14 +175,30 @@ class RemoteController:
         self.torso = _InputWriter(transport, config, "torso", []) if "torso" in config.inputs else None
         self.inputs = [_InputWriter(transport, config, n, ch) for n, ch in by_input.items()]
         self.clock = transport.writer(CLOCK_TOPIC, Clock, QosSettings("reliable", 64))
-        self.commands = transport.reader(config.command.topic, JointTrajectory, QosSettings("reliable", 64))
+        self.trajectory = config.command.type == "trajectory_msgs/msg/JointTrajectory"
+        self.interface = "trajectory" if self.trajectory else config.command.interface
+        self.commands = transport.reader(config.command.topic, MESSAGE_TYPES[config.command.type],
+                                         QosSettings("reliable", 64))
+        self._dynamics: tuple[Any, Any] | None = None  # the arm's (pinocchio model, data) for an effort command
         self.status = transport.reader(config.status_topic, DiagnosticArray, QosSettings("reliable", 64))
         self.missing = 0
         self._got_any, self._last_ok = False, False
-        self._last: JointTrajectory | None = None
+        self._last: Any = None  # the last command used, and (wall clock) its arrival [s, monotonic]
+        self._last_arrival = -math.inf
+        self._newest_status: dict[str, str] = {}
         self._t0: float | None = None
         self._statuses: dict[str, dict[str, str]] = {}
         self.live, self.live_error = live, None
+
+    def bind(self, robot: Any) -> None:
+        """The simulated arm (a ``robot.description.RobotDescription``): its joints must be the configuration's,
+        in order; with an effort command its rigid-body model turns τ into the acceleration. RunConfigError
+        naming the joints otherwise."""
+        if list(robot.joint_names) != list(self.config.arm.joints):
+            raise RunConfigError(f"{self.config.source}, [inputs.arm] joints: {list(self.config.arm.joints)} are "
+                                 f"not the simulated arm's {list(robot.joint_names)}")
+        if self.interface == "effort":
+            self._dynamics = (robot.model, robot.model.createData())
 
     def wait_for_run(self, timeout_s: float) -> bool:
         """Wait up to ``timeout_s`` [s] until ``mpcshare run`` listens (reads the arm, with sim time the clock)
@@ -260,35 +253,18 @@ class RemoteController:
                 values = {kv.key: kv.value for kv in msg.status[0].values}
                 if "stamp" in values:
                     self._statuses[values["stamp"]] = values
+                    self._newest_status = values
         if len(self._statuses) > 256:
             for key in list(self._statuses)[:-64]:
                 del self._statuses[key]
 
-    def _command(self, msg: JointTrajectory) -> RemoteCommand | None:
-        if len(msg.points) != 1:
-            return None
-        p = msg.points[0]
-        index = {n: i for i, n in enumerate(msg.joint_names)}
-        try:
-            order = [index[j] for j in self.config.arm.joints]
-            arrays = [np.array([seq[i] for i in order], dtype=float) for seq in (p.positions, p.velocities,
-                                                                                   p.accelerations)]
-        except (KeyError, IndexError):
-            return None
-        stamp = msg.header.stamp
-        self._take_statuses()
-        values = self._statuses.get(f"{stamp.sec}.{stamp.nanosec:09d}", {})
+    def _segment(self, msg: Any, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, ...] | None:
+        return command_segment(msg, self.interface, self.config.arm.joints, self.config.period_s, q, v,
+                               self._dynamics)
 
-        def num(key: str) -> float:
-            try:
-                return float(values[key])
-            except (KeyError, ValueError):
-                return math.nan
-
-        tip = _floats(values.get("tip_reference", ""))
-        return RemoteCommand(*arrays, status=values.get("status", "no_status"), alpha=num("alpha"), beta=num("beta"),
-                             novelty=num("novelty"), tip_reference=tip if tip.size == 3 else np.full(3, np.nan),
-                             mode_proba=_floats(values.get("mode_proba", "")))
+    def _command(self, msg: Any, values: dict[str, str], q: np.ndarray, v: np.ndarray) -> RemoteCommand | None:
+        segment = self._segment(msg, q, v)
+        return None if segment is None else remote_command(segment, values)
 
     def step(self, t: float, obs: Any, voluntary: Any, q: Any, v: Any, base_pose: Any = None) -> RemoteCommand | None:
         """Publish the inputs at ``t`` [s] and return ``run``'s command for them (None: none came)."""
@@ -313,13 +289,18 @@ class RemoteController:
 
     def _step(self, t: float, obs: Any, voluntary: Any, q: Any, v: Any, base_pose: Any) -> RemoteCommand | None:
         obs, voluntary = np.asarray(obs, dtype=float).reshape(-1), np.asarray(voluntary, dtype=float).reshape(-1)
+        q, v = np.asarray(q, dtype=float).reshape(-1), np.asarray(v, dtype=float).reshape(-1)
         if self.sim_time:
             stamp = ros_time(t + 1e-10)  # the nearest nanosecond below t + 0.1 ns: k·T exactly
+            self.commands.take()  # in lockstep nothing before this clock is this step's
             self._publish(t, stamp, obs, voluntary, q, v, base_pose)
             self.clock.write(Clock(stamp))
             wait = self.timeout_s if self._last_ok else self.first_timeout_s if not self._got_any else \
                 self.lost_timeout_s
-            msg = self._wait(time.monotonic() + wait, lambda c: c.header.stamp == stamp)
+            if self.trajectory:
+                msg = self._wait(time.monotonic() + wait, lambda c: c.header.stamp == stamp)
+            else:
+                msg = self._untimed_command(time.monotonic() + wait, _key(stamp))
         else:
             if self._t0 is None:
                 self._t0 = time.monotonic() - t
@@ -327,29 +308,59 @@ class RemoteController:
                 time.sleep(min(pause, 0.002))
             stamp = ros_time(time.time())
             self._publish(t, stamp, obs, voluntary, q, v, base_pose)
-            after = -math.inf if self._last is None else seconds(self._last.header.stamp)
-            msg = self._wait(self._t0 + t + 0.8 * self.config.period_s,
-                             lambda c: seconds(c.header.stamp) > after) or self._fresh_last(stamp)
+            if self.trajectory:
+                after = -math.inf if self._last is None else seconds(self._last.header.stamp)
+                msg = self._wait(self._t0 + t + 0.8 * self.config.period_s,
+                                 lambda c: seconds(c.header.stamp) > after)
+            else:
+                msg = self._wait(self._t0 + t + 0.8 * self.config.period_s, lambda c: True)
+            msg = msg or self._fresh_last(stamp)
         self._last_ok = msg is not None
         if msg is None:
             self.missing += 1
             return None
+        if msg is not self._last:
+            self._last_arrival = time.monotonic()
         self._got_any, self._last = True, msg
-        key = f"{msg.header.stamp.sec}.{msg.header.stamp.nanosec:09d}"
+        if not self.trajectory:
+            self._take_statuses()
+            values = self._statuses.get(_key(stamp), {}) if self.sim_time else self._newest_status
+            return self._command(msg, values, q, v)
+        key = _key(msg.header.stamp)
         end = time.monotonic() + (0.05 if self.sim_time else 0.2 * self.config.period_s)
         while key not in self._statuses and time.monotonic() < end:  # the status follows its command
             self.status.wait(0.002)
             self._take_statuses()
-        return self._command(msg)
+        return self._command(msg, self._statuses.get(key, {}), q, v)
 
-    def _fresh_last(self, stamp: Time) -> JointTrajectory | None:
-        """The last command while its trajectory point is not yet a period old (wall clock)."""
-        last = self._last
-        if last is None or seconds(stamp) - seconds(last.header.stamp) > 2 * self.config.period_s:
+    def _untimed_command(self, end: float, key: str) -> Any:
+        """Lockstep, a command without a header: this step's status (stamp ``key``, up to ``end``); the newest
+        command received when the status says one went out (up to 0.05 s more), else None."""
+        while key not in self._statuses:
+            self._take_statuses()
+            if key in self._statuses:
+                break
+            remaining = end - time.monotonic()
+            if remaining <= 0:
+                return None
+            self.status.wait(min(remaining, 0.01))
+        values = self._statuses[key]
+        if "alpha" not in values and values.get("stop_command") != "1":
             return None
-        return last
+        return self._wait(time.monotonic() + 0.05, lambda c: True)
 
-    def _wait(self, end: float, wanted: Any) -> JointTrajectory | None:
+    def _fresh_last(self, stamp: Time) -> Any:
+        """The last command while its point is not yet two periods old (wall clock; by its stamp, or its arrival
+        for a command without a header)."""
+        last, T = self._last, self.config.period_s
+        if last is None:
+            return None
+        if self.trajectory:
+            return None if seconds(stamp) - seconds(last.header.stamp) > 2 * T else last
+        return None if time.monotonic() - self._last_arrival > 2 * T else last
+
+    def _wait(self, end: float, wanted: Any) -> Any:
+        """The newest command satisfying ``wanted`` received up to ``end`` [s, monotonic]; None: none."""
         found = None
         while True:
             for c in self.commands.take():
@@ -361,3 +372,8 @@ class RemoteController:
             if remaining <= 0:
                 return None
             self.commands.wait(min(remaining, 0.01))
+
+
+def _key(stamp: Time) -> str:
+    """A stamp as the status's ``stamp`` value (``sec.nanosec``)."""
+    return f"{stamp.sec}.{stamp.nanosec:09d}"

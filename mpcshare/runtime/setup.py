@@ -18,13 +18,13 @@ from typing import Any
 import numpy as np
 
 from mpcshare.arms import TaskArm, task_arm
+from mpcshare.arms import rest_base_pose as arm_rest_pose
 from mpcshare.control.controller import SharedController
 from mpcshare.errors import ControllerSetupError
 from mpcshare.runtime.config import RunConfig, RunConfigError, check_against_model
 from robot.default_arm import as_description
 from robot.description import RobotDescription
 from robot.errors import ControllerConfigError
-from sim.scene import SceneConfig
 
 __all__ = ["configured_arm", "make_controller", "rest_base_pose", "robot_description"]
 
@@ -48,11 +48,9 @@ def _robot_file(config: RunConfig) -> Path:
 
 
 def rest_base_pose() -> np.ndarray:
-    """T_plate_torso (4×4) with the wearer's torso at rest, as the simulator places it: the plate at
-    ``SceneConfig.plate_position`` in the torso frame, axes aligned (the mounts' convention)."""
-    T = np.eye(4)
-    T[:3, 3] = -np.asarray(SceneConfig().plate_position, dtype=float)
-    return T
+    """T_plate_torso (4×4) with the wearer's torso at rest, as the simulator places it
+    (:func:`mpcshare.arms.rest_base_pose` of the eating scene)."""
+    return arm_rest_pose()
 
 
 def configured_arm(config: RunConfig) -> TaskArm | None:
@@ -83,6 +81,7 @@ def make_controller(config: RunConfig, bundle: Any, arm: TaskArm | None = None) 
                         rate_hz=float(bundle.rate_hz), joint_names=robot.joint_names)
     c = config.controller
     try:
-        return SharedController.from_bundle(bundle, robot=robot, strategy=c.strategy, beta=c.beta, use_mpc=c.mpc)
+        return SharedController.from_bundle(bundle, robot=robot, strategy=c.strategy, beta=c.beta, use_mpc=c.mpc,
+                                            base_pose=rest_base_pose())
     except ControllerSetupError as exc:
         raise RunConfigError(f"{config.source}, [controller]: {exc}") from None

@@ -22,6 +22,13 @@ from sim.demonstrator import (
     generate_demonstrations,
 )
 
+#: The SuperLimb's mount given to the controllers of these tests (T_plate_torso): the plate's centre
+#: 0.22 m in front of the torso origin and 0.12 m to its right, at its height, axes aligned, so that
+#: the demonstrations' knife positions lie mid-range of the joints around ``0.5·(lower + upper)``.
+#: (`mpcshare sim` and `mpcshare run` give the eating scene's: ``mpcshare.arms.rest_base_pose``.)
+MOUNT = np.eye(4)
+MOUNT[:3, 3] = (-0.22, 0.12, 0.0)
+MOUNT.setflags(write=False)
 
 class TableGate:
     """Gate with a fixed probability per mode (``proba_one(window, mode)``)."""

@@ -10,7 +10,7 @@ import pytest
 
 from mpcshare.control.controller import STATUSES, SharedController
 from robot.superlimb import SuperLimbParams
-from tests.mpcshare.control.controller_doubles import demos_and_bundle, real_model_bundle
+from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle, real_model_bundle
 
 P = SuperLimbParams()
 Q0 = 0.5 * (P.lower + P.upper)
@@ -18,7 +18,8 @@ Q0 = 0.5 * (P.lower + P.upper)
 
 def _controller(strategy="gate", beta=0.5, seed=0, **kw):
     demos, bundle = demos_and_bundle(seed)
-    return demos, SharedController.from_bundle(bundle, strategy=strategy, beta=beta, use_mpc=False, **kw)
+    return demos, SharedController.from_bundle(bundle, strategy=strategy, beta=beta, use_mpc=False,
+                                               **{"base_pose": MOUNT, **kw})
 
 
 def _run(ctl, trial, n, q=Q0, v=None, modify=None):
@@ -83,7 +84,7 @@ def test_undecided_gate_does_not_toggle_alpha_in_the_loop():
     demos, bundle = demos_and_bundle(0)
     gate = _AlternatingGate()
     undecided = SimpleNamespace(**{**vars(bundle), "gates": gate})
-    ctl = SharedController.from_bundle(undecided, strategy="gate", use_mpc=False)
+    ctl = SharedController.from_bundle(undecided, strategy="gate", use_mpc=False, base_pose=MOUNT)
     cmds = _run(ctl, demos.trials[0], 500)
     assert gate.n > 40 and ctl.handovers == [] and {c.alpha for c in cmds} == {0.0}
 
@@ -94,7 +95,7 @@ def test_torso_sway_moves_the_arm_not_the_plate_frame_reference():
 
     demos, ctl = _controller("voluntary")
     trial = demos.trials[0]
-    pose = np.array(SharedController.default_base_pose, dtype=float)
+    pose = MOUNT.copy()
 
     def sway(k, a):
         T = pose.copy()
@@ -222,7 +223,8 @@ def test_mpc_paths(mode, status):
     from mpcshare.control.controller import ControllerConfig
 
     mpc = _FakeMPC(mode)
-    ctl = SharedController.from_bundle(bundle, strategy="gate", mpc=mpc, config=ControllerConfig(mpc_every=1))
+    ctl = SharedController.from_bundle(bundle, strategy="gate", mpc=mpc, config=ControllerConfig(mpc_every=1),
+                                       base_pose=MOUNT)
     cmds = _run(ctl, demos.trials[0], 60)
     assert mpc.calls == 60 and cmds[-1].status == status and "mpc" in cmds[-1].timings
     for c in cmds:
@@ -234,7 +236,7 @@ def test_mpc_at_its_own_rate():
 
     demos, bundle = demos_and_bundle(0)
     mpc = _FakeMPC("ok")
-    ctl = SharedController.from_bundle(bundle, mpc=mpc, config=ControllerConfig(mpc_every=3))
+    ctl = SharedController.from_bundle(bundle, mpc=mpc, config=ControllerConfig(mpc_every=3), base_pose=MOUNT)
     cmds = _run(ctl, demos.trials[0], 60)
     assert mpc.calls == 20 and all(c.status == "ok" for c in cmds)
 
@@ -244,7 +246,8 @@ def test_with_the_real_mpc():
     from mpcshare.control.controller import ControllerConfig
 
     demos, bundle = demos_and_bundle(0)
-    ctl = SharedController.from_bundle(bundle, use_mpc=True, config=ControllerConfig(mpc_deadline_s=1.0))
+    ctl = SharedController.from_bundle(bundle, use_mpc=True, config=ControllerConfig(mpc_deadline_s=1.0),
+                                       base_pose=MOUNT)
     cmds = _run(ctl, demos.trials[0], 300)
     for c in cmds:
         _safe(c)
@@ -268,7 +271,7 @@ def test_qp_failure_brakes_within_limits():
 
 def test_learned_part_failure_is_reported_not_raised():
     demos, bundle = demos_and_bundle(0)
-    ctl = SharedController.from_bundle(bundle, use_mpc=False)
+    ctl = SharedController.from_bundle(bundle, use_mpc=False, base_pose=MOUNT)
 
     def broken(x):
         raise FloatingPointError("bad weights")
@@ -287,7 +290,7 @@ def test_from_a_saved_bundle_folder(tmp_path):
 
     demos, bundle = real_model_bundle(0)
     save_bundle(bundle, tmp_path / "bundle")
-    ctl = SharedController.from_bundle(str(tmp_path / "bundle"), strategy="gate", use_mpc=False)
+    ctl = SharedController.from_bundle(str(tmp_path / "bundle"), strategy="gate", use_mpc=False, base_pose=MOUNT)
     cmds = _run(ctl, demos.trials[1], 400)
     for c in cmds:
         _safe(c)
@@ -322,6 +325,22 @@ def test_construction_misuse():
     assert dataclasses.is_dataclass(SharedController.from_bundle(bundle, use_mpc=False).config)
 
 
+def test_without_a_mount_the_controller_holds_until_a_step_gives_one():
+    demos, ctl = _controller("voluntary", base_pose=None)
+    trial = demos.trials[0]
+    first = ctl.step(trial.t[0], trial.obs[0], trial.voluntary[0], Q0, np.zeros(3))
+    _safe(first)
+    assert first.status == "invalid_base_pose" and "no base pose yet" in first.reasons[0]
+    assert np.allclose(first.v_cmd, 0.0, atol=0.02)  # held (from rest)
+    given = ctl.step(trial.t[1], trial.obs[1], trial.voluntary[1], first.q_cmd, first.v_cmd, MOUNT)
+    assert given.status == "ok"
+    kept = ctl.step(trial.t[2], trial.obs[2], trial.voluntary[2], given.q_cmd, given.v_cmd)  # the last one kept
+    assert kept.status == "ok"
+    _, bundle = demos_and_bundle(0)
+    with pytest.raises(ValueError, match="base_pose has non-finite entries"):
+        SharedController.from_bundle(bundle, base_pose=np.full((4, 4), np.nan))
+
+
 @pytest.mark.parametrize("share", [0.0, 0.9])
 def test_the_default_gate_reads_the_modes_and_the_bundles_per_mode_figures(share):
     """Every mode of the bundle's held-out figures unpredictable: the wearer keeps the lead; none: the robot
@@ -329,7 +348,7 @@ def test_the_default_gate_reads_the_modes_and_the_bundles_per_mode_figures(share
     demos, b = demos_and_bundle(0)
     per_mode = {str(j): {"n": 100, "n_positive": round(100 * (1 - share))} for j in range(3)}
     bundle = SimpleNamespace(**vars(b), metrics={"gate": {"per_mode": per_mode}})
-    ctl = SharedController.from_bundle(bundle, strategy="gate", use_mpc=False)
+    ctl = SharedController.from_bundle(bundle, strategy="gate", use_mpc=False, base_pose=MOUNT)
     cmds = _run(ctl, demos.trials[0], 300)
     for c in cmds:
         _safe(c)

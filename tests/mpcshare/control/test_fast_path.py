@@ -12,6 +12,7 @@ from mpcshare.training import train_bundle
 from mpcshare.training.config import TrainConfig
 from mpcshare.training.fast import TIP, trial_designs
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
+from tests.mpcshare.control.controller_doubles import MOUNT
 
 SMALL = TrainConfig(n_modes=3, hmm_restarts=1, max_epochs=3, patience=2, gate_max_samples=200, seed=0)
 
@@ -24,7 +25,7 @@ def setup():
 
 def _online(bundle, trial, n: int, config: ControllerConfig | None = None):
     """(φ per step, forecasts per step, commands) of the controller streaming ``trial``."""
-    ctl = SharedController.from_bundle(bundle, strategy="reactive", config=config)
+    ctl = SharedController.from_bundle(bundle, strategy="reactive", config=config, base_pose=MOUNT)
     phis, outs = [], []
     inputs_step, fast_step = ctl.fast.inputs.step, ctl.fast.step
 
@@ -63,7 +64,7 @@ def test_online_inputs_equal_the_offline_rows(setup):
 def test_the_preview_holds_where_the_forecast_has_no_skill(setup):
     demos, bundle = setup
     trial = demos.trials[bundle.heldout_trials[0]]
-    ctl = SharedController.from_bundle(bundle, strategy="reactive")
+    ctl = SharedController.from_bundle(bundle, strategy="reactive", base_pose=MOUNT)
     q, v = np.array([0.0, 0.5, 1.0]), np.zeros(3)
     for k in range(120):
         ctl.step(trial.t[k], trial.obs[k], trial.voluntary[k], q, v)
@@ -83,7 +84,7 @@ def test_the_10hz_path_is_kept_when_asked_or_for_an_old_bundle(setup):
     assert SharedController.from_bundle(bundle, config=ControllerConfig(fast_forecast=False)).fast is None
     import dataclasses
     old = dataclasses.replace(bundle, fast=None, format_version=1)
-    ctl = SharedController.from_bundle(old)
+    ctl = SharedController.from_bundle(old, base_pose=MOUNT)
     assert ctl.fast is None and ctl.lead_s == ControllerConfig().forecast_lead_s
     trial = demos.trials[0]
     cmd = ctl.step(trial.t[0], trial.obs[0], trial.voluntary[0], np.array([0.0, 0.5, 1.0]), np.zeros(3))

@@ -14,7 +14,7 @@ import numpy as np
 from mpcshare.control.controller import SharedController
 from robot.shoulder import ShoulderMap
 from robot.superlimb import SuperLimbParams
-from tests.mpcshare.control.controller_doubles import demos_and_bundle
+from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle
 
 P = SuperLimbParams()
 Q0 = 0.5 * (P.lower + P.upper)
@@ -37,7 +37,7 @@ def _lowest_tip(ctl: SharedController, n: int = 300) -> tuple[float, list]:
 
 def test_a_command_below_the_table_stops_the_tip_at_the_plate():
     _, bundle = demos_and_bundle(0)
-    ctl = SharedController.from_bundle(bundle, strategy="voluntary")
+    ctl = SharedController.from_bundle(bundle, strategy="voluntary", base_pose=MOUNT)
     low, cmds = _lowest_tip(ctl)
     floor = ctl.config.floor_z
     assert floor is not None and -0.01 <= floor <= 0.0

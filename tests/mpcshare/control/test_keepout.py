@@ -13,7 +13,7 @@ from robot.keepout import segment_zone_clearance
 from robot.shoulder import ShoulderMap
 from robot.superlimb import SuperLimbParams
 from robot.wearer_body import WearerBody, body_zones, hand_center
-from tests.mpcshare.control.controller_doubles import demos_and_bundle
+from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle
 
 P = SuperLimbParams()
 Q0 = 0.5 * (P.lower + P.upper)
@@ -22,7 +22,8 @@ FORK = slice(0, 6)  # fork_x … fork_yaw are the first obs channels of the gene
 
 def _controller(config=None):
     demos, bundle = demos_and_bundle(0)
-    ctl = SharedController.from_bundle(bundle, strategy="voluntary", beta=1.0, use_mpc=False, config=config)
+    ctl = SharedController.from_bundle(bundle, strategy="voluntary", beta=1.0, use_mpc=False, config=config,
+                                       base_pose=MOUNT)
     return demos.trials[0], ctl
 
 

@@ -10,14 +10,14 @@ from mpcshare.control.arbitration import Arbiter
 from mpcshare.evaluation import intent_preview
 from sim.closed_loop import run_episode
 from sim.task_metrics import time_lag
-from tests.mpcshare.control.controller_doubles import demos_and_bundle
+from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle
 
 
 def _episode(preview: bool, seconds: float = 8.0):
     demos, bundle = demos_and_bundle(0)
     trial = demos.trials[0]
     options = {"preview": intent_preview(trial, demos.act_names)} if preview else {}
-    ctl = SharedController.from_bundle(bundle, strategy="reactive", **options)
+    ctl = SharedController.from_bundle(bundle, strategy="reactive", base_pose=MOUNT, **options)
     return run_episode(ctl, trial, duration_s=seconds, seed=0, obs_names=list(demos.obs_names),
                        act_names=list(demos.act_names))
 
@@ -70,7 +70,8 @@ def test_between_ticks_the_forecast_is_followed_not_held():
             predictor = ReactivePredictor(hidden_size=8, max_epochs=2, chunk_len=25, seed=0, horizons=horizons)
             seqs, targets = _training_sequences(bundle, demos)
             predictor.fit(seqs, targets, progress=False)
-        ctl = SharedController.from_bundle(dataclasses.replace(bundle, predictor=predictor), strategy="reactive")
+        ctl = SharedController.from_bundle(dataclasses.replace(bundle, predictor=predictor), strategy="reactive",
+                                           base_pose=MOUNT)
         trial = demos.trials[0]
         q, v = np.zeros(3), np.zeros(3)
         aimed = []

@@ -15,6 +15,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import pytest
@@ -24,9 +25,10 @@ pytest.importorskip("cyclonedds", reason="mpcshare run needs the cyclonedds pack
 from learning.data import save  # noqa: E402
 from mpcshare.cli import main  # noqa: E402
 from mpcshare.runtime.config import RunConfigError, load_run_config  # noqa: E402
-from mpcshare.runtime.convert import read_path  # noqa: E402
+from mpcshare.runtime.convert import command_message, read_path  # noqa: E402
 from mpcshare.runtime.messages import Clock, DiagnosticArray, JointTrajectory, Time, seconds  # noqa: E402
 from mpcshare.runtime.remote import Outage, RemoteController, parse_outage  # noqa: E402
+from mpcshare.runtime.setup import robot_description  # noqa: E402
 from mpcshare.runtime.transport import NetworkSettings, QosSettings, Transport  # noqa: E402
 from tests.mpcshare.runtime.ros_helpers import DOMAIN, PANDA, ROOT, write_config  # noqa: E402
 
@@ -34,6 +36,13 @@ T = 0.01  # the control period [s]
 RESUME_S = 0.3  # the test configuration's resume_after_s
 CLEAN_S = 1.0  # seconds before the first outage
 DURATION_S = 6.0  # the kill at 4.7 s lands up to ~0.3 s late on a quiet machine (the test polls the clock)
+PANDA_S = 1.0  # the Panda's trial [s]
+_TORSO = """
+[inputs.torso]
+topic = "/mocap/torso/pose"
+optional = true
+frame = "plate"
+"""
 FAULTS = ["--drop", "fork:1.0:1.7", "--drop", "arm:2.5:2.8", "--restart", "shoulder:3.5:3.7"]
 
 
@@ -84,11 +93,14 @@ class _Listener:
 
 
 def _pair(served, out: Path, extra: list[str], trials: int, duration: float,
-          kill_at: tuple[int, float] | None = None) -> tuple[str, str, _Listener, bool]:
+          kill_at: tuple[int, float] | None = None, cfg: Path | None = None,
+          meanwhile: Callable[[], None] = lambda: None) -> tuple[str, str, _Listener, bool]:
     """Run ``run --sim-time`` and ``sim --serve`` to the stand-in's end (``kill_at`` (episode, t): SIGKILL
     ``run`` when the clock reaches t in that episode); then SIGTERM ``run``. (run's stdout, the stand-in's
-    stdout, what was heard, whether run was killed)."""
-    root, model, data, cfg = served
+    stdout, what was heard, whether run was killed); ``cfg``: another configuration than ``served``'s;
+    ``meanwhile`` is called once both processes are started (while they load)."""
+    root, model, data, served_cfg = served
+    cfg = cfg or served_cfg
     listen = _Listener()
     run = _start(["run", "--model", str(model), "--config", str(cfg), "--sim-time"], root)
     stand = _start(["sim", "--model", str(model), "--data", str(data), "--out", str(out), "--serve", "--config",
@@ -96,6 +108,7 @@ def _pair(served, out: Path, extra: list[str], trials: int, duration: float,
                    root)
     killed = False
     try:
+        meanwhile()
         episode, last, end = 0, -1.0, time.monotonic() + 180
         while stand.poll() is None and time.monotonic() < end:
             n = len(listen.times)
@@ -225,16 +238,60 @@ def test_bad_stand_in_requests_are_named():
 
 
 def test_the_stand_in_refuses_what_it_cannot_follow(tmp_path):
-    panda = load_run_config(write_config(tmp_path, PANDA))
-    t = Transport(NetworkSettings(domain_id=DOMAIN))
-    with pytest.raises(RunConfigError, match="follows a trajectory_msgs/msg/JointTrajectory command"):
-        RemoteController(panda, t, obs_names=[], vol_names=[])
     config = load_run_config(write_config(tmp_path))
+    t = Transport(NetworkSettings(domain_id=DOMAIN))
     with pytest.raises(RunConfigError, match=r"\[obs\] fork_x: the simulator has no such channel"):
         RemoteController(config, t, obs_names=["x"], vol_names=[])
     with pytest.raises(RunConfigError, match="no input 'hand' to silence"):
         RemoteController(config, t, obs_names=list(config.names("obs")), vol_names=list(config.names("voluntary")),
                          outages=[Outage("hand", 0.0, 1.0)])
+    remote = RemoteController(config, t, obs_names=list(config.names("obs")),
+                              vol_names=list(config.names("voluntary")))
+    with pytest.raises(RunConfigError, match=r"\[inputs.arm\] joints: .* are not the simulated arm's"):
+        remote.bind(robot_description(load_run_config(PANDA)))
+
+
+@pytest.mark.parametrize("kind, interface", [("trajectory_msgs/msg/JointTrajectory", "position"),
+                                             ("std_msgs/msg/Float64MultiArray", "position"),
+                                             ("std_msgs/msg/Float64MultiArray", "velocity"),
+                                             ("std_msgs/msg/Float64MultiArray", "effort")])
+def test_every_command_form_gives_back_the_controllers_segment(tmp_path, kind, interface):
+    pin = pytest.importorskip("pinocchio")
+    config = load_run_config(write_config(tmp_path, PANDA, replace={
+        r"^type = \"std_msgs/msg/Float64MultiArray\"": f'type = "{kind}"',
+        r"^interface = \"position\"": "" if kind.startswith("trajectory") else f'interface = "{interface}"'}))
+    robot = robot_description(load_run_config(PANDA))
+    remote = RemoteController(config, Transport(NetworkSettings(domain_id=DOMAIN)),
+                              obs_names=list(config.names("obs")), vol_names=list(config.names("voluntary")))
+    remote.bind(robot)
+    rng = np.random.default_rng(3)
+    q, v, a = rng.uniform(-1, 1, 7), rng.uniform(-0.5, 0.5, 7), rng.uniform(-3, 3, 7)
+    v1, q1 = v + a * T, q + (v + 0.5 * T * a) * T  # the QP's integration
+    tau = pin.rnea(robot.model, robot.model.createData(), q, v, a)
+    msg = command_message(kind, interface, config.arm.joints, Time(1, 0), T, q1, v1, a, tau)
+    got = remote._segment(msg, q, v)
+    for x, want in zip(got, (q1, v1, a)):
+        assert np.allclose(x, want, rtol=0, atol=1e-9 if interface != "position" or kind.startswith("traj") else 1e-6)
+    bad = command_message(kind, interface, config.arm.joints[:3], Time(1, 0), T, q1[:3], v1[:3], a[:3], tau[:3])
+    assert remote._segment(bad, q, v) is None  # not the arm's joints
+
+
+def test_the_panda_over_forward_commands_tracks_as_in_one_process(served, tmp_path):
+    """The Panda of examples/ros2/panda.toml (a Float64MultiArray position command) against ``sim --robot
+    panda``; with the torso's pose as an input, since the simulator sways the arm's base with the torso."""
+    root, model, data, _ = served
+    cfg = write_config(tmp_path, PANDA, append=_TORSO)
+    arm = ["--robot", "panda", "--velocity-limit", "1.5", "--acceleration-limit", "6.0"]
+    inproc = ["sim", "--model", str(model), "--data", str(data), "--out", str(tmp_path / "inproc"), "--runs", "gate",
+              "--trials", "1", "--duration", str(PANDA_S), *arm]
+    codes: list[int] = []
+    _, s_out, _, _ = _pair(served, tmp_path / "across", arm, 1, PANDA_S, cfg=cfg,
+                           meanwhile=lambda: codes.append(main(inproc)))
+    assert "0 control steps without a command" in s_out and codes == [0]
+    a, b = _episode(tmp_path / "across"), _episode(tmp_path / "inproc")
+    assert np.array_equal(a["t"], b["t"]) and (a["status"] == "ok").all()
+    assert np.abs(a["tip"] - b["tip"]).max() < 1e-6
+    assert int(a["info_limit_violations"]) == 0
 
 
 @pytest.mark.parametrize("argv, words", [

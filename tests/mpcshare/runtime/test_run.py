@@ -6,6 +6,7 @@ the wearer's shoulder; then the fork goes silent (protective stop), then SIGTERM
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -62,8 +63,8 @@ def test_run_publishes_stamped_commands_at_100_hz_and_stops_when_an_input_goes_s
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("CYCLONEDDS_URI", None)
     proc = subprocess.Popen([sys.executable, "-m", "mpcshare", "run", "--model", str(model), "--config", str(cfg),
-                             "--duration", "60"], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                             "--duration", "60", "--timing", "timing.json"], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         t = Transport(NetworkSettings(domain_id=DOMAIN))
         arm = t.writer("/joint_states", JointState)
@@ -146,3 +147,10 @@ def test_run_publishes_stamped_commands_at_100_hz_and_stops_when_an_input_goes_s
     assert ok[-1]["leader"] in ("robot", "wearer") and float(ok[-1]["clearance_m"]) > 0
     final = _status_values(stats[-1][1]) if stats else {}
     assert final.get("status") in ("stopped", "protective_stop")
+
+    # --timing: the ticks' profile, the collector frozen after setup (the default policy)
+    timing = json.loads((tmp_path / "timing.json").read_text())
+    assert timing["ticks"] >= FEED_S * 100 * 0.8 and timing["phases_ms"]["step"]["median"] > 0
+    assert timing["gc_policy"]["policy"] == "managed" and timing["gc_policy"]["full_ms"] > 0
+    assert timing["gc_policy"]["frozen_full_ms"] < timing["gc_policy"]["full_ms"]  # the frozen heap is not scanned
+    assert sum(timing["causes"].values()) <= timing["ticks"]
