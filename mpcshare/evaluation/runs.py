@@ -47,7 +47,7 @@ from sim.closed_loop import run_episode
 from sim.keepout_metrics import KEEPOUT_KEYS
 from sim.run_mcap import fork_poses, write_run_mcap
 from sim.scene import SceneConfig
-from sim.task_metrics import TASK_KEYS
+from sim.task import EATING
 from sim.wearer import WearerConfig
 from sim.wearer_presets import wearer_preset_name
 
@@ -106,7 +106,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     strategy=..., use_mpc=..., beta=...)`` builds a controller (default:
     :meth:`SharedController.from_bundle`). ``mode_names``: the names of the data's mode labels;
     with them (and labels in the data) each run also gets the task figures of
-    :mod:`sim.task_metrics` (lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
+    the task's (:meth:`sim.task.Task.episode_metrics`: lag, sawing while ``cutting``, RMS per mode). ``wearer``: the
     simulated wearer's settings (default ``WearerConfig()``, the preset ``hemiparetic_mild``);
     the comparison records them and the preset's name. ``scene``: the arm's world (:func:`simulate_episode`).
     ``mcap_rate_hz``: the MCAP's joint states at about this rate (default: every physics step).
@@ -135,7 +135,7 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
                 {**pool_metrics(trial_metrics, trial_steps, trial_seconds),
                  **pool_task_metrics(trial_metrics, trial_steps), **pool_keepout_metrics(trial_metrics)}
-            per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + TASK_KEYS + KEEPOUT_KEYS}
+            per_trial[run.name][str(tid)] = {k: m[k] for k in METRIC_KEYS + EATING.metric_keys + KEEPOUT_KEYS}
             if log is not None:
                 log(f"  {run.name:12s} trial {tid}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
