@@ -53,25 +53,26 @@ def test_both_tasks_are_tasks_and_a_partial_one_is_not():
     assert not isinstance(SimpleNamespace(name="half", mode_names=("a",)), Task)
 
 
-def test_a_closed_loop_episode_is_scored_by_the_task_it_is_given():
-    from mpcshare.evaluation.episode import simulate_episode
+def test_a_closed_loop_comparison_is_scored_by_the_task_it_is_given():
+    from mpcshare.evaluation import compare_strategies, simulate_episode
     from mpcshare.run_table import StrategyRun
 
     demos = generate_demonstrations(n_subjects=1, minutes=0.5, seed=11)
-    trial = demos.trials[0]
-    trial = replace(trial, mode=(trial.mode > 0).astype(int))  # two modes: cutting → approach, the rest → pour
-    task = Pouring()
-    _, m = simulate_episode(SimpleNamespace(vol_names=list(demos.vol_names)), demos, trial,
-                            StrategyRun("voluntary", "voluntary"), {}, beta=1.0, duration_s=4.0, seed=1, wearer=None,
-                            mode_names=task.mode_names, make_controller=lambda bundle, **_: VoluntaryController(),
-                            task=task)
-    assert set(task.metric_keys) <= set(m) and "saw_correlation" not in m  # its figures, not eating's
-    assert set(m["rms_by_mode_m"]) == {"approach", "pour"} and task.done(m)
-    _, eating = simulate_episode(SimpleNamespace(vol_names=list(demos.vol_names)), demos, demos.trials[0],
-                                 StrategyRun("voluntary", "voluntary"), {}, beta=1.0, duration_s=4.0, seed=1,
+    two = demos.__class__([replace(t, mode=(t.mode > 0).astype(int)) for t in demos.trials], demos.rate_hz,
+                          list(demos.obs_names), list(demos.act_names), list(demos.vol_names))  # cutting → approach
+    task, run = Pouring(), StrategyRun("voluntary", "voluntary")
+    bundle = SimpleNamespace(vol_names=list(demos.vol_names))
+    comp = compare_strategies(bundle, two, [two.trials[0].trial_id], runs=(run,), duration_s=4.0, seed=1, beta=1.0,
+                              make_controller=lambda bundle, **_: VoluntaryController(), log=None,
+                              mode_names=task.mode_names, task=task)
+    row = comp.per_trial["voluntary"][str(two.trials[0].trial_id)]
+    assert set(task.metric_keys) <= set(row) and "saw_correlation" not in row  # its figures, not eating's
+    assert set(row["rms_by_mode_m"]) == {"approach", "pour"} and task.done(row)
+    assert set(comp.strategies["voluntary"]["rms_by_mode_m"]) == {"approach", "pour"}  # pooled by its mode names
+    _, eating = simulate_episode(bundle, demos, demos.trials[0], run, {}, beta=1.0, duration_s=4.0, seed=1,
                                  wearer=None, mode_names=EATING.mode_names,
                                  make_controller=lambda bundle, **_: VoluntaryController())
-    assert set(EATING.metric_keys) <= set(eating) and eating["lag_s"] == m["lag_s"]  # same loop, eating's figures
+    assert set(EATING.metric_keys) <= set(eating) and eating["lag_s"] == row["lag_s"]  # the same loop, eating's figures
 
 
 def test_the_report_colours_and_the_data_summary_name_the_tasks_modes():
