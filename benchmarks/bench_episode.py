@@ -32,7 +32,7 @@ from mpcshare.bundle import load_bundle
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.evaluation.episode import simulate_episode
 from mpcshare.run_table import DEFAULT_RUNS
-from sim.demonstrator import MODE_NAMES
+from sim.task.eating import MODE_NAMES
 from sim.wearer_presets import wearer_preset
 model, data, trial_id, seconds, names = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), sys.argv[5:]
 bundle, demos = load_bundle(model), load(data)

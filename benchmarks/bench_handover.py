@@ -30,7 +30,8 @@ from mpcshare.calibration.rule_choice import line_ratio as _line
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, pool_task_metrics, simulate_episode
 from mpcshare.evaluation.schedule import StepSchedule
-from sim.demonstrator import CUTTING, MODE_NAMES
+from sim.demonstrator import CUTTING
+from sim.task.eating import MODE_NAMES
 from sim.wearer_presets import WEARER_PRESETS, wearer_preset
 
 KEYS = ("tracking_rmse_m", "voluntary_effort", "saw_correlation", "saw_amplitude_ratio", "reactive_share",

@@ -41,8 +41,8 @@ from mpcshare.arms import task_arm  # noqa: E402
 from mpcshare.bundle import save_bundle  # noqa: E402
 from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies  # noqa: E402
 from robot.presets import ARM_PRESETS  # noqa: E402
-from sim.demonstrator import MODE_NAMES  # noqa: E402
 from sim.scene import SceneConfig  # noqa: E402
+from sim.task.eating import MODE_NAMES  # noqa: E402
 
 KEYS = ("tracking_rmse_m", "tracking_p95_m", "limit_violations", "step_p50_ms", "step_p99_ms", "realtime_factor",
         "lag_s")

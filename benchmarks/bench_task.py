@@ -12,7 +12,7 @@ Prints one JSON object:
 * ``targets``: per preset, each target of issue 19 with its figure and whether it is met
   (ratios against runs of the same process: the machine is shared);
 * ``latency_budget``: per stage, the time shift (s) that minimises the RMS between that stage's
-  signal and the signal it follows (:func:`sim.task_metrics.time_lag`), measured in the closed
+  signal and the signal it follows (:func:`sim.task.metrics.time_lag`), measured in the closed
   loop on the first held-out trial under ``reactive`` (the robot's path) and ``voluntary``
   (the wearer's path). Cumulative shifts against the intent are in ``cumulative_s``. The input
   side has two paths: the Kalman state of the fork (the control-rate forecast's input, every
@@ -45,8 +45,9 @@ from mpcshare.bundle import load_bundle
 from mpcshare.control import SharedController
 from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies
 from sim.closed_loop import run_episode
-from sim.demonstrator import MODE_NAMES, GeneratorConfig, SubjectStyle, generate_demonstrations
-from sim.task_metrics import time_lag
+from sim.demonstrator import GeneratorConfig, SubjectStyle, generate_demonstrations
+from sim.task.eating import MODE_NAMES
+from sim.task.metrics import time_lag
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS, wearer_preset
 
 # Figures before this work (README, 2 held-out trials x 30 s, default data, the old error-driven wearer).

@@ -22,7 +22,8 @@ from learning.data import save
 from mpcshare.evaluation.tuning.episodes import TIMING_KEYS
 from mpcshare.evaluation.tuning.runner import run_tune
 from mpcshare.training.config import TrainConfig
-from sim.demonstrator import MODE_NAMES, generate_demonstrations
+from sim.demonstrator import generate_demonstrations
+from sim.task.eating import MODE_NAMES
 
 
 def main() -> None:

@@ -19,6 +19,6 @@ def world_data(world: str, quick: bool) -> tuple[Any, tuple[str, ...], dict[str,
         return demos, spec.mode_names, info
     from bench_task import make_data
 
-    from sim.demonstrator import MODE_NAMES
+    from sim.task.eating import MODE_NAMES
 
     return make_data(world), MODE_NAMES, {}

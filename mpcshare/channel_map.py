@@ -4,7 +4,7 @@ The roles (``docs/design.md``, "Data format") are channel names: the knife tip `
 metres, plate frame), the fork ``fork_x/y/z`` (obs, metres) with ``fork_roll/pitch/yaw`` (obs, rad;
 optional, else a level fork) and the shoulder's ``shoulder_elevation``, ``shoulder_protraction``,
 ``shoulder_abduction`` (voluntary, rad; any of them, or 1 to 3 channels taken in that order:
-:meth:`robot.shoulder.ShoulderMap.for_channels`). A map ``NAME=CHANNEL`` gives the data's CHANNEL the
+:meth:`sim.task.eating.Eating.shoulder_map`). A map ``NAME=CHANNEL`` gives the data's CHANNEL the
 name NAME (:meth:`learning.data.Demonstrations.renamed`). ``train``, ``sim`` and ``inspect`` take it as
 ``--map``; ``train`` records it in the bundle (``config["channel_map"]``) and ``sim`` applies it again.
 
@@ -21,7 +21,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
-from robot.shoulder import SHOULDER_CHANNELS, SHOULDER_TO_PLATE, ShoulderMap
+from sim.task import EATING
 from sim.wearer import WearerConfig
 
 __all__ = ["KNIFE", "FORK_POSITION", "FORK_ANGLES", "apply_map", "bundle_map", "bundle_wearer", "parse_map",
@@ -94,9 +94,9 @@ def simulator_gaps(obs_names: Sequence[str], act_names: Sequence[str], vol_names
     elif fork and angles and "CHANNEL" not in _flags(FORK_ANGLES, obs):
         gaps[-1] += f" (and --map {_flags(FORK_ANGLES, obs)} its angles [rad, ZYX])"
     try:
-        ShoulderMap.for_channels(vol)
+        EATING.shoulder_map(vol)
     except ValueError as exc:
-        gaps.append(f"{exc}: --map {SHOULDER_CHANNELS[0]}=CHANNEL ... names them")
+        gaps.append(f"{exc}: --map {EATING.shoulder_channels[0]}=CHANNEL ... names them")
     if rate_hz is not None:
         from sim.scene import SceneConfig  # imports MuJoCo
 
@@ -114,10 +114,10 @@ def simulator_line(obs_names: Sequence[str], act_names: Sequence[str], vol_names
     gaps = simulator_gaps(obs_names, act_names, vol_names, rate_hz)
     if gaps:
         return "no: " + "; ".join(gaps)
-    m = ShoulderMap.for_channels(vol_names)
-    roles = {j: r for j in range(m.n_channels) for r in range(3)
-             if np.array_equal(m.matrix[:, j], SHOULDER_TO_PLATE[:, r])}
-    used = [n if n == SHOULDER_CHANNELS[roles[j]] else f"{n} as {SHOULDER_CHANNELS[roles[j]]}"
+    m, channels = EATING.shoulder_map(vol_names), EATING.shoulder_channels
+    roles = {j: r for j in range(m.n_channels) for r in range(len(channels))
+             if np.array_equal(m.matrix[:, j], EATING.shoulder_to_plate[:, r])}
+    used = [n if n == channels[roles[j]] else f"{n} as {channels[roles[j]]}"
             for j, n in enumerate(vol_names) if j in roles]
     shoulder = f"shoulder {', '.join(used)}" if vol_names else "no shoulder channels (a simulated 3-angle shoulder)"
     fork = "pose" if all(c in obs_names for c in FORK_ANGLES) else "position (a level fork)"
@@ -127,10 +127,10 @@ def simulator_line(obs_names: Sequence[str], act_names: Sequence[str], vol_names
 def bundle_wearer(bundle: Any, wearer: Any) -> Any:
     """The wearer commanding through the bundle's shoulder channels: a :class:`WearerConfig` ``wearer``
     (None: ``WearerConfig()``) with its shoulder map's gain and dead zone on the bundle's ``vol_names``
-    (:meth:`robot.shoulder.ShoulderMap.for_channels`, the controller's map); ``wearer`` itself for the
+    (:meth:`sim.task.eating.Eating.shoulder_map`, the controller's map); ``wearer`` itself for the
     three angles or a wearer of another kind. Raises ValueError for channels no map reads."""
     wc = WearerConfig() if wearer is None else wearer
     if not isinstance(wc, WearerConfig):
         return wearer
-    m = ShoulderMap.for_channels(getattr(bundle, "vol_names", ()) or (), wc.shoulder.gain, wc.shoulder.deadband_rad)
+    m = EATING.shoulder_map(getattr(bundle, "vol_names", ()) or (), wc.shoulder.gain, wc.shoulder.deadband_rad)
     return wearer if np.array_equal(m.matrix, wc.shoulder.matrix) else replace(wc, shoulder=m)

@@ -71,8 +71,8 @@ class Scenario:
 
     def __init__(self, name: str, obs_names: Sequence[str], act_names: Sequence[str],
                  body: WearerBody | None = None, scene: SceneConfig | None = None) -> None:
-        from robot.wearer_body import WearerBody
         from sim.scene import SceneConfig
+        from sim.task import EATING
 
         if name not in SCENARIOS:
             raise ValueError(f"unknown scenario {name!r}; valid choices: {', '.join(SCENARIOS)}")
@@ -83,7 +83,7 @@ class Scenario:
         self.name = name
         self.fork_cols = [obs.index(c) for c in FORK_CHANNELS]
         self.tip_cols = [act.index(c) for c in TIP_CHANNELS]
-        self.body = body or WearerBody()
+        self.body = body or EATING.body
         sc = scene or SceneConfig()
         self.head_plate = np.asarray(self.body.head_center) - np.asarray(sc.plate_position)
 

@@ -2,12 +2,12 @@
 
 :mod:`~research.splice_bound` splices constant-authority runs per group of steps. Here the
 spliced knife must also saw: with b_{l,k} the stroke-band tip of run l and b*_k the intent's at cutting
-step k (:func:`sim.task_metrics.bandpass`), per group g
+step k (:func:`sim.task.metrics.bandpass`), per group g
 
     X_g(l) = Σ_{k∈g, cutting} b_{l,k}·b*_k,   S_g(l) = Σ_{k∈g, cutting} ‖b_{l,k}‖²,   Y = Σ_{cutting} ‖b*_k‖²,
 
 and the spliced stroke correlation ρ(a) = Σ_g X_g / √(Y·Σ_g S_g) must be at least c (the task's
-measure, :func:`sim.task_metrics.sawing_fidelity`, of the spliced band-passed signals: the filter's
+measure, :func:`sim.task.metrics.sawing_fidelity`, of the spliced band-passed signals: the filter's
 response to a switch is left out, as a splice leaves out the switch). Since √S = min_{t>0} (S/t + t)/2,
 
     ρ(a) ≥ c  ⟺  ∃ t > 0:  Σ_g w_g(l(g); t) ≥ c√Y·t/2,   w_g(l; t) = X_g(l) − c√Y·S_g(l)/(2t),
@@ -62,7 +62,8 @@ def stroke_terms(tip: np.ndarray, intent: np.ndarray, cutting: np.ndarray, dt: f
                  ) -> tuple[np.ndarray, np.ndarray, float]:
     """(b_k·b*_k (N,), ‖b_k‖² (N,), Y = Σ‖b*_k‖²) of one run's (N, d) tip and intent [m] every dt [s], zero
     outside ``cutting`` (N,): the terms of the module docstring, band-passed as the task measures them."""
-    from sim.task_metrics import STROKE_BAND_HZ, bandpass
+    from sim.task.eating import STROKE_BAND_HZ
+    from sim.task.metrics import bandpass
 
     tip, intent = np.asarray(tip, dtype=float), np.asarray(intent, dtype=float)
     mask = np.asarray(cutting, dtype=bool)

@@ -8,34 +8,25 @@ rate command (like a joystick), as in Song & Asada's voluntary channel:
 
 with ``dz`` a dead zone of half-width ``deadband_rad`` that is continuous at its
 edge (dz(θ) = sign(θ)·max(|θ| − δ, 0)), ``P`` (3, n) the fixed map from the n
-measured angles to the plate axes (elevation → z up, protraction → x away from the
-wearer, abduction → y), and ``g`` the per-user gain [m/s per rad]. The controller uses
+measured angles to the plate axes (the task's layout: ``sim.task.eating.SHOULDER_TO_PLATE``), and
+``g`` the per-user gain [m/s per rad]. The controller uses
 :meth:`ShoulderMap.tip_velocity`; a simulated wearer who wants a tip velocity uses
 the inverse :meth:`ShoulderMap.angles_for`.
 
 A sensor may measure 1, 2 or 3 of the angles (or more channels, of which only those
 named by a role command the knife): :meth:`ShoulderMap.for_channels` builds P from the
-channel names, one column per channel, the column of its role (:data:`SHOULDER_CHANNELS`)
-or zero. With fewer than three angles the wearer commands only the plate axes they map to.
+channel names, one column per channel, the column of its role in the task's layout or zero.
+With fewer than three angles the wearer commands only the plate axes they map to.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
-__all__ = ["SHOULDER_CHANNELS", "SHOULDER_TO_PLATE", "ShoulderMap"]
-
-#: the roles of the shoulder channels, in the column order of :data:`SHOULDER_TO_PLATE`
-SHOULDER_CHANNELS: tuple[str, ...] = ("shoulder_elevation", "shoulder_protraction", "shoulder_abduction")
-
-#: rows: plate x, y, z; columns: elevation, protraction, abduction.
-SHOULDER_TO_PLATE = np.array([[0.0, 1.0, 0.0],
-                              [0.0, 0.0, 1.0],
-                              [1.0, 0.0, 0.0]])
-SHOULDER_TO_PLATE.setflags(write=False)
+__all__ = ["ShoulderMap"]
 
 
 @dataclass(frozen=True)
@@ -43,15 +34,15 @@ class ShoulderMap:
     """Shoulder angles [rad] → tip velocity [m/s] (module docstring).
 
     Attributes:
-        gain: g [m/s per rad] (> 0).
-        deadband_rad: δ [rad] (≥ 0): angles within ±δ command nothing.
         matrix: P (3, n), plate axes × shoulder channels; read-only. Its non-zero columns are
             linearly independent (a zero column: a channel that commands nothing).
+        gain: g [m/s per rad] (> 0).
+        deadband_rad: δ [rad] (≥ 0): angles within ±δ command nothing.
     """
 
+    matrix: np.ndarray
     gain: float = 0.5
     deadband_rad: float = 0.01
-    matrix: np.ndarray = field(default_factory=lambda: SHOULDER_TO_PLATE)
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.gain) and self.gain > 0):
@@ -68,32 +59,37 @@ class ShoulderMap:
         object.__setattr__(self, "matrix", m)
 
     @classmethod
-    def for_channels(cls, names: Sequence[str], gain: float = 0.5, deadband_rad: float = 0.01) -> ShoulderMap:
-        """The map of a sensor whose channels are ``names`` (module docstring).
+    def for_channels(cls, names: Sequence[str], roles: Sequence[str], layout: np.ndarray, gain: float = 0.5,
+                     deadband_rad: float = 0.01) -> ShoulderMap:
+        """The map of a sensor whose channels are ``names`` (module docstring), in a task's layout:
+        ``roles`` name the columns of ``layout`` (3, len(roles)).
 
-        No names: the three angles of :data:`SHOULDER_CHANNELS`. Where some names are roles
-        (:data:`SHOULDER_CHANNELS`), those channels take their role's column of
-        :data:`SHOULDER_TO_PLATE` and the others a zero column; where none is, the 1 to 3 channels
-        take the roles in order (elevation, protraction, abduction). Raises ValueError for a
-        repeated name, or for more than 3 channels none of which is named by a role.
+        No names: the channels ``roles``, P = ``layout``. Where some names are roles, those channels
+        take their role's column of ``layout`` and the others a zero column; where none is, the channels
+        (at most len(roles)) take the roles in order. Raises ValueError for a repeated name, for more
+        channels than roles none of which is named by a role, or for a layout of another shape.
         """
+        roles = tuple(str(r) for r in roles)
+        layout = np.asarray(layout, dtype=float)
+        if layout.shape != (3, len(roles)):
+            raise ValueError(f"the shoulder layout has shape {layout.shape}, its roles {roles} need (3, {len(roles)})")
         names = [str(n) for n in names]
         if not names:
-            return cls(gain, deadband_rad)
+            return cls(layout, gain, deadband_rad)
         if len(set(names)) != len(names):
             raise ValueError(f"the shoulder channels {names} repeat a name")
-        roles = [n for n in names if n in SHOULDER_CHANNELS]
-        if not roles and len(names) > len(SHOULDER_CHANNELS):
+        named = [n for n in names if n in roles]
+        if not named and len(names) > len(roles):
             raise ValueError(f"{len(names)} shoulder channels {names} and none named by its role: the shoulder map "
-                             f"takes at most 3 by position; name those that command the knife "
-                             f"({', '.join(SHOULDER_CHANNELS)})")
+                             f"takes at most {len(roles)} by position; name those that command the knife "
+                             f"({', '.join(roles)})")
         m = np.zeros((3, len(names)))
         for j, name in enumerate(names):
-            if not roles:
-                m[:, j] = SHOULDER_TO_PLATE[:, j]
-            elif name in SHOULDER_CHANNELS:
-                m[:, j] = SHOULDER_TO_PLATE[:, SHOULDER_CHANNELS.index(name)]
-        return cls(gain, deadband_rad, m)
+            if not named:
+                m[:, j] = layout[:, j]
+            elif name in roles:
+                m[:, j] = layout[:, roles.index(name)]
+        return cls(m, gain, deadband_rad)
 
     @property
     def n_channels(self) -> int:

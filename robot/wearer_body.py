@@ -13,19 +13,9 @@ SuperLimb is worn on it), the *plate* frame is the data's frame; ``T_plate_torso
 * **head** (with the face) — a sphere fixed to the torso;
 * **torso** — a capsule fixed to the torso.
 
-Defaults (sizes [m] are the body part's own, the controller's margin comes on top):
-hand radius 0.045 (a 4.5 cm sphere; a fist's half-breadth, hand breadth
-≈ 0.09 m in adult anthropometry, Winter, *Biomechanics and Motor Control of Human
-Movement*, 4th ed., table 4.1 proportions for a 1.75 m adult); forearm 0.25 m long
-(0.146·H for H = 1.75 m, Winter), radius 0.04; head radius 0.10 and trunk radius 0.14,
-as the scene draws them. Speed caps of the knife toward a body part near it: 0.15 m/s
-(hand, forearm, torso) and 0.06 m/s (head and face): the figures a robot-assisted
-feeding system uses away from and near the mouth (ADA, Nanavati
-et al., "An Adaptable, Safe, and Portable Robot-Assisted Feeding System", HRI 2024,
-arXiv:2403.04134). A lost fork marker gives the hand and forearm an uncertainty of the
-hand's top speed times the marker's age (:class:`robot.keepout.Zone`): 2.0 m/s, the approach
-speed of a reaching hand and arm that ISO 13855 assumes for safety distances (its whole-body
-figure is 1.6 m/s).
+The sizes, anchors and speed caps are the task's (:class:`WearerBody` has no defaults; the
+task shipped gives them, ``sim.task.eating.BODY``). A lost fork marker gives the hand and forearm an
+uncertainty of the hand's top speed times the marker's age (:class:`robot.keepout.Zone`).
 """
 
 from __future__ import annotations
@@ -53,22 +43,22 @@ class WearerBody:
     hand_offset: the hand's centre in the fork frame (the handle's upper end);
     elbow: the elbow in the torso frame; head_center, torso_a, torso_b: torso frame;
     hand_top_speed [m/s]: growth rate of the hand and forearm zones while the fork
-    marker is lost (ISO 13855's 2.0 m/s hand and arm approach speed).
+    marker is lost.
     """
 
-    hand_offset: Vec3 = (-0.04, 0.07, 0.13)
-    hand_radius: float = 0.045
-    elbow: Vec3 = (0.10, 0.22, 0.28)
-    forearm_length: float = 0.25
-    forearm_radius: float = 0.04
-    head_center: Vec3 = (-0.03, 0.0, 0.80)
-    head_radius: float = 0.10
-    torso_a: Vec3 = (-0.05, 0.0, 0.08)
-    torso_b: Vec3 = (-0.05, 0.0, 0.55)
-    torso_radius: float = 0.14
-    hand_speed_cap: float = 0.15
-    head_speed_cap: float = 0.06
-    hand_top_speed: float = 2.0
+    hand_offset: Vec3
+    hand_radius: float
+    elbow: Vec3
+    forearm_length: float
+    forearm_radius: float
+    head_center: Vec3
+    head_radius: float
+    torso_a: Vec3
+    torso_b: Vec3
+    torso_radius: float
+    hand_speed_cap: float
+    head_speed_cap: float
+    hand_top_speed: float
 
     def __post_init__(self) -> None:
         for name in ("hand_radius", "forearm_length", "forearm_radius", "head_radius", "torso_radius",

@@ -12,7 +12,8 @@
   corrections); :mod:`sim.wearer_presets` — its presets from the literature (unimpaired, mild and
   severe hemiparesis), their numbers in :mod:`sim.wearer_preset_values`.
 - :mod:`sim.closed_loop` — ``run_episode``; :mod:`sim.episode` — its record and run file;
-  :mod:`sim.metrics` — episode metrics; :mod:`sim.task_metrics` — lag, sawing and the share per mode;
+  :mod:`sim.metrics` — episode metrics; :mod:`sim.task` — the task (eating): its modes, sawing, body zones,
+  shoulder layout and figures;
   :mod:`sim.keepout_metrics` — how close the knife came to the wearer's body;
   :mod:`sim.run_mcap` — a run as MCAP for Foxglove.
 - :mod:`sim.render` — offscreen video; :mod:`sim.offscreen_gl` — the OpenGL back-end, chosen on import.

@@ -46,6 +46,7 @@ from learning.data import Trial
 from sim.episode import Episode
 from sim.scene import EatingScene, SceneConfig
 from sim.servo import JointServo, ServoConfig
+from sim.task import EATING
 from sim.wearer_presets import DEFAULT_WEARER
 from sim.wearer_protocol import Wearer, WearerFactory, make_wearer
 
@@ -178,7 +179,6 @@ class _Loop:
 
     def caption(self, k: int) -> Any:
         """What the video shows on control step ``k``'s frame: time, who leads (α), the demonstration's task mode."""
-        from sim.demonstrator import MODE_COLOURS, MODE_NAMES
         from sim.render import Caption
 
         a = self.alpha[k]
@@ -188,8 +188,9 @@ class _Loop:
         label = int(self.trial.mode[k]) if self.trial.mode is not None and k < len(self.trial.mode) else -1
         if label < 0:
             return Caption(parts)
-        name = MODE_NAMES[label] if label < len(MODE_NAMES) else f"mode {label}"
-        return Caption(parts + [name], MODE_COLOURS.get(name))
+        names = EATING.mode_names
+        name = names[label] if label < len(names) else f"mode {label}"
+        return Caption(parts + [name], EATING.mode_colours.get(name))
 
     def _log_command(self, k: int, cmd: Any) -> None:
         self.alpha[k], self.beta[k] = _scalar(getattr(cmd, "alpha", np.nan)), _scalar(getattr(cmd, "beta", np.nan))

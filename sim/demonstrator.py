@@ -8,7 +8,8 @@ the analysis has something real to find:
 * action ``u`` (9): the knife's pose and force, same layout;
 * voluntary channel (3): shoulder elevation, protraction and abduction [rad] of
   the wearer's affected arm, the signal a wearer would use to command the knife;
-* four task modes with semi-Markov transitions: ``cutting`` (fork holds the food
+* the four modes of the eating task (:data:`sim.task.eating.MODE_NAMES`, in their label order) with
+  semi-Markov transitions: ``cutting`` (fork holds the food
   still and presses down while the knife saws back and forth: not predictable
   from the fork), ``repositioning`` (the fork moves to the next piece, the knife
   escorts it), ``collecting`` (the fork scoops, the knife pushes the piece on),
@@ -48,12 +49,11 @@ import numpy as np
 from scipy import signal
 
 from learning.data import Demonstrations, Trial
+from sim.task.eating import MODE_NAMES, SHOULDER_CHANNELS
 
 __all__ = [
     "DEFAULT_MINUTES",
     "DEFAULT_SUBJECTS",
-    "MODE_COLOURS",
-    "MODE_NAMES",
     "OBS_NAMES",
     "ACT_NAMES",
     "VOL_NAMES",
@@ -63,15 +63,13 @@ __all__ = [
     "generate_trial",
 ]
 
-MODE_NAMES: tuple[str, ...] = ("cutting", "repositioning", "collecting", "removing")
-#: one colour per task mode, in every plot and the video (mpcshare.reports.style reads it from here)
-MODE_COLOURS: dict[str, str] = {"cutting": "#C44E52", "repositioning": "#4C72B0", "collecting": "#55A868",
-                                "removing": "#DD8452"}
-CUTTING, REPOSITIONING, COLLECTING, REMOVING = range(4)
+#: the labels of the modes (the rows of the tables below)
+CUTTING, REPOSITIONING, COLLECTING, REMOVING = (MODE_NAMES.index(m) for m in
+                                                ("cutting", "repositioning", "collecting", "removing"))
 _POSE_FORCE = ("x", "y", "z", "roll", "pitch", "yaw", "fx", "fy", "fz")
 OBS_NAMES: tuple[str, ...] = tuple(f"fork_{c}" for c in _POSE_FORCE)
 ACT_NAMES: tuple[str, ...] = tuple(f"knife_{c}" for c in _POSE_FORCE)
-VOL_NAMES: tuple[str, ...] = ("shoulder_elevation", "shoulder_protraction", "shoulder_abduction")
+VOL_NAMES: tuple[str, ...] = SHOULDER_CHANNELS
 #: the default data set's size: subjects, and minutes per subject (``mpcshare generate`` and ``demo`` read them)
 DEFAULT_SUBJECTS: int = 3
 DEFAULT_MINUTES: float = 10.0
@@ -357,7 +355,7 @@ def generate_demonstrations(n_subjects: int = DEFAULT_SUBJECTS, minutes: float =
 
     Returns:
         Demonstrations at ``config.rate_hz`` with ground-truth ``mode`` labels
-        (indices into :data:`MODE_NAMES`) and the voluntary channel.
+        (indices into :data:`sim.task.eating.MODE_NAMES`) and the voluntary channel.
     """
     config = config or GeneratorConfig()
     if n_subjects < 1:

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from learning.atomic import atomic_open
-from robot.shoulder import SHOULDER_CHANNELS, SHOULDER_TO_PLATE
+from sim.task import EATING
 
 __all__ = ["CONTROL_KEYS", "OPTIONAL_KEYS", "PHYSICS_KEYS", "Episode", "run_file_bytes_estimate"]
 
@@ -80,15 +80,17 @@ class Episode:
     @property
     def shoulder_names(self) -> list[str]:
         """The names of the ``voluntary`` columns: each column's role in the wearer's shoulder map
-        (``info["shoulder_matrix"]``; absent: the three of ``robot.shoulder.SHOULDER_CHANNELS``),
+        (``info["shoulder_matrix"]``; absent: the three of the task's
+        :data:`sim.task.eating.SHOULDER_CHANNELS`),
         ``shoulder_<j>`` for a column of no role."""
         matrix = self.info.get("shoulder_matrix")
         if not matrix:
-            return list(SHOULDER_CHANNELS)
+            return list(EATING.shoulder_channels)
         names = []
         for j, col in enumerate(np.array(json.loads(matrix), dtype=float).T):
-            role = [r for r in range(len(SHOULDER_CHANNELS)) if np.array_equal(col, SHOULDER_TO_PLATE[:, r])]
-            names.append(SHOULDER_CHANNELS[role[0]] if role else f"shoulder_{j}")
+            roles = EATING.shoulder_channels
+            role = [r for r in range(len(roles)) if np.array_equal(col, EATING.shoulder_to_plate[:, r])]
+            names.append(roles[role[0]] if role else f"shoulder_{j}")
         return names
 
     def save(self, path: str | Path) -> Path:

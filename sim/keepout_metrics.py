@@ -31,6 +31,7 @@ import numpy as np
 from robot.keepout import segment_zone_clearances
 from robot.wearer_body import BODY_PARTS, WearerBody, body_zone_axes
 from sim.episode import Episode
+from sim.task import EATING
 
 __all__ = ["KEEPOUT_KEYS", "episode_keepout_metrics"]
 
@@ -43,7 +44,7 @@ DRIVEN_SPEED = 0.05  # [m/s] inside and moving toward the zone faster than this 
 def _body(info: dict[str, Any]) -> WearerBody:
     raw = info.get("body_zones")
     if not raw:
-        return WearerBody()
+        return EATING.body
     fields = json.loads(str(raw))
     fields.pop("blade_length", None)
     return WearerBody(**{k: tuple(v) if isinstance(v, list) else v for k, v in fields.items()})

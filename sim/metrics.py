@@ -31,8 +31,9 @@ from typing import Any
 
 import numpy as np
 
-from robot.shoulder import SHOULDER_TO_PLATE, ShoulderMap
+from robot.shoulder import ShoulderMap
 from sim.episode import Episode
+from sim.task import EATING
 
 __all__ = ["METRIC_KEYS", "conflict_mask", "episode_metrics"]
 
@@ -45,7 +46,7 @@ def conflict_mask(episode: Episode, speed_deadband: float = 0.01) -> np.ndarray:
     matrix = episode.info.get("shoulder_matrix")
     shoulder = ShoulderMap(gain=float(episode.info.get("shoulder_gain", 0.5)),
                            deadband_rad=float(episode.info.get("shoulder_deadband_rad", 0.01)),
-                           matrix=SHOULDER_TO_PLATE if not matrix else np.array(json.loads(matrix), dtype=float))
+                           matrix=EATING.shoulder_to_plate if not matrix else np.array(json.loads(matrix), dtype=float))
     n = episode.t.size
     out = np.zeros(n, dtype=bool)
     if n < 2:

@@ -42,9 +42,9 @@ from scipy.spatial.transform import Rotation
 
 from learning.atomic import atomic_open
 from learning.data import Trial
-from robot.shoulder import SHOULDER_CHANNELS
 
 from .closed_loop import FORK_CHANNELS, Episode, fork_pose_rows
+from .task import EATING
 
 __all__ = ["JOINT_NAMES", "SCHEMAS", "TOPICS", "fork_poses", "mcap_bytes_estimate", "status_log", "step_messages",
            "write_run_mcap"]
@@ -55,7 +55,7 @@ MCAP_BYTES_PER_CONTROL_STEP = 390
 MCAP_BYTES_PER_JOINT_STATE = 125
 
 JOINT_NAMES: tuple[str, ...] = ("joint_1", "joint_2", "joint_3")
-SHOULDER_NAMES: tuple[str, ...] = SHOULDER_CHANNELS
+SHOULDER_NAMES: tuple[str, ...] = EATING.shoulder_channels
 PLATE_FRAME = "plate"
 
 

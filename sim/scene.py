@@ -45,6 +45,7 @@ from robot.description import RobotDescription
 from robot.keepout import BLADE_LENGTH
 from robot.superlimb import rpy_to_matrix, superlimb_description
 from robot.wearer_body import WearerBody, body_zones
+from sim.task import EATING
 
 __all__ = ["EatingScene", "SceneConfig", "build_scene_xml", "pose_matrix"]
 
@@ -104,7 +105,7 @@ class SceneConfig:
     posture_pitch_rad: float = 0.015
     timestep: float = 0.001
     control_period: float = 0.01
-    body: WearerBody = field(default_factory=WearerBody)
+    body: WearerBody = field(default_factory=lambda: EATING.body)
     blade_length: float = BLADE_LENGTH
 
     def __post_init__(self) -> None:

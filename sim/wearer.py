@@ -63,8 +63,9 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from robot.shoulder import SHOULDER_TO_PLATE, ShoulderMap
+from robot.shoulder import ShoulderMap
 from sim.errors import WearerConfigError
+from sim.task import EATING
 from sim.wearer_preset_values import PRESET_VALUES
 
 __all__ = ["SimulatedWearer", "WearerConfig", "rhythmic_plan", "smooth_intent", "wearer_preset_name"]
@@ -100,7 +101,7 @@ class WearerConfig:
     noise_rad: float = 0.003
     noise_signal_dependent: float = 0.15
     intent_cutoff_hz: float = 5.0
-    shoulder: ShoulderMap = field(default_factory=ShoulderMap)
+    shoulder: ShoulderMap = field(default_factory=EATING.shoulder_map)
 
     def __post_init__(self) -> None:
         for name in ("reaction_delay_s", "deadband_m", "feedback_gain_per_s", "noise_rad",
@@ -206,7 +207,7 @@ class SimulatedWearer:
         c = self.config
         out = {"shoulder_gain": c.shoulder.gain, "shoulder_deadband_rad": c.shoulder.deadband_rad,
                "wearer_deadband_m": c.deadband_m, "wearer_preset": wearer_preset_name(c)}
-        if not np.array_equal(c.shoulder.matrix, SHOULDER_TO_PLATE):
+        if not np.array_equal(c.shoulder.matrix, EATING.shoulder_to_plate):
             out["shoulder_matrix"] = json.dumps(c.shoulder.matrix.tolist())
         return out
 

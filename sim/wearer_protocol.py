@@ -20,7 +20,7 @@ The loop reads, per episode:
 - ``info()`` → JSON-able settings stored in the episode's ``info``; it must hold
   ``shoulder_gain`` and ``shoulder_deadband_rad`` (the shoulder map the wearer commands
   through: :func:`sim.metrics.conflict_mask` maps θ back to a tip velocity with it), and
-  ``shoulder_matrix`` (its P, JSON) where that is not ``robot.shoulder.SHOULDER_TO_PLATE``.
+  ``shoulder_matrix`` (its P, JSON) where that is not the task's ``sim.task.eating.SHOULDER_TO_PLATE``.
 
 :class:`sim.wearer.SimulatedWearer` is the project's wearer; its settings
 (:class:`sim.wearer.WearerConfig`, the presets in :mod:`sim.wearer_presets`) are

@@ -31,7 +31,7 @@ structure, not only in parameters (:func:`draw_world`, one :class:`WorldSpec` pe
 * **noise** (fork 0.2–1.5 mm, knife 0.3–2 mm), the hand's low-pass on the knife (0.02–0.06 s;
   the stroke is scaled by its inverse gain at the stroke's frequency, so the drawn half-stroke is
   what the knife makes),
-  the shoulder's gains (1.5–3 rad per m/s, the project's :data:`robot.shoulder.SHOULDER_TO_PLATE`
+  the shoulder's gains (1.5–3 rad per m/s, the task's :data:`sim.task.eating.SHOULDER_TO_PLATE`
   layout), and 1–3 subjects whose pace scales dwell times and stroke frequency (±15 %).
 
 The data have the project's channels (:data:`sim.demonstrator.OBS_NAMES`, ``ACT_NAMES``,
@@ -49,6 +49,7 @@ from scipy import signal
 
 from learning.data import Demonstrations, Trial
 from sim.demonstrator import ACT_NAMES, OBS_NAMES, VOL_NAMES
+from sim.task.eating import STROKE_MODE
 
 __all__ = ["KINDS", "WorldSpec", "draw_world", "world_demonstrations", "world_trial"]
 
@@ -94,7 +95,7 @@ class WorldSpec:
     @property
     def mode_names(self) -> tuple[str, ...]:
         """``cutting`` for the stroke mode (label 0), ``<kind><label>`` for the others."""
-        return tuple("cutting" if k == "stroke" else f"{k}{j}" for j, k in enumerate(self.kinds))
+        return tuple(STROKE_MODE if k == "stroke" else f"{k}{j}" for j, k in enumerate(self.kinds))
 
     def to_dict(self) -> dict:
         """JSON-able description (arrays as lists)."""

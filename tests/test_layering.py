@@ -116,6 +116,14 @@ def test_no_private_module_or_name_of_another_package(folder):
     assert not bad, "\n".join(bad)
 
 
+def test_the_task_imports_nothing_else_of_sim():
+    """``sim/task/`` (what is specific to the task) imports ``learning`` and ``robot``, of ``sim`` only itself."""
+    bad = [f"{p.relative_to(ROOT)}:{line} imports {name} (sim/task/ imports of sim only sim.task)"
+           for p in _sources("sim/task") for line, name in _imports(p)
+           if name.split(".")[0] == "sim" and name != "sim.task" and not name.startswith("sim.task.")]
+    assert not bad, "\n".join(bad)
+
+
 def test_the_checker_sees_a_violation(tmp_path, monkeypatch):
     """The rules above can fail: a planted upward import is found."""
     planted = ROOT / "learning" / "_planted_for_test.py"

@@ -53,7 +53,8 @@ from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
-from sim.task_metrics import saws as task_saws
+from sim.task.eating import STROKE_MODE
+from sim.task.eating import saws as task_saws
 from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
@@ -161,7 +162,7 @@ def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float
 
 
 def saws(row: dict[str, Any]) -> bool:
-    """Whether the knife sawed while cutting in ``row``: the task's criterion (:func:`sim.task_metrics.saws`)."""
+    """Whether the knife sawed while cutting in ``row``: the task's criterion (:func:`sim.task.eating.saws`)."""
     return task_saws(row.get("saw_correlation"), row.get("saw_amplitude_ratio"))
 
 
@@ -177,13 +178,13 @@ def _n_modes(bundle: Any) -> int:
 def _cutting(bundle_episodes: list[Any], demos: Demonstrations, trials: Sequence[int],
              mode_names: Sequence[str] | None, n_modes: int) -> list[int]:
     """The controller's modes that carry the labelled cutting (none without labels or a ``cutting`` name)."""
-    if not mode_names or "cutting" not in mode_names:
+    if not mode_names or STROKE_MODE not in mode_names:
         return []
     by_id = {tr.trial_id: tr for tr in demos.trials}
     labels = [by_id[int(t)].mode for t in trials]
     if any(lab is None for lab in labels):
         return []
-    return cutting_modes(bundle_episodes, labels, list(mode_names).index("cutting"), n_modes)
+    return cutting_modes(bundle_episodes, labels, list(mode_names).index(STROKE_MODE), n_modes)
 
 
 def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],

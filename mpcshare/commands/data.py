@@ -12,7 +12,8 @@ from typing import Sequence
 from learning.data import Demonstrations, save, saved_bytes_estimate
 from mpcshare.channel_map import apply_map, parse_map, simulator_gaps, simulator_line
 from mpcshare.commands.base import Command, CommandError, human_bytes, load_or_fail, positive_float, positive_int
-from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
+from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, GeneratorConfig, generate_demonstrations
+from sim.task import EATING
 from sim.world_family import world_demonstrations
 
 __all__ = ["INSPECT_COMMAND", "GENERATE_COMMAND", "format_summary", "DATA_HELP"]
@@ -94,7 +95,7 @@ def _generate_args(p: argparse.ArgumentParser) -> None:
 
 def _generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    names: Sequence[str] = MODE_NAMES
+    names: Sequence[str] = EATING.mode_names
     if args.world is not None:
         if args.single_regime:
             raise CommandError("--single-regime is a setting of the project's generator, not of a --world")

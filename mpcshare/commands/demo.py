@@ -37,7 +37,8 @@ from mpcshare.commands.data import format_summary
 from mpcshare.commands.sim import add_wearer_argument, cutting_steps
 from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, EpisodePool, default_workers
 from mpcshare.training.config import RULE_DURATION_S, TrainConfig
-from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, MODE_NAMES, GeneratorConfig, generate_demonstrations
+from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, GeneratorConfig, generate_demonstrations
+from sim.task import EATING
 
 __all__ = ["DEMO_COMMAND"]
 
@@ -84,13 +85,13 @@ def _summarise(demos: Demonstrations, out: Path) -> tuple[dict, str]:
     from mpcshare.reports.analysis import plot_demonstrations
 
     summary = demos.summary()
-    summary["mode_names"] = list(MODE_NAMES)
+    summary["mode_names"] = list(EATING.mode_names)
     write_json(summary, out / "data_summary.json", non_finite="raise")
-    summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, MODE_NAMES)
+    summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, EATING.mode_names)
                   + "\n```\n\n![a trial](data_trial.png)\n")
     with atomic_open(out / "data_summary.md") as f:
         f.write(summary_md)
-    plot_demonstrations(demos, out / "data_trial.png", mode_names=MODE_NAMES)
+    plot_demonstrations(demos, out / "data_trial.png", mode_names=EATING.mode_names)
     return summary, summary_md
 
 
@@ -114,7 +115,7 @@ def _start_choice(bundle: Any, demos: Demonstrations, wearer_name: str, rule_dur
 
     lines: list[str] = []
     choose = partial(choose_for_bundle, bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,
-                     mode_names=MODE_NAMES, pool=pool)
+                     mode_names=EATING.mode_names, pool=pool)
     if pool.workers > 1:
         print(f"choosing the hand-over rule in the closed loop on held-out trials ({pool.workers} workers, "
               "beside the training and the K sweep)", flush=True)
@@ -231,7 +232,7 @@ def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, o
                      seed=args.seed, wearer=wearer)
     clip = render() if pool.workers > 1 and not args.no_video else None
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
-                              mode_names=MODE_NAMES, wearer=wearer, pool=pool)
+                              mode_names=EATING.mode_names, wearer=wearer, pool=pool)
     if not args.no_video:
         video, message = (clip or render()).result()
         comp.video = None if video is None else str(Path(video).relative_to(sim_out))
@@ -263,7 +264,7 @@ def _demo(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     _stage(3, "predictability analysis")
-    analysis = run_analysis(demos, args, prepare_output_folder(out / "analysis"), mode_names=MODE_NAMES)
+    analysis = run_analysis(demos, args, prepare_output_folder(out / "analysis"), mode_names=EATING.mode_names)
     print_headline(analysis)
     lap("analysis", t0)
 

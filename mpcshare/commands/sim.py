@@ -38,7 +38,7 @@ from mpcshare.commands.sim_serve import add_serve_arguments, check_serve_argumen
 from mpcshare.conflicts import SCENARIOS
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.run_table import RUN_NAMES
-from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
+from sim.task import EATING  # the mode labels of the data format (docs/design.md)
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
@@ -147,7 +147,7 @@ def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list
 def cutting_steps(demos: Demonstrations, trial_id: int) -> Any:
     """Where trial ``trial_id``'s demonstration cuts (bool per sample), or None without mode labels."""
     trial = next(tr for tr in demos.trials if tr.trial_id == trial_id)
-    return None if trial.mode is None else trial.mode == MODE_NAMES.index("cutting")
+    return None if trial.mode is None else trial.mode == EATING.mode_names.index(EATING.stroke_mode)
 
 
 def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
@@ -187,7 +187,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
         print(f"scenario: {scenario_name or 'none'}; keep-out {guard}")
     announce_output_size(runs, demos, trial_ids, args, out, scene)
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
-                              seed=args.sim_seed, beta=args.beta, mode_names=MODE_NAMES,
+                              seed=args.sim_seed, beta=args.beta, mode_names=EATING.mode_names,
                               mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene,
                               mcap_rate_hz=getattr(args, "mcap_rate", None), scenario=scenario,
                               controller_options=options, make_controller=make_controller)

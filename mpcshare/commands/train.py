@@ -198,10 +198,10 @@ def _calibrate(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, st
         bundle.metrics["rule_choice_skipped"] = why
         return None, why
     from mpcshare.calibration.rule_choice import choose_for_bundle
-    from sim.demonstrator import MODE_NAMES  # the mode labels of the data format (docs/design.md)
+    from sim.task import EATING  # the mode labels of the data format (docs/design.md)
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
-                             wearer_name=args.rule_wearer, mode_names=MODE_NAMES,
+                             wearer_name=args.rule_wearer, mode_names=EATING.mode_names,
                              log=None if args.quiet else print), None
 
 

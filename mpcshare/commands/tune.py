@@ -23,7 +23,7 @@ from mpcshare.commands.data import DATA_HELP
 from mpcshare.commands.sim import add_wearer_argument
 from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, default_workers
 from mpcshare.run_table import RANDOM_DRAWS, TUNABLE
-from sim.demonstrator import MODE_NAMES
+from sim.task import EATING
 
 __all__ = ["TUNE_COMMAND"]
 
@@ -138,7 +138,7 @@ def _run(args: argparse.Namespace) -> int:
                        betas=sorted(set(args.betas)), strategies=list(dict.fromkeys(args.strategies)),
                        n_trials=n_trials, seeds=seeds, duration_s=args.duration, wearer=args.wearer,
                        config=config, backend=args.backend, workers=args.workers,
-                       address=args.address, progress=not args.quiet, mode_names=MODE_NAMES, draws=args.draws,
+                       address=args.address, progress=not args.quiet, mode_names=EATING.mode_names, draws=args.draws,
                        oracle=args.oracle_preview)
     except RayMissing as exc:
         return _usage_error(str(exc))

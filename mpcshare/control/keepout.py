@@ -33,6 +33,7 @@ from robot.floor import FloorLimit
 from robot.keepout import BLADE_LENGTH, KeepOutConfig, KeepOutLimit, retreat
 from robot.qp import QPController, QPResult, QPStatus
 from robot.wearer_body import BODY_PARTS, WearerBody, body_zones
+from sim.task import EATING
 
 __all__ = ["FORK_POSE_CHANNELS", "KeepOut", "KeepOutSettings", "make_keepout_mpc", "make_keepout_qp"]
 
@@ -47,7 +48,7 @@ class KeepOutSettings:
     was driven in; ``mpc_zones``: the MPC (when on) also holds the zones
     over its horizon, moving with the hand's forecast (:class:`robot.mpc.keepout_mpc.KeepOutTipMPC`)."""
 
-    body: WearerBody = field(default_factory=WearerBody)
+    body: WearerBody = field(default_factory=lambda: EATING.body)
     limit: KeepOutConfig = field(default_factory=KeepOutConfig)
     heel_offset: tuple[float, float, float] = (-BLADE_LENGTH, 0.0, 0.0)
     parts: tuple[str, ...] = BODY_PARTS

@@ -17,6 +17,7 @@ from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import decimation_factor
 from mpcshare.errors import ControllerSetupError
 from robot.shoulder import ShoulderMap
+from sim.task import EATING
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -104,8 +105,8 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
 
 def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> ShoulderMap:
     """The shoulder map of the bundle's voluntary channels (``vol_names``): ``shoulder`` when given (its
-    channels must match), else :meth:`robot.shoulder.ShoulderMap.for_channels` of the names (none: the
-    three angles). Raises ControllerSetupError naming the channels."""
+    channels must match), else the task's map of the names (:meth:`sim.task.eating.Eating.shoulder_map`;
+    none: the three angles). Raises ControllerSetupError naming the channels."""
     vol = [str(n) for n in (getattr(bundle, "vol_names", ()) or ())]
     if shoulder is not None:
         if vol and shoulder.n_channels != len(vol):
@@ -113,7 +114,7 @@ def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> Sh
                                        f"vol_names {vol} are {len(vol)}")
         return shoulder
     try:
-        return ShoulderMap.for_channels(vol)
+        return EATING.shoulder_map(vol)
     except ValueError as exc:
         raise ControllerSetupError(f"the bundle's vol_names: {exc}") from None
 

@@ -3,7 +3,7 @@
 What :func:`mpcshare.evaluation.runs.compare_strategies`, the rule choice and ``tune`` run per episode:
 the controller built from the bundle (:meth:`SharedController.from_bundle` by default), the trial
 simulated by :func:`sim.closed_loop.run_episode`, and the metrics of :mod:`sim.metrics`,
-:mod:`sim.task_metrics` and :mod:`sim.keepout_metrics`.
+the task's (:meth:`sim.task.Task.episode_metrics`) and :mod:`sim.keepout_metrics`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from sim.closed_loop import run_episode
 from sim.keepout_metrics import episode_keepout_metrics
 from sim.metrics import episode_metrics
 from sim.scene import SceneConfig
-from sim.task_metrics import episode_task_metrics
+from sim.task import EATING, Task
 from sim.wearer import WearerConfig
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
@@ -57,9 +57,10 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
                      *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
                      mode_names: Sequence[str] | None,
                      make_controller: Callable[..., Any] | None = None,
-                     scene: SceneConfig | None = None, scenario: Any = None) -> tuple[Any, dict[str, Any]]:
+                     scene: SceneConfig | None = None, scenario: Any = None, task: Task = EATING
+                     ) -> tuple[Any, dict[str, Any]]:
     """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
-    its metrics: :func:`sim.metrics.episode_metrics`, the task figures of :mod:`sim.task_metrics`
+    its metrics: :func:`sim.metrics.episode_metrics`, the figures of ``task`` (:meth:`sim.task.Task.episode_metrics`)
     and the keep-out figures of :mod:`sim.keepout_metrics`. ``scene``: the world and its arm (default
     ``SceneConfig()``, the SuperLimb); the controller is given the scene's arm (``robot=``).
     ``scenario``: a :class:`mpcshare.conflicts.Scenario` that transforms the trial (and the bundle's
@@ -84,7 +85,7 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
                               fork_truth=fork_truth)
     m = episode_metrics(episode)
     true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
-    m.update(episode_task_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
+    m.update(task.episode_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),
                                   true_mode, tuple(mode_names) if mode_names else None, alpha=episode.alpha))
     m.update(episode_keepout_metrics(episode))
     return episode, m

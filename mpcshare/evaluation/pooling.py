@@ -1,6 +1,6 @@
 """Pooling per-episode metrics over the trials of a closed-loop run (:mod:`mpcshare.evaluation`):
 the tracking and effort figures of :func:`sim.metrics.episode_metrics` (:func:`pool_metrics`), the task
-figures of :mod:`sim.task_metrics` (:func:`pool_task_metrics`) and the keep-out figures of
+figures of :mod:`sim.task.eating` (:func:`pool_task_metrics`) and the keep-out figures of
 :mod:`sim.keepout_metrics` (:func:`pool_keepout_metrics`)."""
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
 def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np.ndarray]) -> dict[str, Any]:
     """Pool the task figures: lag and RMS at it weighted by steps; the sawing amplitude and correlation
     weighted by cutting time; strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n);
-    the wearer's pick-ups (:func:`sim.task_metrics.pickup_error`) counted and timed in sum, their RMS
+    the wearer's pick-ups (:func:`sim.task.metrics.pickup_error`) counted and timed in sum, their RMS
     √(Σ s·rms² / Σ s) over their times s, their share of the squared error weighted by each episode's
     Σ‖e‖² = n·rms²."""
     n = np.array([len(s) for s in step_times], dtype=float)

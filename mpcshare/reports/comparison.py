@@ -18,7 +18,7 @@ from learning.atomic import atomic_open, write_json
 from mpcshare.evaluation import Comparison
 from mpcshare.reports.headline import headline_lines, lag_words, trials_words
 from mpcshare.reports.style import strategy_colour, strategy_ticks
-from sim.task_metrics import SAWING_CRITERION, saws
+from sim.task.eating import SAWING_CRITERION, saws
 
 __all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "plot_effort_error",
            "write_comparison"]
@@ -34,7 +34,7 @@ _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("step_p50_ms", "step p50 [ms]", 1.0, "{:.2f}"),
             ("step_p99_ms", "step p99 [ms]", 1.0, "{:.2f}"),
             ("realtime_factor", "× real time", 1.0, "{:.1f}"))
-#: the task's figures (sim.task_metrics): on time, and sawing while cutting
+#: the task's figures (sim.task.eating): on time, and sawing while cutting
 _TASK_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
                  ("line_ratio", "line ratio", 1.0, "{:.2f}"),
                  ("lag_s", "lag [ms]", 1e3, "{:.0f}"),

@@ -54,7 +54,8 @@ def plot_episode(episode: Any, path: str | Path, title: str = "", cutting: np.nd
     """Panels over time: tip x/y/z with intent and reference [m], α and β, shoulder angles [rad];
     then the sawing close-up (module docstring), taken inside the ``cutting`` steps (bool per
     control step) when given, so that a repositioning jump is not mistaken for a stroke."""
-    from sim.task_metrics import STROKE_BAND_HZ, bandpass
+    from sim.task.eating import STROKE_BAND_HZ
+    from sim.task.metrics import bandpass
 
     t = np.asarray(episode.t, dtype=float)
     fig = Figure(figsize=(11.5, 10), constrained_layout=True)

@@ -1,7 +1,7 @@
 """The four answers a person wants first, one line each with its figure and a word of verdict.
 
 1. **The task** — did the knife saw while cutting (the task's one criterion,
-   :data:`sim.task_metrics.SAWING_CRITERION`)? Where the bundle's hand-over rule was chosen
+   :data:`sim.task.eating.SAWING_CRITERION`)? Where the bundle's hand-over rule was chosen
    in the closed loop (``rule_choice``) and the choice's sawing verdict differs from this one,
    the line says why (the choice's trials and span against the evaluation's).
 2. **Sharing** — did the shared strategy track the wearer's intent better than the wearer
@@ -28,7 +28,7 @@ from typing import Any
 
 from mpcshare.control.strategies import by_role
 from mpcshare.line_ratio import add_line_ratios
-from sim.task_metrics import SAWING_CRITERION, saws
+from sim.task.eating import SAWING_CRITERION, saws
 
 __all__ = ["MIX_RUNS", "Headline", "better_mixes", "choice_note",
            "headline_lines", "headlines", "lag_words", "line_ratio", "shared_strategy", "trials_words"]

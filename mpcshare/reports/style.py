@@ -3,10 +3,10 @@ the data, strategy names a person can read (horizontal bars).
 
 One mapping in one place: a mode has the same colour in the data plot, the quotient plot, the
 trial plot of the closed loop and the video; a strategy the same colour in the comparison, the
-effort–error plot and ``tune``'s Pareto plot. Modes are coloured by *name* (the task modes of
-the data format, ``sim.demonstrator.MODE_NAMES``; the mapping lives beside them, in
-``sim.demonstrator.MODE_COLOURS``, so that the video in ``sim`` uses it too); a mode without a name (an HMM mode no true
-mode matches) gets a grey of its own.
+effort–error plot and ``tune``'s Pareto plot. Modes are coloured by *name*, from the
+``mode_colours`` of the :class:`sim.task.Task` (the task shipped: :data:`sim.task.eating.MODE_COLOURS`,
+which the video in ``sim`` draws with too); a mode without a colour (an HMM mode no true mode matches)
+gets a grey of its own.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ from __future__ import annotations
 from typing import Any, Sequence
 
 from mpcshare.run_table import RUN_COLORS
-from sim.demonstrator import MODE_COLOURS  # task mode name → colour; the video draws with the same
+from sim.task import EATING, Task
 
-__all__ = ["MODE_COLOURS", "number", "STRATEGY_COLOURS", "legend_outside", "mode_colour", "strategy_colour",
+__all__ = ["number", "STRATEGY_COLOURS", "legend_outside", "mode_colour", "strategy_colour",
            "strategy_ticks"]
 
 _UNNAMED = ("#8C8C8C", "#B0B0B0", "#6E6E6E", "#C8C8C8", "#5A5A5A", "#A0A0A0", "#7C7C7C", "#BEBEBE")
@@ -25,11 +25,11 @@ _UNNAMED = ("#8C8C8C", "#B0B0B0", "#6E6E6E", "#C8C8C8", "#5A5A5A", "#A0A0A0", "#
 STRATEGY_COLOURS: dict[str, str] = RUN_COLORS
 
 
-def mode_colour(label: int, names: Sequence[str] | None = None) -> str:
-    """The colour of mode ``label``: by its name in ``names`` (see :data:`MODE_COLOURS`), else a grey."""
-    k = int(label)
-    if names is not None and 0 <= k < len(names) and names[k] in MODE_COLOURS:
-        return MODE_COLOURS[names[k]]
+def mode_colour(label: int, names: Sequence[str] | None = None, task: Task = EATING) -> str:
+    """The colour of mode ``label``: by its name in ``names`` (``task.mode_colours``), else a grey."""
+    k, colours = int(label), task.mode_colours
+    if names is not None and 0 <= k < len(names) and names[k] in colours:
+        return colours[names[k]]
     return _UNNAMED[k % len(_UNNAMED)]
 
 

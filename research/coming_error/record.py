@@ -41,7 +41,7 @@ def world_data(world: str, quick: bool = True, extra_trials: int = 0) -> tuple[A
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
     from bench_task import make_data
 
-    from sim.demonstrator import MODE_NAMES
+    from sim.task.eating import MODE_NAMES
 
     return make_data(world), tuple(MODE_NAMES), []
 

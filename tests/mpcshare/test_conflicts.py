@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mpcshare.conflicts import SCENARIOS, SWEEP_SPEED, Scenario
-from robot.wearer_body import WearerBody
+from sim.task import EATING
 from tests.mpcshare.control.controller_doubles import demos_and_bundle
 
 
@@ -42,7 +42,7 @@ def test_sweep_brings_the_hand_to_the_knife_at_0_4_m_s(data):
     speed = np.linalg.norm(np.diff(hands - base, axis=0), axis=1) / 0.01
     assert speed.max() <= SWEEP_SPEED + 1e-6 and speed.max() > 0.9 * SWEEP_SPEED
     gap = np.linalg.norm(hands - trial.act[:, sc.tip_cols], axis=1)
-    assert gap.min() < WearerBody().hand_radius  # the sweep runs into where the knife should be
+    assert gap.min() < EATING.body.hand_radius  # the sweep runs into where the knife should be
     assert np.array_equal(st.trial.obs[:, sc.fork_cols], st.fork_truth)  # the controller sees it
 
 

@@ -83,7 +83,8 @@ def test_a_correlation_every_assignment_meets_gives_the_plain_splice_bound():
 
 
 def test_stroke_terms_give_the_task_measure_of_a_run():
-    from sim.task_metrics import sawing_fidelity
+    from sim.task.eating import STROKE_BAND_HZ
+    from sim.task.metrics import sawing_fidelity
 
     dt, t = 0.02, np.arange(0, 20, 0.02)
     rng = np.random.default_rng(0)
@@ -91,7 +92,7 @@ def test_stroke_terms_give_the_task_measure_of_a_run():
     tip = 0.8 * np.roll(intent, 3, axis=0) + rng.normal(0, 2e-3, intent.shape)
     cutting = (t > 4) & (t < 14)
     dot, power, y = stroke_terms(tip, intent, cutting, dt)
-    want = sawing_fidelity(tip, intent, cutting, dt).correlation
+    want = sawing_fidelity(tip, intent, cutting, dt, STROKE_BAND_HZ).correlation
     assert dot.sum() / np.sqrt(y * power.sum()) == pytest.approx(want, rel=1e-12)
     assert np.all(dot[~cutting] == 0) and np.all(power[~cutting] == 0)
 

@@ -9,6 +9,7 @@ import numpy as np
 from robot.qp import QPConfig, QPController
 from robot.smoothing import ReferenceSmoother
 from robot.superlimb import SuperLimbParams
+from sim.task import EATING
 
 
 @dataclass
@@ -85,10 +86,9 @@ class VoluntaryController:
     """Integrates the wearer's shoulder command into the tip reference (α = 0, β = 1), tracked by the QP."""
 
     def __init__(self, params: SuperLimbParams | None = None, dt: float = 0.01, shoulder=None) -> None:
-        from robot.shoulder import ShoulderMap
 
         self.qp = QPController.for_superlimb(params, QPConfig(dt=dt))
-        self.shoulder = shoulder or ShoulderMap()
+        self.shoulder = shoulder or EATING.shoulder_map()
         self.dt, self.ref = dt, None
 
     def reset(self) -> None:

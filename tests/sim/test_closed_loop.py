@@ -173,8 +173,7 @@ def test_without_opengl_the_loop_says_so_and_goes_on(trial, tmp_path, monkeypatc
 
 def test_a_leading_wearer_saws_in_the_closed_loop(trial):
     """Under a controller that follows the shoulder (α = 0), the wearer's own strokes reach the knife on time."""
-    from sim.demonstrator import MODE_NAMES
-    from sim.task_metrics import episode_task_metrics
+    from sim.task.eating import MODE_NAMES, episode_task_metrics
     from sim.wearer_presets import wearer_preset
 
     def figures(wearer):
@@ -190,8 +189,8 @@ def test_a_leading_wearer_saws_in_the_closed_loop(trial):
 
 
 def test_a_caption_is_drawn_across_the_top_of_a_frame():
-    from sim.demonstrator import MODE_COLOURS
     from sim.render import Caption
+    from sim.task.eating import MODE_COLOURS
 
     img = np.full((480, 640, 3), 200, dtype=np.uint8)
     out = Caption(["t = 1.0 s", "robot leads (alpha 1.00)", "cutting"], MODE_COLOURS["cutting"]).draw(img)

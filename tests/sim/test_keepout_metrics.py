@@ -7,14 +7,15 @@ import numpy as np
 import pytest
 
 from robot.superlimb import rpy_to_matrix
-from robot.wearer_body import BODY_PARTS, WearerBody, body_zone_axes, body_zones, hand_center, zones_to_plate
+from robot.wearer_body import BODY_PARTS, body_zone_axes, body_zones, hand_center, zones_to_plate
 from sim.episode import Episode
 from sim.keepout_metrics import episode_keepout_metrics
 from sim.scene import EatingScene
+from sim.task import EATING
 
 FORK = np.array([0.0, 0.05, 0.02, 0.1, -0.4, 0.2])
-HAND = hand_center(WearerBody(), FORK)
-R = WearerBody().hand_radius
+HAND = hand_center(EATING.body, FORK)
+R = EATING.body.hand_radius
 U = np.array([-1.0, 0.0, 1.0]) / np.sqrt(2.0)  # the blade's direction, tip to heel: the tip leads toward the hand
 
 
@@ -64,9 +65,9 @@ def test_the_zones_of_every_step_at_once_are_those_of_each_step():
     base = np.tile(np.eye(4), (n, 1, 1))
     base[:, :3, 3] = 0.01 * rng.normal(size=(n, 3))
     base[:, :3, :3] = [rpy_to_matrix(r) for r in 0.3 * rng.normal(size=(n, 3))]
-    axes = body_zone_axes(WearerBody(), fork, base)
+    axes = body_zone_axes(EATING.body, fork, base)
     for k in range(n):
-        zones = {z.name: z for z in zones_to_plate(body_zones(WearerBody(), fork[k], base[k]), base[k])}
+        zones = {z.name: z for z in zones_to_plate(body_zones(EATING.body, fork[k], base[k]), base[k])}
         for name in BODY_PARTS:
             a, b, radius = axes[name]
             if name not in zones:
@@ -105,7 +106,7 @@ def test_the_scene_draws_the_zones_where_the_controller_keeps_them():
     scene.set_fork(FORK, t)
     mujoco.mj_forward(scene.model, scene.data)
     base = scene.base_pose(t)
-    zones = {z.name: z for z in zones_to_plate(body_zones(WearerBody(), FORK, base), base)}
+    zones = {z.name: z for z in zones_to_plate(body_zones(EATING.body, FORK, base), base)}
     geom = {name: mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_GEOM, name)
             for name in ("hand", "forearm", "head", "trunk")}
     plate = scene.plate_p
@@ -113,6 +114,6 @@ def test_the_scene_draws_the_zones_where_the_controller_keeps_them():
     assert np.allclose(scene.data.geom_xpos[geom["head"]] - plate, zones["head"].a, atol=1e-9)
     mid = 0.5 * (zones["forearm"].a + zones["forearm"].b)
     assert np.allclose(scene.data.geom_xpos[geom["forearm"]] - plate, mid, atol=1e-9)
-    assert scene.model.geom_size[geom["hand"]][0] == pytest.approx(WearerBody().hand_radius)
+    assert scene.model.geom_size[geom["hand"]][0] == pytest.approx(EATING.body.hand_radius)
     heel = scene.knife_heel_in_plate()
     assert np.linalg.norm(heel - scene.tip_in_plate()) == pytest.approx(scene.config.blade_length)

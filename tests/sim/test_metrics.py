@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from robot.shoulder import ShoulderMap
 from sim.episode import Episode
 from sim.metrics import conflict_mask, episode_metrics
+from sim.task import EATING
 
 
 def _episode(n=100, **over):
@@ -45,7 +45,7 @@ def test_tracking_effort_shares_and_timing():
 
 def test_conflict_when_wearer_and_robot_push_opposite_ways():
     n = 50
-    shoulder = ShoulderMap()
+    shoulder = EATING.shoulder_map()
     u_v = np.array([-0.05, 0.0, 0.0])  # the wearer pulls the tip toward −x at 5 cm/s
     theta = np.tile(shoulder.angles_for(u_v), (n, 1))
     beta = np.full(n, 0.5)

@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from robot.shoulder import ShoulderMap
+from sim.task import EATING
 from sim.wearer import SimulatedWearer, WearerConfig, rhythmic_plan
 from sim.wearer_presets import (
     DEFAULT_WEARER_PRESET,
@@ -129,7 +129,7 @@ def test_when_the_robot_leads_and_the_error_is_tolerated_the_shoulder_is_still()
     noisy = SimulatedWearer(intent, RATE, wearer_preset("hemiparetic_mild"), seed=1)
     out = np.array([noisy.step(k, intent[k] + tip_error, alpha_cue=1.0) for k in range(200)])[noisy.delay_steps:]
     assert 0.0005 < out.std() < 0.006  # only noise: tremor-level, inside the shoulder map's dead zone
-    assert np.all([np.linalg.norm(ShoulderMap().tip_velocity(th)) < 0.003 for th in out])
+    assert np.all([np.linalg.norm(EATING.shoulder_map().tip_velocity(th)) < 0.003 for th in out])
 
 
 # --- corrections ---------------------------------------------------------------------------------------
@@ -140,7 +140,7 @@ def test_reaction_delay_then_correction_toward_the_intent():
     out = np.array([w.step(k, np.zeros(3) if k < 10 else tip) for k in range(80)])
     assert np.all(out[:30] == 0.0)  # steps 10..29: the error is not perceived yet (0.2 s = 20 steps)
     assert np.any(out[31] != 0.0)
-    u = ShoulderMap().tip_velocity(out[-1])
+    u = EATING.shoulder_map().tip_velocity(out[-1])
     assert u[2] > 0 and abs(u[0]) < 1e-12 and abs(u[1]) < 1e-12  # commands the tip up, toward the intent
 
 
@@ -152,7 +152,7 @@ def test_corrections_wait_for_the_presets_reaction_time_even_when_the_robot_lead
     out = np.array([w.step(k, np.zeros(3) if k < 50 else np.array([0.05, 0.0, 0.0]), alpha_cue=1.0)
                     for k in range(50 + d + 5)])
     assert np.all(out[:50 + d] == 0.0) and np.any(out[50 + d + 1] != 0.0)
-    assert ShoulderMap().tip_velocity(out[-1])[0] < 0  # the tip is ahead in x: pull it back
+    assert EATING.shoulder_map().tip_velocity(out[-1])[0] < 0  # the tip is ahead in x: pull it back
 
 
 def test_errors_inside_the_deadband_are_tolerated():
@@ -165,7 +165,7 @@ def test_limited_bandwidth_smooths_a_correction():
     cfg = WearerConfig(**{**QUIET, "reaction_delay_s": 0.0}, bandwidth_hz=2.0, feedback_gain_per_s=2.0)
     w = SimulatedWearer(_still_intent(), RATE, cfg)
     out = np.array([w.step(k, np.array([0.0, 0.0, -0.05])) for k in range(100)])
-    target = ShoulderMap().angles_for(np.array([0.0, 0.0, 0.1]))  # K·e = 2/s · 5 cm
+    target = EATING.shoulder_map().angles_for(np.array([0.0, 0.0, 0.1]))  # K·e = 2/s · 5 cm
     z = out[:, 0]  # elevation drives plate z
     assert np.all(np.diff(z) >= -1e-15)  # critically damped: no overshoot, monotone
     assert z[5] < 0.5 * target[0]  # slow start: a 2 Hz second-order stage
@@ -181,7 +181,7 @@ def test_a_leading_wearer_adds_corrections_to_the_plan_and_is_capped():
     out = [w.step(k, tip) for k in range(31)]
     assert w.engagement == 1.0 and w.wearer_leads
     assert w.desired_velocity[0] == pytest.approx(0.1 + 2.0 * (intent[30, 0] + 0.05), rel=1e-3)  # ṗ_r + K·e
-    assert ShoulderMap().tip_velocity(out[-1])[0] > 0.1  # the plan at once, corrections on top
+    assert EATING.shoulder_map().tip_velocity(out[-1])[0] > 0.1  # the plan at once, corrections on top
     for k in range(31, 150):
         w.step(k, tip)
     assert np.linalg.norm(w.desired_velocity) == pytest.approx(w.config.max_speed_mps)
@@ -245,7 +245,7 @@ def test_a_two_angle_shoulder_tracks_the_axes_it_reaches():
     intent[:, 0] = np.linspace(0.0, 0.05, 300)
     intent[:, 1] = np.linspace(0.0, 0.04, 300)  # y: out of this shoulder's reach
     intent[:, 2] = np.linspace(0.0, -0.03, 300)
-    shoulder = ShoulderMap.for_channels(["shoulder_elevation", "shoulder_protraction"])
+    shoulder = EATING.shoulder_map(["shoulder_elevation", "shoulder_protraction"])
     w = SimulatedWearer(intent, RATE, replace(WearerConfig(), shoulder=shoulder, noise_rad=0.0,
                                                noise_signal_dependent=0.0))
     tips, thetas = _drive(w, intent)

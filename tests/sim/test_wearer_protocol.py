@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from robot.shoulder import ShoulderMap
 from sim.closed_loop import run_episode
 from sim.demonstrator import generate_demonstrations
 from sim.errors import SimError, WearerError
 from sim.metrics import episode_metrics
+from sim.task import EATING
 from sim.wearer_presets import DEFAULT_WEARER, wearer_preset
 from sim.wearer_protocol import Wearer
 from tests.sim.controllers import IdleController, VoluntaryController
@@ -22,7 +22,7 @@ class ExactWearer:
     def __init__(self, intent: np.ndarray, rate_hz: float, *, seed: int, gain_per_s: float = 5.0) -> None:
         self.intent = np.asarray(intent, dtype=float)
         self.velocity = np.gradient(self.intent, 1.0 / rate_hz, axis=0)
-        self.gain, self.map = gain_per_s, ShoulderMap()
+        self.gain, self.map = gain_per_s, EATING.shoulder_map()
         self.resets = self.steps = 0
 
     def reset(self) -> None:
@@ -50,7 +50,7 @@ def test_a_wearer_class_is_its_own_factory_and_drives_the_loop(trial):
     print(f"voluntary tracking RMS beside the exact wearer: {rms * 1e3:.1f} mm")
     assert rms < 0.005  # no delay, no dead band: the shoulder's command reaches the knife
     # the loop gave the controller exactly what the class returned (its behaviour, not the default wearer's)
-    u = np.array([ShoulderMap().tip_velocity(th) for th in ep.voluntary[1:]])
+    u = np.array([EATING.shoulder_map().tip_velocity(th) for th in ep.voluntary[1:]])
     np.testing.assert_allclose(np.diff(ep.tip_reference, axis=0), u * 0.01, atol=1e-12)
 
 

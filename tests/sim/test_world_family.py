@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sim.demonstrator import ACT_NAMES, OBS_NAMES, VOL_NAMES
-from sim.task_metrics import bandpass
+from sim.task.metrics import bandpass
 from sim.world_family import KINDS, draw_world, world_demonstrations
 
 

@@ -16,7 +16,7 @@ and wearer noise: ``run_episode(seed=seed)``):
 
 A row is a JSON-able dict: ``percentile``, ``beta``, ``strategy``, ``matched_to``, ``trial``,
 ``seed``, ``draw`` (0 but for the placebo's draws), the metrics of :mod:`sim.metrics` and
-:mod:`sim.task_metrics`; rows of a setting also hold its ``schedule`` record. :data:`TIMING_KEYS`
+:mod:`sim.task.eating`; rows of a setting also hold its ``schedule`` record. :data:`TIMING_KEYS`
 depend on wall time, nothing else does.
 """
 

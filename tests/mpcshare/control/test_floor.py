@@ -12,13 +12,13 @@ from __future__ import annotations
 import numpy as np
 
 from mpcshare.control.controller import SharedController
-from robot.shoulder import ShoulderMap
 from robot.superlimb import SuperLimbParams
+from sim.task import EATING
 from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle
 
 P = SuperLimbParams()
 Q0 = 0.5 * (P.lower + P.upper)
-DOWN = ShoulderMap().angles_for(np.array([0.0, 0.0, -0.5]))  # the wearer commands 0.5 m/s down
+DOWN = EATING.shoulder_map().angles_for(np.array([0.0, 0.0, -0.5]))  # the wearer commands 0.5 m/s down
 
 
 def _lowest_tip(ctl: SharedController, n: int = 300) -> tuple[float, list]:

@@ -10,9 +10,9 @@ from mpcshare.control.controller import SharedController
 from mpcshare.control.keepout import KeepOutSettings
 from mpcshare.control.types import ControllerConfig
 from robot.keepout import segment_zone_clearance
-from robot.shoulder import ShoulderMap
 from robot.superlimb import SuperLimbParams
-from robot.wearer_body import WearerBody, body_zones, hand_center
+from robot.wearer_body import body_zones, hand_center
+from sim.task import EATING
 from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle
 
 P = SuperLimbParams()
@@ -34,7 +34,7 @@ def _blade(ctl, q):
 
 def _hand_clearance(ctl, q, fork_pose):
     """Clearance [m] of the blade to the true hand (model frame; base pose at rest)."""
-    zone = body_zones(WearerBody(), fork_pose, ctl._pose, parts=("hand",))[0]
+    zone = body_zones(EATING.body, fork_pose, ctl._pose, parts=("hand",))[0]
     tip, heel = _blade(ctl, q)
     return segment_zone_clearance(tip, heel, zone).distance
 
@@ -55,14 +55,14 @@ def _fork_near_knife(ctl, trial, offset):
     """A fork pose whose hand sits ``offset`` (plate frame) from the knife's tip at the start pose."""
     tip_plate = ctl._to_plate(ctl.tip.position(Q0))
     pose = trial.obs[0, FORK].copy()
-    pose[:3] += tip_plate + offset - hand_center(WearerBody(), pose)
+    pose[:3] += tip_plate + offset - hand_center(EATING.body, pose)
     return pose
 
 
 def test_a_command_into_the_hand_stops_at_the_margin():
     trial, ctl = _controller()
     fork = _fork_near_knife(ctl, trial, np.array([0.0, 0.12, 0.0]))
-    shoulder = ShoulderMap()
+    shoulder = EATING.shoulder_map()
     push = shoulder.angles_for(np.array([0.0, 0.15, 0.0]))  # 0.15 m/s straight at the hand
     out = _run(ctl, trial, 150, lambda k: fork, lambda k, q: push)
     d = np.array([o[2] for o in out])
@@ -102,7 +102,7 @@ def test_a_lost_marker_grows_the_zone_and_is_reported():
         assert np.all(np.isfinite(c.q_cmd))
     assert "keepout_stale_zone" in statuses
     hand = next(z for z in ctl.keepout.limit.zones if z.name == "hand")
-    assert hand.uncertainty == pytest.approx(WearerBody().hand_top_speed * ctl.keepout.age_s)
+    assert hand.uncertainty == pytest.approx(EATING.body.hand_top_speed * ctl.keepout.age_s)
 
 
 def test_keepout_off_is_today_s_controller():

@@ -9,7 +9,7 @@ from mpcshare.control import ControllerConfig, SharedController
 from mpcshare.control.arbitration import Arbiter
 from mpcshare.evaluation import intent_preview
 from sim.closed_loop import run_episode
-from sim.task_metrics import time_lag
+from sim.task.metrics import time_lag
 from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle
 
 

@@ -11,7 +11,8 @@ from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, EpisodeJob, Ep
 from mpcshare.run_table import StrategyRun
 from mpcshare.training import train_bundle
 from mpcshare.training.config import TrainConfig
-from sim.demonstrator import MODE_NAMES, generate_demonstrations
+from sim.demonstrator import generate_demonstrations
+from sim.task.eating import MODE_NAMES
 
 TIMING = ("step_p50_ms", "step_p99_ms", "realtime_factor")
 RUNS = (StrategyRun("voluntary", "voluntary"), StrategyRun("reactive", "reactive"), StrategyRun("gate", "gate"),

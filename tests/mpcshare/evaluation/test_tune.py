@@ -13,7 +13,8 @@ from mpcshare.cli import main
 from mpcshare.evaluation.tuning.episodes import TIMING_KEYS, plan_tasks, random_tasks, task_key
 from mpcshare.evaluation.tuning.runner import run_tune
 from mpcshare.evaluation.tuning.stats import gate_vs_random, pareto, recommend, summarise
-from sim.demonstrator import MODE_NAMES, generate_demonstrations
+from sim.demonstrator import generate_demonstrations
+from sim.task.eating import MODE_NAMES
 from tests.mpcshare.evaluation.tune_rows import tune_row as _row
 
 SWEEP = ["--percentiles", "90", "70", "--betas", "0", "1", "--strategies", "gate", "--trials", "1",

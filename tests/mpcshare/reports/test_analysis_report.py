@@ -10,7 +10,8 @@ from mpcshare.reports.analysis import (
     fmt_p_value,
     plot_demonstrations,
 )
-from sim.demonstrator import MODE_NAMES, generate_demonstrations
+from sim.demonstrator import generate_demonstrations
+from sim.task.eating import MODE_NAMES
 
 
 def test_json_is_atomic_and_strict(tmp_path):

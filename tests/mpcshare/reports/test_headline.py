@@ -9,7 +9,7 @@ import pytest
 import mpcshare.control.strategies as strategies
 from mpcshare.control.strategies import REGISTRY, StrategySpec
 from mpcshare.reports.headline import MIX_RUNS, headline_lines, headlines, lag_words, line_ratio, shared_strategy
-from sim.task_metrics import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
+from sim.task.eating import SAWING_MIN_AMPLITUDE, SAWING_MIN_CORRELATION
 
 
 def _m(rms_mm: float, effort: float, **extra) -> dict:

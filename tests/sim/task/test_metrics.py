@@ -1,11 +1,12 @@
-"""Task figures on signals written here (not the generator's): lag, sawing, strokes, RMS per mode."""
+"""The figures tasks are made of (sim/task/metrics.py), on signals written here: lag, strokes, RMS per mode."""
 
 import numpy as np
 import pytest
 
-from sim.task_metrics import rms_by_mode, sawing_fidelity, time_lag
+from sim.task.metrics import rms_by_mode, sawing_fidelity, time_lag
 
 DT = 0.01
+BAND = (0.8, 3.0)  # [Hz] a stroke band about the 2 Hz strokes below
 
 
 def _smooth(n: int, seed: int, f_max: float = 1.5) -> np.ndarray:
@@ -48,7 +49,7 @@ def _cutting(freq_hz=2.0, amp=0.01, n=2400):
 @pytest.mark.parametrize("freq_hz", [2.0, 1.3])
 def test_a_knife_that_saws_as_intended_scores_one(freq_hz):
     _, drift, stroke, mask = _cutting(freq_hz)
-    f = sawing_fidelity(drift + stroke, drift + stroke, mask, DT)
+    f = sawing_fidelity(drift + stroke, drift + stroke, mask, DT, BAND)
     assert f.amplitude_ratio == pytest.approx(1.0) and f.correlation == pytest.approx(1.0)
     assert abs(f.strokes_intended - freq_hz * 12.0) <= 1.0 and f.stroke_share == 1.0
     assert f.cutting_s == pytest.approx(12.0)
@@ -56,28 +57,28 @@ def test_a_knife_that_saws_as_intended_scores_one(freq_hz):
 
 def test_a_knife_that_never_saws_scores_near_zero():
     _, drift, stroke, mask = _cutting()
-    f = sawing_fidelity(drift, drift + stroke, mask, DT)
+    f = sawing_fidelity(drift, drift + stroke, mask, DT, BAND)
     assert f.amplitude_ratio < 0.1 and f.stroke_share == 0.0
 
 
 def test_half_strokes_and_late_strokes():
     t, drift, stroke, mask = _cutting()
-    half = sawing_fidelity(drift + 0.5 * stroke, drift + stroke, mask, DT)
+    half = sawing_fidelity(drift + 0.5 * stroke, drift + stroke, mask, DT, BAND)
     assert half.amplitude_ratio == pytest.approx(0.5, abs=0.02) and half.correlation > 0.99
-    assert sawing_fidelity(drift + 0.6 * stroke, drift + stroke, mask, DT).stroke_share == 1.0
-    assert sawing_fidelity(drift + 0.4 * stroke, drift + stroke, mask, DT).stroke_share == 0.0
+    assert sawing_fidelity(drift + 0.6 * stroke, drift + stroke, mask, DT, BAND).stroke_share == 1.0
+    assert sawing_fidelity(drift + 0.4 * stroke, drift + stroke, mask, DT, BAND).stroke_share == 0.0
     late = np.zeros_like(stroke)
     late[mask, 0] = 0.01 * np.sin(2 * np.pi * 2.0 * (t[mask] - 0.125))  # a quarter cycle late
-    q = sawing_fidelity(drift + late, drift + stroke, mask, DT)
+    q = sawing_fidelity(drift + late, drift + stroke, mask, DT, BAND)
     assert q.amplitude_ratio == pytest.approx(1.0, abs=0.05) and abs(q.correlation) < 0.1
 
 
 def test_no_cutting_and_bad_input():
     _, drift, stroke, mask = _cutting()
-    none = sawing_fidelity(drift, drift, np.zeros(len(drift), bool), DT)
+    none = sawing_fidelity(drift, drift, np.zeros(len(drift), bool), DT, BAND)
     assert none.amplitude_ratio is None and none.stroke_share is None and none.cutting_s == 0.0
     with pytest.raises(ValueError, match="cutting_mask must have shape"):
-        sawing_fidelity(drift, drift, mask[:-1], DT)
+        sawing_fidelity(drift, drift, mask[:-1], DT, BAND)
     with pytest.raises(ValueError, match="stroke band"):
         sawing_fidelity(drift, drift, mask, DT, band=(1.0, 80.0))
 
@@ -94,7 +95,7 @@ def test_rms_by_mode_matches_a_direct_computation():
 
 
 def test_wearer_share_by_mode_counts_alpha_below_half_and_nan():
-    from sim.task_metrics import wearer_share_by_mode
+    from sim.task.metrics import wearer_share_by_mode
 
     alpha = np.array([1.0, 0.0, np.nan, 0.6, 0.4, 1.0])
     modes = np.array([0, 0, 0, 1, 1, -1])
@@ -108,7 +109,7 @@ def test_wearer_share_by_mode_counts_alpha_below_half_and_nan():
 def test_pickup_error_against_a_direct_computation():
     """Two hand-overs to the wearer (α falls below 0.5 at steps 100 and 400, 10 ms steps): the 1 s after
     each holds its error; one back to the robot (step 300) does not count."""
-    from sim.task_metrics import pickup_error
+    from sim.task.metrics import pickup_error
 
     dt, n = 0.01, 700
     alpha = np.ones(n)

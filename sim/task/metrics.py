@@ -1,20 +1,21 @@
-"""Task figures of a closed loop: is the knife on time, and does it saw while cutting?
+"""The figures a task's metrics are made of: is the tip on time, does it stroke as intended, per mode.
 
-Tracking RMS hides both failures the task cares about: a knife that follows the intent
-0.4 s late, and a knife that never saws (a 2 cm stroke missed costs only about 14 mm RMS).
-With p the knife tip and p* the wearer's intent (plate frame [m], control period Δ [s]):
+The machinery every task composes (:mod:`sim.task.eating` picks its own; :class:`sim.task.Task`).
+Tracking RMS hides two failures a task may care about: a tip that follows the intent 0.4 s late,
+and a tip that never makes the intended strokes (a 2 cm stroke missed costs only about 14 mm RMS).
+With p the tip and p* the wearer's intent (plate frame [m], control period Δ [s]):
 
 * **lag** τ* [s]: the time shift of the tip against the intent that minimises the RMS,
   τ* = argmin_τ sqrt(mean_k ‖p(t_k + τ) − p*(t_k)‖²), τ ∈ {−τ_max, …, τ_max} in steps of Δ
   (positive: the tip is late); ``rms_at_lag_m`` is that minimum.
-* **sawing fidelity** while cutting (the samples of ``cutting_mask``): both signals are
-  band-passed to the stroke band (default 0.8–3 Hz; zero-phase 2nd-order Butterworth over
+* **stroke fidelity** in the stroke mode (the samples of ``cutting_mask``): both signals are
+  band-passed to the task's stroke band (zero-phase 2nd-order Butterworth over
   the whole episode, so that the mask's edges see no filter transient); with b, b* the
   band-passed tip and intent,
   amplitude ratio = sqrt(Σ‖b_k‖² / Σ‖b*_k‖²), correlation = Σ b_k·b*_k / sqrt(Σ‖b_k‖² Σ‖b*_k‖²)
   (no shift: a stroke a quarter cycle late scores 0, as it should).
 * **strokes executed**: the intent's band-passed motion along its principal direction while
-  cutting is cut at its upward zero crossings into cycles; a cycle is executed when the tip's
+  in the mode is cut at its upward zero crossings into cycles; a cycle is executed when the tip's
   peak-to-peak excursion along that direction in the cycle is at least ``stroke_fraction``
   (default 0.5) of the intent's. The share is over cycles whose intended excursion is at
   least ``min_stroke_m`` (default 5 mm).
@@ -29,11 +30,8 @@ from typing import Any
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-__all__ = ["PICKUP_WINDOW_S", "SAWING_CRITERION", "SAWING_MIN_AMPLITUDE", "SAWING_MIN_CORRELATION", "STROKE_BAND_HZ",
-           "TASK_KEYS", "SawingFidelity", "bandpass", "episode_task_metrics", "pickup_error", "rms_by_mode",
-           "sawing_fidelity", "saws", "time_lag", "wearer_share_by_mode"]
-
-STROKE_BAND_HZ = (0.8, 3.0)  # [Hz] the band of the sawing strokes (2 Hz strokes in the demonstrations)
+__all__ = ["PICKUP_WINDOW_S", "SawingFidelity", "bandpass", "pickup_error", "rms_by_mode", "sawing_fidelity",
+           "time_lag", "wearer_share_by_mode"]
 
 
 def _check(tip: np.ndarray, intent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -92,9 +90,10 @@ def bandpass(x: np.ndarray, dt: float, band: tuple[float, float]) -> np.ndarray:
 
 
 def sawing_fidelity(tip: np.ndarray, intent: np.ndarray, cutting_mask: np.ndarray, dt: float,
-                    band: tuple[float, float] = STROKE_BAND_HZ, stroke_fraction: float = 0.5,
+                    band: tuple[float, float], stroke_fraction: float = 0.5,
                     min_stroke_m: float = 0.005) -> SawingFidelity:
-    """Amplitude ratio, correlation and share of strokes executed while cutting (module docstring)."""
+    """Amplitude ratio, correlation and share of strokes executed in the stroke mode, in ``band`` [Hz]
+    (module docstring)."""
     tip, intent = _check(tip, intent)
     mask = np.asarray(cutting_mask, dtype=bool)
     if mask.shape != (len(tip),):
@@ -148,27 +147,6 @@ def rms_by_mode(tip: np.ndarray, intent: np.ndarray, modes: np.ndarray,
     return out
 
 
-#: the stroke counts as sawing when, while cutting, its band correlates with the intended stroke at least
-#: this much and reaches at least this share of its amplitude (docs/design.md, "the task"): :func:`saws`
-SAWING_MIN_CORRELATION = 0.7
-SAWING_MIN_AMPLITUDE = 0.6
-#: the sawing criterion in words, for every report and document that states it
-SAWING_CRITERION = (f"a stroke correlation of at least {SAWING_MIN_CORRELATION:g} with the intended stroke and at "
-                    f"least {SAWING_MIN_AMPLITUDE:g} of its amplitude, while cutting")
-
-
-def saws(correlation: float | None, amplitude_ratio: float | None) -> bool:
-    """The task's one sawing criterion (:data:`SAWING_CRITERION`): correlation ≥ :data:`SAWING_MIN_CORRELATION`
-    and amplitude ratio ≥ :data:`SAWING_MIN_AMPLITUDE`; False when either is None (no cutting)."""
-    if correlation is None or amplitude_ratio is None:
-        return False
-    return correlation >= SAWING_MIN_CORRELATION and amplitude_ratio >= SAWING_MIN_AMPLITUDE
-
-
-#: keys of :func:`episode_task_metrics` (``comparison.json`` per strategy)
-TASK_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "strokes_intended",
-             "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps",
-             "pickups", "pickup_rms_m", "pickup_s", "pickup_error_share")
 #: [s] how long after a hand-over to the wearer counts as their pick-up (:func:`pickup_error`): the
 #: default wearer's reaction (0.3 s) and one corrective time constant (1/K ≈ 0.67 s at K = 1.5/s) about
 PICKUP_WINDOW_S = 1.0
@@ -215,36 +193,3 @@ def wearer_share_by_mode(alpha: np.ndarray, true_mode: np.ndarray, mode_names: t
         name = mode_names[j] if mode_names is not None and 0 <= j < len(mode_names) else str(int(j))
         shares[name], counts[name] = float(np.mean(~(alpha[sel] >= 0.5))), int(sel.sum())
     return shares, counts
-
-
-def episode_task_metrics(tip: np.ndarray, intent: np.ndarray, dt: float, true_mode: np.ndarray | None,
-                         mode_names: tuple[str, ...] | None = None, cutting: str = "cutting",
-                         alpha: np.ndarray | None = None) -> dict:
-    """The task figures of one episode (keys :data:`TASK_KEYS`, JSON-able; None where undefined).
-
-    ``true_mode`` (N,): the demonstration's mode labels at the control steps (None: unknown, no
-    sawing or per-mode figures); the cutting mode is the label named ``cutting`` in ``mode_names``.
-    ``alpha`` (N,): the controller's α per step, for the wearer's share per mode (a NaN α counts
-    as the wearer leading) and the cost of their pick-ups (:func:`pickup_error`).
-    """
-    lag, rms_lag = time_lag(tip, intent, dt)
-    out: dict = {"lag_s": None if not np.isfinite(lag) else lag,
-                 "rms_at_lag_m": None if not np.isfinite(rms_lag) else rms_lag,
-                 "saw_amplitude_ratio": None, "saw_correlation": None, "strokes_intended": 0,
-                 "strokes_executed": 0, "stroke_share": None, "cutting_s": 0.0, "rms_by_mode_m": {},
-                 "wearer_share_by_mode": {}, "mode_steps": {}}
-    if alpha is not None:
-        out.update(pickup_error(tip, intent, alpha, dt))
-    else:
-        out.update(pickups=0, pickup_rms_m=None, pickup_s=0.0, pickup_error_share=None)
-    if true_mode is None or not np.any(np.asarray(true_mode) >= 0):
-        return out
-    out["rms_by_mode_m"] = rms_by_mode(tip, intent, true_mode, mode_names)
-    if alpha is not None:
-        out["wearer_share_by_mode"], out["mode_steps"] = wearer_share_by_mode(alpha, true_mode, mode_names)
-    if mode_names is not None and cutting in mode_names:
-        f = sawing_fidelity(tip, intent, np.asarray(true_mode) == mode_names.index(cutting), dt)
-        out.update(saw_amplitude_ratio=f.amplitude_ratio, saw_correlation=f.correlation,
-                   strokes_intended=f.strokes_intended, strokes_executed=f.strokes_executed,
-                   stroke_share=f.stroke_share, cutting_s=f.cutting_s)
-    return out
