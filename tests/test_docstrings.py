@@ -20,8 +20,6 @@ ISSUE = re.compile(r"\bissues?[\s-]+#?\d+", re.IGNORECASE)
 #: packages whose module docstrings are capped; ``mpcshare`` and ``sim`` join once theirs are contracts
 CAPPED_PACKAGES = ("learning", "robot")
 MAX_MODULE_DOC_LINES = 20
-#: modules over the cap that another change is rewriting or moving: each must still be over it
-LONG_DOC_PENDING = ("robot/wearer_body.py",)
 
 
 def _resolves(name: str) -> bool:
@@ -93,16 +91,10 @@ def test_the_issue_check_sees_a_planted_mention(tmp_path):
 
 
 def test_module_docstrings_are_short_contracts():
-    long = [row for row in _long_module_docstrings(_capped_sources()) if row.split(":")[0] not in LONG_DOC_PENDING]
+    long = [row for row in _long_module_docstrings(_capped_sources())]
     assert not long, (f"module docstrings over {MAX_MODULE_DOC_LINES} lines: say what the module computes, the "
                       "equation, units and errors; evidence goes to docs/results.md, rationale to docs/design.md:\n"
                       + "\n".join(long))
-
-
-def test_the_pending_long_docstrings_are_still_pending():
-    still = {row.split(":")[0] for row in _long_module_docstrings(_capped_sources())}
-    done = [name for name in LONG_DOC_PENDING if name not in still]
-    assert not done, f"within the cap or gone now, remove from LONG_DOC_PENDING: {done}"
 
 
 def test_the_length_check_sees_a_planted_long_docstring():
