@@ -55,7 +55,7 @@ from mpcshare.control.keepout import KeepOutSettings, make_keepout_mpc, make_kee
 from mpcshare.control.models_tick import fast_step, models_tick
 from mpcshare.control.mpc_follow import MPCFollower
 from mpcshare.control.preview import PreviewPlan, mpc_preview
-from mpcshare.control.setup import BundleLayout, arbitration_inputs, check_bundle, make_mpc, shoulder_map
+from mpcshare.control.setup import BundleLayout, check_bundle, make_mpc, mode_figures, rule_settings, shoulder_map
 from mpcshare.control.types import DEFAULT_BETA, STATUSES, ControlCommand, ControllerConfig
 from mpcshare.control.workspace import DEFAULT_BASE_POSE, bound_reference, check_base_pose
 from mpcshare.errors import ControllerTypeError
@@ -123,12 +123,10 @@ class SharedController:
         self.frontend = StreamingFrontEnd(bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz,
                                           model_hz=bundle.model_hz, window_s=bundle.window_s,
                                           detect_stale=cfg.detect_stale)
-        self.arbiter = Arbiter(strategy, beta, novelty_threshold=float(bundle.novelty_threshold),
-                               on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
-                               min_dwell_s=cfg.min_dwell_s, blend_range=cfg.blend_range,
+        self.arbiter = Arbiter(strategy, beta, settings=rule_settings(bundle, strategy, cfg.strategy_settings),
+                               novelty_threshold=float(bundle.novelty_threshold), min_dwell_s=cfg.min_dwell_s,
                                handover_s=cfg.handover_s, novelty_persist_s=cfg.novelty_persist_s,
-                               schedule=schedule,
-                               **arbitration_inputs(bundle, cfg.strategy_options))
+                               schedule=schedule, figures=mode_figures(bundle))
         self.smoother = ReferenceSmoother(3, self.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk)
         if preview is not None and not callable(getattr(preview, "sample", None)):
             raise ControllerTypeError(f"preview must be a TipTrajectory (sample(times)), got {type(preview).__name__}")

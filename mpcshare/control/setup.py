@@ -15,13 +15,14 @@ import numpy as np
 
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import decimation_factor
+from mpcshare.control.strategies.base import ModeFigures
 from mpcshare.errors import ControllerSetupError
 from robot.shoulder import ShoulderMap
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["BundleLayout", "arbitration_inputs", "check_bundle", "make_mpc", "make_qp", "shoulder_map"]
+__all__ = ["BundleLayout", "check_bundle", "make_mpc", "make_qp", "mode_figures", "rule_settings", "shoulder_map"]
 
 DEFAULT_TIP = ("knife_x", "knife_y", "knife_z")
 DEFAULT_FORK = ("fork_x", "fork_y", "fork_z")
@@ -118,25 +119,28 @@ def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> Sh
         raise ControllerSetupError(f"the bundle's vol_names: {exc}") from None
 
 
-def arbitration_inputs(bundle: ModelBundle, options: dict[str, float] | None = None) -> dict[str, Any]:
-    """What the Arbiter's strategies read of a bundle (``mpcshare.control.strategies.gate``).
-
-    ``mode_stats``: ``{"voluntary_share": [v_j per mode]}``, v_j = 1 − n_positive/n of the held-out
-    gate figures per mode (``bundle.metrics["gate"]["per_mode"]``; None when absent or a mode has no
-    held-out point); ``transmat``: the mode model's (K, K) transition matrix per model tick (None when
-    it has none); ``model_dt`` [s]; ``options``: the bundle's chosen rule settings
-    (``bundle.metrics["rule_settings"]``) updated with ``options``.
-    """
+def mode_figures(bundle: ModelBundle) -> ModeFigures:
+    """What the strategies read of a bundle (:class:`~mpcshare.control.strategies.base.ModeFigures`):
+    v_j = 1 − n_positive/n of the held-out gate figures per mode (``bundle.metrics["gate"]["per_mode"]``;
+    None when absent or a mode has no held-out point), the mode model's transition matrix per model tick
+    (None when it has none) and the model period [s]."""
     metrics = getattr(bundle, "metrics", None) or {}
     transmat = getattr(bundle.modes, "transmat_", None)
-    chosen = dict(metrics.get("rule_settings") or {})
-    chosen.update(options or {})
     per_mode = (metrics.get("gate") or {}).get("per_mode") or {}
     shares = [1.0 - m["n_positive"] / m["n"] if m.get("n") else None for _, m in sorted(per_mode.items(),
                                                                                         key=lambda kv: int(kv[0]))]
-    stats = {"voluntary_share": shares} if shares and None not in shares else None
-    return {"mode_stats": stats, "model_dt": 1.0 / float(bundle.model_hz), "options": chosen,
-            "transmat": None if transmat is None else np.asarray(transmat, dtype=float)}
+    return ModeFigures(np.asarray(shares, dtype=float) if shares and None not in shares else None,
+                       None if transmat is None else np.asarray(transmat, dtype=float), 1.0 / float(bundle.model_hz))
+
+
+def rule_settings(bundle: ModelBundle, strategy: str, given: Any = None) -> Any:
+    """The settings the strategy runs with: ``given`` (the controller's ``strategy_settings``) when not None,
+    else the bundle's calibrated rule's (``bundle.rule``) when it is for ``strategy``, else None (the
+    strategy's defaults). The Arbiter turns them into the strategy's typed settings."""
+    if given is not None:
+        return given
+    rule = getattr(bundle, "rule", None)
+    return rule.settings if rule is not None and rule.strategy == strategy else None
 
 
 def make_qp(robot, config, dt: float):
