@@ -273,7 +273,7 @@ def test_learned_part_failure_is_reported_not_raised():
     def broken(x):
         raise FloatingPointError("bad weights")
 
-    ctl._stream.step = broken
+    ctl.state.stream.step = broken
     cmds = _run(ctl, demos.trials[0], 120)
     assert cmds[0].status == "internal_error" and "bad weights" in cmds[0].reasons[0]
     assert all(c.alpha == 0.0 for c in cmds)  # π̂ not finite → α = 0

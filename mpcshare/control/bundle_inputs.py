@@ -1,9 +1,8 @@
-"""Construction-time checks of the controller: bundle channels, learned parts, MPC.
+"""What the controller takes from a bundle, checked once when it is built: the channel layout, the
+learned parts' interfaces, the shoulder map, the mode figures and the rule's settings.
 
-Everything here runs once in ``SharedController.__init__`` and raises
-``mpcshare.errors.ControllerSetupError`` (a ValueError; or
-RuntimeError for a missing optional part) naming what was wrong; nothing here runs in
-the loop.
+Everything here raises ``mpcshare.errors.ControllerSetupError`` (a ValueError) naming what is wrong;
+nothing here runs in the loop.
 """
 
 from __future__ import annotations
@@ -22,7 +21,7 @@ from robot.shoulder import ShoulderMap
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["BundleLayout", "check_bundle", "make_mpc", "make_qp", "mode_figures", "rule_settings", "shoulder_map"]
+__all__ = ["BundleLayout", "check_bundle", "mode_figures", "rule_settings", "shoulder_map"]
 
 DEFAULT_TIP = ("knife_x", "knife_y", "knife_z")
 DEFAULT_FORK = ("fork_x", "fork_y", "fork_z")
@@ -141,27 +140,3 @@ def rule_settings(bundle: ModelBundle, strategy: str, given: Any = None) -> Any:
         return given
     rule = getattr(bundle, "rule", None)
     return rule.settings if rule is not None and rule.strategy == strategy else None
-
-
-def make_qp(robot, config, dt: float):
-    """The joint QP (``robot.qp.QPController``) on ``robot``'s tip frame and limits at period ``dt`` [s];
-    ``config`` (``QPConfig``) with its posture defaulting to the arm's home posture (the SuperLimb:
-    mid-range, the QP's own default)."""
-    from robot.qp import QPConfig, QPController
-
-    if abs(config.dt - dt) >= 1e-12:
-        config = QPConfig(**{**config.__dict__, "dt": dt})
-    return QPController.for_robot(robot, config)
-
-
-def make_mpc(robot, dt: float):
-    """The CasADi tip MPC (``robot.mpc.tip_mpc.TipMPC``) for ``robot`` (a description) at period ``dt`` [s]."""
-    try:
-        from robot.mpc.tip_mpc import TipMPC
-    except ImportError as exc:
-        raise RuntimeError("use_mpc=True needs robot.mpc.tip_mpc.TipMPC, which cannot be imported "
-                           f"({exc}); pass use_mpc=False to run the QP on the smoothed reference") from exc
-    mpc = TipMPC(robot, dt=dt)
-    if int(mpc.horizon) < 2:
-        raise ControllerSetupError(f"the MPC horizon must be ≥ 2 steps, got {mpc.horizon}")
-    return mpc
