@@ -62,7 +62,7 @@ class ControllerParts:
     tip: TipKinematics
     reach: Any
     box: tuple[np.ndarray, np.ndarray]
-    frontend: StreamingFrontEnd
+    frontend: Any
     arbiter: Arbiter
     fast: FastPath | None
     lead_s: float
@@ -128,8 +128,10 @@ def build_parts(bundle: ModelBundle, *, robot: RobotDescription | None = None, s
                 beta: float, use_mpc: bool = False, shoulder: ShoulderMap | None = None,
                 tip_channels: tuple[str, str, str] | None = None, fork_channels: tuple[str, str, str] | None = None,
                 mpc: Any = None, config: ControllerConfig | None = None, preview: TipTrajectory | None = None,
-                schedule: Callable[[float], float] | None = None) -> ControllerParts:
-    """Every part of the controller (the arguments are :class:`~mpcshare.control.controller.SharedController`'s)."""
+                schedule: Callable[[float], float] | None = None, frontend: Any = None) -> ControllerParts:
+    """Every part of the controller (the arguments are :class:`~mpcshare.control.controller.SharedController`'s).
+    ``frontend``: an object with ``step(t, obs) -> FrontEndOutput`` and ``reset()`` in place of the bundle's
+    :class:`~mpcshare.control.frontend.StreamingFrontEnd` (e.g. one that replays recorded outputs); None: that."""
     check_strategy(strategy, scheduled=schedule is not None)
     beta_user = check_beta(beta)
     cfg = config or ControllerConfig()
@@ -147,8 +149,12 @@ def build_parts(bundle: ModelBundle, *, robot: RobotDescription | None = None, s
     lower = np.array(cfg.workspace.lower, dtype=float)
     if cfg.floor_z is not None:
         lower[2] = max(lower[2], cfg.floor_z)
-    frontend = StreamingFrontEnd(bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz,
-                                 model_hz=bundle.model_hz, window_s=bundle.window_s, detect_stale=cfg.detect_stale)
+    if frontend is not None and not (callable(getattr(frontend, "step", None))
+                                     and callable(getattr(frontend, "reset", None))):
+        raise ControllerTypeError(f"frontend must have step(t, obs) and reset(), got {type(frontend).__name__}")
+    frontend = frontend if frontend is not None else StreamingFrontEnd(
+        bundle.preprocessor.obs, bundle.modes, rate_hz=bundle.rate_hz, model_hz=bundle.model_hz,
+        window_s=bundle.window_s, detect_stale=cfg.detect_stale)
     arbiter = Arbiter(strategy, beta, settings=rule_settings(bundle, strategy, cfg.strategy_settings),
                       novelty_threshold=float(bundle.novelty_threshold), min_dwell_s=cfg.min_dwell_s,
                       handover_s=cfg.handover_s, novelty_persist_s=cfg.novelty_persist_s, schedule=schedule,

@@ -109,11 +109,11 @@ class SharedController:
                  tip_channels: tuple[str, str, str] | None = None,
                  fork_channels: tuple[str, str, str] | None = None, mpc=None,
                  config: ControllerConfig | None = None, preview: TipTrajectory | None = None,
-                 schedule: Callable[[float], float] | None = None) -> None:
+                 schedule: Callable[[float], float] | None = None, frontend: Any = None) -> None:
         self.parts: ControllerParts = build_parts(
             bundle, robot=robot, strategy=strategy, beta=beta, use_mpc=use_mpc, shoulder=shoulder,
             tip_channels=tip_channels, fork_channels=fork_channels, mpc=mpc, config=config, preview=preview,
-            schedule=schedule)
+            schedule=schedule, frontend=frontend)
         self.reset()
 
     def __getattr__(self, name: str) -> Any:
@@ -134,7 +134,9 @@ class SharedController:
         tip positions when they are not knife_x/y/z, fork_x/y/z), ``mpc`` (an MPC object),
         ``config`` (:class:`ControllerConfig`), ``preview`` (a known tip trajectory that replaces
         the predictor's forecast: the ``oracle_preview`` upper bound, not realisable), ``schedule``
-        (t → α ∈ {0, 1} with strategy ``schedule``: a replayed hand-over schedule).
+        (t → α ∈ {0, 1} with strategy ``schedule``: a replayed hand-over schedule), ``frontend`` (an object
+        with ``step(t, obs) -> FrontEndOutput`` and ``reset()`` in place of the streaming front end, e.g. one
+        that replays recorded outputs; :mod:`mpcshare.control.sensing`).
         """
         check_strategy(strategy, scheduled=options.get("schedule") is not None)
         check_beta(beta)
