@@ -64,7 +64,7 @@ def run_pooled(bundle: Any, demos: Demonstrations, trials: list[int], name: str,
         if strategy == "schedule":
             extra["schedule"] = true_mode_schedule(by_id[tid], margin)
         if options:
-            extra["config"] = ControllerConfig(strategy_options=dict(options))
+            extra["config"] = ControllerConfig(strategy_settings=dict(options))
         episode, m = simulate_episode(bundle, demos, by_id[tid], StrategyRun(name, strategy), extra, beta=0.5,
                                       duration_s=duration, seed=0, wearer=wearer_preset(preset),
                                       mode_names=MODE_NAMES)

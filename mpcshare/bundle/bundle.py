@@ -15,6 +15,10 @@ A bundle (format version :data:`FORMAT_VERSION`) is a folder holding
 - ``fast.json`` (format 2) — the control-rate forecast (:class:`learning.predictor.fast.FastForecaster`,
   its coefficients as exact JSON numbers; ``{"model": null}`` when it was not trained);
   a version-1 bundle (without it) still loads, and the controller runs its 10 Hz forecast alone;
+- ``rule.json`` (format 3) — the calibrated hand-over rule (:class:`~mpcshare.bundle.rule.CalibratedRule`:
+  strategy, settings, the calibration's record, its version; ``{"rule": null}`` before calibration); a
+  format-1/2 bundle kept it in ``metrics.json`` and is migrated on loading
+  (:func:`~mpcshare.bundle.rule.rule_from_metrics`);
 - ``modes.joblib``, ``gates.joblib`` — the fitted :class:`~learning.modes.TaskModes`
   and :class:`~learning.gates.gate.ModeGates` (scikit-learn / hmmlearn objects, joblib).
   joblib files are pickles: load bundles you made or trust, like any scikit-learn model.
@@ -28,7 +32,6 @@ JSON encodings, checksums and fsync are in :mod:`mpcshare.bundle.files`.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import tempfile
@@ -47,7 +50,15 @@ from mpcshare.bundle.files import (
     standardizer_from_json,
     standardizer_to_json,
 )
-from mpcshare.errors import MpcshareError
+from mpcshare.bundle.manifest import (
+    BUNDLE_FILES,
+    FORMAT_VERSION,
+    MANIFEST,
+    BundleError,
+    read_json,
+    verify_manifest,
+)
+from mpcshare.bundle.rule import CalibratedRule, rule_from_json, rule_from_metrics, rule_to_json
 
 if TYPE_CHECKING:  # pragma: no cover - imported lazily (torch and sklearn are slow to import)
     from learning.gates.gate import ModeGates
@@ -56,26 +67,6 @@ if TYPE_CHECKING:  # pragma: no cover - imported lazily (torch and sklearn are s
 
 __all__ = ["FORMAT_VERSION", "BUNDLE_FILES", "ModelBundle", "BundleError", "save_bundle",
            "load_bundle", "check_bundle_target", "is_bundle"]
-
-#: Version of the folder layout written by :func:`save_bundle`; :data:`READ_VERSIONS` are read.
-FORMAT_VERSION = 2
-#: versions :func:`load_bundle` reads (1: before the control-rate forecast, loaded without it)
-READ_VERSIONS = (1, 2)
-MANIFEST = "manifest.json"
-#: Files of a version-1 bundle besides the manifest.
-BUNDLE_FILES_V1: tuple[str, ...] = ("bundle.json", "metrics.json", "preprocessor.json", "predictor.pt",
-                                    "modes.joblib", "gates.joblib")
-#: Files of a bundle of the current version besides the manifest.
-BUNDLE_FILES: tuple[str, ...] = (*BUNDLE_FILES_V1, "fast.json")
-
-
-class BundleError(MpcshareError, ValueError):
-    """A bundle that cannot be used; the message starts with the file that is wrong."""
-
-    def __init__(self, path: str | os.PathLike, message: str) -> None:
-        super().__init__(f"{path}: {message}")
-        self.path = str(path)
-
 
 @dataclass
 class ModelBundle:
@@ -95,6 +86,8 @@ class ModelBundle:
         metrics: JSON-able training and held-out metrics.
         config: JSON-able training configuration.
         fast: the control-rate forecast (``learning.predictor.fast.FastForecaster``) or None.
+        rule: the calibrated hand-over rule (:class:`~mpcshare.bundle.rule.CalibratedRule`) or None (not
+            calibrated: the strategies' defaults).
     """
 
     obs_names: tuple[str, ...]
@@ -115,6 +108,7 @@ class ModelBundle:
     metrics: dict[str, Any] = field(default_factory=dict)
     config: dict[str, Any] = field(default_factory=dict)
     fast: Any = None
+    rule: CalibratedRule | None = None
     format_version: int = FORMAT_VERSION
 
     def __post_init__(self) -> None:
@@ -194,6 +188,7 @@ def _write_files(bundle: ModelBundle, tmp: Path) -> None:
     joblib.dump(bundle.modes, tmp / "modes.joblib")
     joblib.dump(bundle.gates, tmp / "gates.joblib")
     write_json({"model": None if bundle.fast is None else bundle.fast.to_json()}, tmp / "fast.json")
+    write_json(rule_to_json(bundle.rule), tmp / "rule.json", non_finite="raise", fsync=False)
     files = {}
     for name in BUNDLE_FILES:
         path = tmp / name
@@ -241,50 +236,6 @@ def save_bundle(bundle: ModelBundle, folder: str | os.PathLike) -> Path:
 
 # -------------------------------------------------------------------- load
 
-def _read_json(path: Path) -> Any:
-    try:
-        with open(path, encoding="utf-8") as f:
-            return json.load(f)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise BundleError(path, f"not valid JSON ({exc}); the file is truncated or corrupt") from None
-    except OSError as exc:
-        raise BundleError(path, f"cannot read ({exc.strerror or exc})") from None
-
-
-def _check_version(path: Path, version: Any) -> None:
-    if version not in READ_VERSIONS:
-        raise BundleError(path, f"bundle format version {version!r}; this mpcshare reads versions "
-                                f"{list(READ_VERSIONS)} (retrain with `mpcshare train`)")
-
-
-def _verify_manifest(root: Path) -> int:
-    """Check the manifest and every file it must list; return the format version."""
-    mpath = root / MANIFEST
-    if not mpath.is_file():
-        raise BundleError(mpath, "missing: not a model bundle (or an incomplete one)")
-    manifest = _read_json(mpath)
-    if not isinstance(manifest, dict) or "files" not in manifest or "format_version" not in manifest:
-        raise BundleError(mpath, "not a bundle manifest (keys 'format_version' and 'files' expected)")
-    version = manifest["format_version"]
-    _check_version(mpath, version)
-    files = manifest["files"]
-    names = BUNDLE_FILES_V1 if version == 1 else BUNDLE_FILES
-    missing_entries = [n for n in names if n not in files]
-    if missing_entries:
-        raise BundleError(mpath, f"does not list {missing_entries[0]}")
-    for name in names:
-        path = root / name
-        if not path.is_file():
-            raise BundleError(path, "missing from the bundle")
-        size, want = path.stat().st_size, files[name]
-        if size != want.get("bytes"):
-            raise BundleError(path, f"{size} bytes, the manifest says {want.get('bytes')}: "
-                                    "truncated or replaced")
-        if file_sha256(path) != want.get("sha256"):
-            raise BundleError(path, "checksum differs from the manifest: the file is corrupt or was edited")
-    return int(version)
-
-
 def _load_fast(root: Path, version: int) -> Any:
     """The fast forecaster of ``fast.json`` (None in a version-1 bundle or when not trained)."""
     from learning.predictor.fast import FastForecaster
@@ -292,7 +243,7 @@ def _load_fast(root: Path, version: int) -> Any:
     if version == 1:
         return None
     path = root / "fast.json"
-    d = _read_json(path)
+    d = read_json(path)
     if not isinstance(d, dict) or "model" not in d:
         raise BundleError(path, "expected a JSON object with key 'model'")
     if d["model"] is None:
@@ -301,6 +252,17 @@ def _load_fast(root: Path, version: int) -> Any:
         return FastForecaster.from_json(d["model"])
     except (KeyError, TypeError, ValueError) as exc:
         raise BundleError(path, f"not a valid fast forecaster ({exc!r})") from None
+
+
+def _load_rule(root: Path, version: int, metrics: dict[str, Any]) -> CalibratedRule | None:
+    """The rule of ``rule.json``, or of ``metrics`` in a format-1/2 bundle (moved out of it)."""
+    path = root / ("rule.json" if version >= 3 else "metrics.json")
+    try:
+        return rule_from_json(read_json(path)) if version >= 3 else rule_from_metrics(metrics)
+    except (TypeError, ValueError) as exc:
+        if isinstance(exc, BundleError):
+            raise
+        raise BundleError(path, f"not a valid hand-over rule ({exc})") from None
 
 
 def _check_names(path: Path, kind: str, have: Sequence[str], expect: Sequence[str] | None) -> None:
@@ -315,7 +277,7 @@ def _check_names(path: Path, kind: str, have: Sequence[str], expect: Sequence[st
 def _read_preprocessor(ppath: Path) -> Preprocessor:
     """The two standardizers of ``preprocessor.json``, or a :class:`BundleError` naming the file."""
     try:
-        p = _read_json(ppath)
+        p = read_json(ppath)
         return Preprocessor(obs=standardizer_from_json(p["obs"]), act=standardizer_from_json(p["act"]),
                             target_hz=float(p["target_hz"]), window_s=float(p["window_s"]))
     except (KeyError, TypeError, ValueError) as exc:
@@ -347,16 +309,19 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
         raise BundleError(root, "no such bundle folder")
     if not root.is_dir():
         raise BundleError(root, "is not a folder (a bundle is a folder with manifest.json)")
-    version = _verify_manifest(root)
+    version = verify_manifest(root)
     info_path = root / "bundle.json"
-    info = _read_json(info_path)
+    info = read_json(info_path)
     if not isinstance(info, dict):
         raise BundleError(info_path, "expected a JSON object")
     if info.get("format_version") != version:
         raise BundleError(info_path, f"format version {info.get('format_version')!r}, the manifest says {version}")
     _check_names(info_path, "obs", info.get("obs_names", []), expect_obs_names)
     _check_names(info_path, "act", info.get("act_names", []), expect_act_names)
-    metrics = _read_json(root / "metrics.json")
+    metrics = read_json(root / "metrics.json")
+    if not isinstance(metrics, dict):
+        raise BundleError(root / "metrics.json", "expected a JSON object")
+    rule = _load_rule(root, version, metrics)
 
     ppath = root / "preprocessor.json"
     pre = _read_preprocessor(ppath)
@@ -390,7 +355,7 @@ def load_bundle(folder: str | os.PathLike, expect_obs_names: Sequence[str] | Non
             train_trials=[int(i) for i in info["train_trials"]],
             heldout_trials=[int(i) for i in info["heldout_trials"]],
             metrics=metrics, config=dict(info.get("config", {})), fast=_load_fast(root, version),
-            format_version=int(info["format_version"]))
+            rule=rule, format_version=int(info["format_version"]))
     except (KeyError, TypeError, ValueError) as exc:
         raise BundleError(info_path, f"missing or invalid field ({exc!r})") from None
     if pre.obs.n_features_in_ != len(bundle.obs_names) or pre.act.n_features_in_ != len(bundle.act_names):

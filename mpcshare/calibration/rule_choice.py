@@ -46,8 +46,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
+from mpcshare.bundle.rule import CalibratedRule
 from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
-from mpcshare.control.strategies.gate import DEFAULTS as GATE_DEFAULTS
+from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
@@ -66,8 +67,8 @@ CRITERION = ("among the candidates with effort <= max_effort x voluntary, those 
              "max_effort x voluntary); if none is within the cap, the same without the cap (the lowest line "
              "ratio of those that saw)")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
-HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GATE_DEFAULTS["lead_s"],
-                     "hold_s": GATE_DEFAULTS["hold_s"]}
+HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GateSettings().lead_s,
+                     "hold_s": GateSettings().hold_s}
 #: the early timing: the wearer takes the lead at a forecast probability of 0.2 within 1.5 s and keeps it
 #: for 1 s after it falls below 0.1. A hand-over to the wearer costs most when it comes just after the
 #: knife's intent has jumped into a wearer mode (the pick-up, docs/design.md); earlier, while the robot
@@ -130,7 +131,7 @@ def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
     """:func:`pooled_run` of each (strategy, gate options) in ``specs``, every episode in one batch of
     ``pool`` (default: this process), in the order of ``specs``."""
     jobs = [EpisodeJob(int(tid), StrategyRun(strategy, strategy),
-                       {"config": ControllerConfig(strategy_options=dict(options))} if options else {})
+                       {"config": ControllerConfig(strategy_settings=dict(options))} if options else {})
             for strategy, options in specs for tid in trials]
     done = (pool or EpisodePool(demos)).map(simulate_episode, bundle, jobs, beta=0.5, duration_s=duration_s,
                                            seed=seed, wearer=wearer, mode_names=mode_names)
@@ -273,7 +274,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
         raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
 
     def evaluate(variants: list[tuple[list[int], str, float, float]]) -> None:
-        # every setting written out, so that none is taken from a bundle's earlier choice (rule_settings)
+        # each candidate's settings replace a bundle's earlier rule as a whole
         settings = [{"wearer_modes": modes, **HANDOVER_TIMINGS[timing], "wearer_alpha": a_w,
                      "robot_alphas": [a_r] * n_modes} for modes, timing, a_w, a_r in variants]
         for (modes, timing, a_w, a_r), st, (m, _) in zip(variants, settings, run([("gate", x) for x in settings])):
@@ -325,8 +326,8 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
                       workers: int | None = None) -> dict[str, Any]:
     """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
     1 to 2) with the wearer preset ``wearer_name`` (default the default preset) and the demonstrations'
-    ``mode_names`` (for the cutting modes), recorded in
-    ``bundle.metrics`` (``rule_settings``, ``rule_choice``) so that the saved bundle's ``gate`` uses it;
+    ``mode_names`` (for the cutting modes), recorded as the bundle's rule (``bundle.rule``, a
+    :class:`~mpcshare.bundle.rule.CalibratedRule` for ``gate``) so that the saved bundle's ``gate`` uses it;
     returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
     :func:`mpcshare.evaluation.episode_pool.default_workers`) closed afterwards; the choice is the same
     whatever the number. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
@@ -338,6 +339,5 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
         choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
                              mode_names=mode_names, pool=episodes)
     choice["wearer"] = name
-    bundle.metrics["rule_settings"] = choice["settings"]
-    bundle.metrics["rule_choice"] = choice
+    bundle.rule = CalibratedRule("gate", choice["settings"], choice)
     return choice

@@ -108,8 +108,8 @@ def _fit(demos: Demonstrations, config: TrainConfig) -> Any:
 def _start_choice(bundle: Any, demos: Demonstrations, wearer_name: str, rule_duration_s: float,
                   pool: EpisodePool) -> Callable[[], None]:
     """The bundle's hand-over rule chosen in the closed loop as ``mpcshare train`` chooses it (on the last
-    held-out trials, ``rule_duration_s`` each, beside the wearer ``wearer_name``; recorded in
-    ``bundle.metrics``), its episodes in ``pool``: with workers, in a thread that waits for them while this
+    held-out trials, ``rule_duration_s`` each, beside the wearer ``wearer_name``; recorded as
+    ``bundle.rule``), its episodes in ``pool``: with workers, in a thread that waits for them while this
     process goes on (its lines printed at the end); else at once. Returns what ends it and prints it."""
     from mpcshare.calibration.rule_choice import choose_for_bundle
 
@@ -295,15 +295,17 @@ def _demo(args: argparse.Namespace) -> int:
         lap("closed loop", t0)
 
     timings["total"] = time.perf_counter() - t_start
+    rule = {} if bundle.rule is None else {"rule_settings": dict(bundle.rule.settings),
+                                           "rule_choice": bundle.rule.choice}
     missing = write_demo_report(out, data_summary_md=summary_md, analysis=analysis.to_dict(),
-                                training=bundle.metrics, comparison=comparison, timings_s=timings,
+                                training={**bundle.metrics, **rule}, comparison=comparison, timings_s=timings,
                                 data_summary=summary, sweep=sweep, mode_sources=mode_sources)
     if missing:
         print(f"report.html: could not embed {missing}")
     from mpcshare.reports.headline import headline_lines, trials_words
 
     print("\nWhat the robot did:")
-    heads = headline_lines(comparison["strategies"], markdown=False, rule_choice=bundle.metrics.get("rule_choice"),
+    heads = headline_lines(comparison["strategies"], markdown=False, rule_choice=rule.get("rule_choice"),
                            trials=trials_words(comparison["trials"], comparison["duration_s"]))
     for line in heads or ["the closed loop was not run"]:
         print(f"  {line}")

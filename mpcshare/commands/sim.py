@@ -248,7 +248,8 @@ def _run(args: argparse.Namespace) -> int:
     from mpcshare.reports.comparison import comparison_findings
     from mpcshare.reports.headline import headline_lines, trials_words
 
-    choice = (getattr(bundle, "metrics", None) or {}).get("rule_choice")
+    rule = getattr(bundle, "rule", None)
+    choice = None if rule is None else rule.choice
     heads = headline_lines(obj["strategies"], markdown=False, rule_choice=choice,
                            trials=trials_words(obj["trials"], obj["duration_s"]))
     for line in heads + comparison_findings(obj["strategies"]):

@@ -186,7 +186,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def _calibrate(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, str | None]:
     """(the gate's settings chosen in the closed loop (:mod:`mpcshare.calibration.rule_choice`), recorded in
-    ``bundle.metrics`` (``rule_settings``, ``rule_choice``), or None; why the choice was skipped, or None).
+    ``bundle.rule``, or None; why the choice was skipped, or None).
     Skipped with ``--no-rule-choice`` (no reason given) and where the data cannot drive the simulator."""
     if args.no_rule_choice:
         return None, None

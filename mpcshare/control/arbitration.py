@@ -31,10 +31,10 @@ from typing import Any, Callable
 import numpy as np
 
 from mpcshare.control.strategies import REGISTRY, StepInputs, StrategyContext, user_strategies
-from mpcshare.control.strategies.base import override_reason
+from mpcshare.control.strategies.base import ModeFigures, make_settings, override_reason
 from mpcshare.control.strategies.replay import SCHEDULE
 from mpcshare.control.types import DEFAULT_BETA, ControllerConfig
-from mpcshare.errors import ControllerSetupError
+from mpcshare.errors import ControllerSetupError, ControllerTypeError
 
 __all__ = ["SCHEDULE", "STRATEGIES", "Arbiter", "Decision", "Handover", "check_strategy", "fuse",
            "reactive_velocity"]
@@ -85,52 +85,39 @@ def check_beta(beta: float) -> float:
 class Arbiter:
     """α, β per step for one strategy of the registry (module docstring), with the hand-over log.
 
-    The defaults of the settings are :class:`~mpcshare.control.types.ControllerConfig`'s.
+    The defaults of the Arbiter's own settings are :class:`~mpcshare.control.types.ControllerConfig`'s.
 
     Args:
         strategy: a name of ``mpcshare.control.strategies.REGISTRY`` (:data:`STRATEGIES`, or
             :data:`SCHEDULE` with a ``schedule``).
         beta: the user's β ∈ [0, 1] (weight of the wearer while the robot leads).
+        settings: the strategy's settings: an instance of its spec's ``settings`` class, a mapping of its
+            fields, or None (its defaults); see :func:`~mpcshare.control.strategies.base.make_settings`.
         novelty_threshold: α = 0 while the novelty score exceeds it (inf: never).
-        on_threshold, off_threshold: hysteresis on the gate probability (gate strategies).
-        min_dwell_s: minimum time [s] between two gate-driven switches of α.
-        blend_range: (p₀, p₁) of the blend ramp.
-        schedule: for strategy ``schedule`` only: t [s] → α target ∈ {0, 1}.
+        min_dwell_s: minimum time [s] between two switches of α driven by a policy.
         handover_s: α moves between 0 and 1 over this time [s] instead of at once (0: at once);
             β follows as 1 − α·(1 − β_user). The overrides still act at once.
         novelty_persist_s: the novelty override acts once the novelty has exceeded
-            ``novelty_threshold`` without a break for this long [s] (0: at once). The threshold is
-            a per-step percentile of the training data, so single ticks above it are expected on
-            familiar data too; each costs a hand-over to the wearer and back. A NaN
-            novelty (the mode filter failed) acts at once.
-        mode_stats, transmat, model_dt, options: what the expected-cost ``gate`` reads (the
-            bundle's per-mode figures, the mode model's transition matrix per model period
-            ``model_dt`` [s], its settings); see :mod:`mpcshare.control.strategies.gate`.
+            ``novelty_threshold`` without a break for this long [s] (0: at once). A NaN novelty (the
+            mode filter failed) acts at once.
+        schedule: for strategy ``schedule`` only: t [s] → α target ∈ {0, 1}.
+        figures: what the strategies read of the bundle (:class:`~mpcshare.control.strategies.base.ModeFigures`).
+
+    Raises ``ControllerSetupError`` (a ValueError) naming a wrong setting.
     """
 
-    def __init__(self, strategy: str = "gate", beta: float = DEFAULT_BETA, *, novelty_threshold: float = math.inf,
-                 on_threshold: float = ControllerConfig.on_threshold,
-                 off_threshold: float = ControllerConfig.off_threshold,
-                 min_dwell_s: float = ControllerConfig.min_dwell_s,
-                 blend_range: tuple[float, float] = ControllerConfig.blend_range,
+    def __init__(self, strategy: str = "gate", beta: float = DEFAULT_BETA, *, settings: Any = None,
+                 novelty_threshold: float = math.inf, min_dwell_s: float = ControllerConfig.min_dwell_s,
                  handover_s: float = ControllerConfig.handover_s,
                  novelty_persist_s: float = ControllerConfig.novelty_persist_s,
-                 schedule: Callable[[float], float] | None = None, mode_stats: dict[str, Any] | None = None,
-                 transmat: np.ndarray | None = None, model_dt: float = 0.1,
-                 options: dict[str, Any] | None = None) -> None:
+                 schedule: Callable[[float], float] | None = None, figures: ModeFigures | None = None) -> None:
         if (strategy == SCHEDULE) != (schedule is not None):
             raise ControllerSetupError(f"strategy {SCHEDULE!r} needs a schedule and only it takes one, got strategy "
                                        f"{strategy!r} with schedule={schedule!r}")
         self.strategy = check_strategy(strategy, scheduled=schedule is not None)
         self.beta = check_beta(beta)
-        if not (0.0 <= off_threshold <= on_threshold <= 1.0):
-            raise ControllerSetupError(f"need 0 ≤ off_threshold ≤ on_threshold ≤ 1, got {off_threshold!r}, "
-                                       f"{on_threshold!r}")
         if not (math.isfinite(min_dwell_s) and min_dwell_s >= 0):
             raise ControllerSetupError(f"min_dwell_s must be finite and ≥ 0, got {min_dwell_s!r}")
-        p0, p1 = (float(x) for x in blend_range)
-        if not 0.0 <= p0 < p1 <= 1.0:
-            raise ControllerSetupError(f"blend_range must satisfy 0 ≤ p0 < p1 ≤ 1, got {blend_range!r}")
         if math.isnan(novelty_threshold):
             raise ControllerSetupError("novelty_threshold must not be NaN (use inf to disable)")
         if not (math.isfinite(handover_s) and handover_s >= 0):
@@ -140,13 +127,19 @@ class Arbiter:
         self.novelty_persist_s = float(novelty_persist_s)
         self.novelty_threshold = float(novelty_threshold)
         self.handover_s = float(handover_s)
-        self.context = StrategyContext(beta=self.beta, on_threshold=float(on_threshold),
-                                       off_threshold=float(off_threshold), min_dwell_s=float(min_dwell_s),
-                                       blend_range=(p0, p1), handover_s=self.handover_s, schedule=schedule,
-                                       mode_stats=mode_stats, transmat=transmat, model_dt=float(model_dt),
-                                       options=dict(options or {}))
         self.spec = REGISTRY[self.strategy]
-        self.policy = self.spec.factory(self.context)
+        try:
+            self.settings = make_settings(self.spec, settings)
+            self.context = StrategyContext(beta=self.beta, min_dwell_s=float(min_dwell_s), handover_s=self.handover_s,
+                                           settings=self.settings, figures=figures or ModeFigures(),
+                                           schedule=schedule)
+            self.policy = self.spec.factory(self.context)
+        except ControllerSetupError:
+            raise
+        except TypeError as exc:
+            raise ControllerTypeError(f"strategy {self.strategy!r}: {exc}") from None
+        except ValueError as exc:
+            raise ControllerSetupError(f"strategy {self.strategy!r}: {exc}") from None
         self.reset()
 
     def reset(self) -> None:

@@ -23,7 +23,7 @@ from mpcshare.control.frontend import kalman_inputs
 
 if TYPE_CHECKING:  # annotations only
     from mpcshare.bundle import ModelBundle
-    from mpcshare.control.setup import BundleLayout
+    from mpcshare.control.bundle_inputs import BundleLayout
 
 __all__ = ["FastPath"]
 

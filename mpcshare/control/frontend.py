@@ -32,7 +32,6 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -40,7 +39,7 @@ from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import StreamingDecimator
 from mpcshare.errors import ControllerSetupError
 
-__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd", "fork_kalman", "kalman_batch", "kalman_inputs", "sense"]
+__all__ = ["ForkKalman", "ModelTick", "StreamingFrontEnd", "fork_kalman", "kalman_batch", "kalman_inputs"]
 
 #: the front end's Kalman noise levels per unit of the obs standardiser's scale s_j:
 #: white acceleration 5·s_j per s², measurement 0.02·s_j
@@ -317,27 +316,3 @@ class StreamingFrontEnd:
             self.last_tick = tick
         return FrontEndOutput(feat, self.kalman.velocity, self.kalman.predicting_for(t), missing, stale, tick,
                               self.kalman.position)
-
-
-def sense(t: float, obs: Any, faults: list[tuple[str, str]], *, frontend: StreamingFrontEnd, d_o: int,
-          stale_after_s: float, keepout: Any = None, pose: np.ndarray | None = None) -> FrontEndOutput | None:
-    """The controller's front-end stage: the fork sample ``obs`` (d_o,) at t [s] checked (a wrong shape is
-    dropped, NaN or missing reported), ``frontend`` stepped and, with ``keepout`` (a
-    :class:`mpcshare.control.keepout.KeepOut`), the body zones moved with the base pose ``pose`` (4, 4).
-    Faults are appended to ``faults``; None: no fork sample was ever measured (the controller holds)."""
-    o = np.asarray(obs, dtype=float) if obs is not None else None
-    if o is not None and o.shape != (d_o,):
-        faults.append(("invalid_observation_shape", f"obs has shape {o.shape}, expected ({d_o},)"))
-        o = None
-    elif o is None or not math.isfinite(o.sum()):
-        faults.append(("missing_observation", "fork sample missing or NaN: Kalman prediction substituted"))
-    try:
-        fe = frontend.step(t, o)
-    except ValueError as exc:
-        faults.append(("no_observation", f"{exc}: holding"))
-        return None
-    if keepout is not None:
-        keepout.update(t, o, fe.fork_velocity, fe.stale, pose, faults)
-    if fe.stale and not fe.predicting_for_s > stale_after_s:
-        faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
-    return fe

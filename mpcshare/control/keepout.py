@@ -27,15 +27,12 @@ from typing import Sequence
 
 import numpy as np
 
-from mpcshare.control.setup import make_qp
-from robot.constraints import TorqueLimit
-from robot.floor import FloorLimit
 from robot.keepout import BLADE_LENGTH, KeepOutConfig, KeepOutLimit, retreat
 from robot.qp import QPController, QPResult, QPStatus
 from robot.wearer_body import BODY_PARTS, WearerBody, body_zones
 from sim.task import EATING
 
-__all__ = ["FORK_POSE_CHANNELS", "KeepOut", "KeepOutSettings", "make_keepout_mpc", "make_keepout_qp"]
+__all__ = ["FORK_POSE_CHANNELS", "KeepOut", "KeepOutSettings"]
 
 FORK_POSE_CHANNELS = ("fork_x", "fork_y", "fork_z", "fork_roll", "fork_pitch", "fork_yaw")
 
@@ -61,35 +58,6 @@ class KeepOutSettings:
             raise ValueError(f"KeepOutSettings.parts {bad} unknown; valid choices: {list(BODY_PARTS)}")
         if len(self.parts) > self.limit.max_zones:
             raise ValueError(f"{len(self.parts)} parts need KeepOutConfig.max_zones >= {len(self.parts)}")
-
-
-def make_keepout_qp(robot, qp_config, dt: float, settings: KeepOutSettings | None, floor: FloorLimit | None = None
-                    ) -> tuple[QPController, "KeepOut | None"]:
-    """The QP on ``robot``'s tip frame (a :class:`~robot.description.RobotDescription`; built by
-    ``setup.make_qp``) and, when ``settings`` is given, the keep-out rows beside its torque limit; ``floor``
-    (a :class:`robot.floor.FloorLimit`, None: none): the knife's floor rows beside them, sharing its blade's
-    kinematics where the heel is the same."""
-    qp = make_qp(robot, qp_config, dt)
-    if settings is None and floor is None:
-        return qp, None
-    rows: list = [TorqueLimit(robot.limits)] + ([floor] if floor is not None else [])
-    shared = floor.blade if floor is not None and settings is not None and \
-        np.array_equal(floor.blade.heel_offset, np.asarray(settings.heel_offset, dtype=float)) else None
-    limit = None if settings is None else KeepOutLimit(robot.model, robot.tip_frame, settings.heel_offset,
-                                                         settings.limit, blade=shared)
-    qp = QPController(robot.model, robot.tip_frame, robot.limits, qp.config,
-                      constraints=rows + ([limit] if limit is not None else []))
-    return qp, None if limit is None else KeepOut(settings, limit)
-
-
-def make_keepout_mpc(robot, dt: float, settings: KeepOutSettings):
-    """The tip MPC of ``robot`` with the body zones over its horizon (``robot.mpc.keepout_mpc``), imported
-    when used."""
-    from robot.mpc.keepout_mpc import KeepOutTipMPC
-
-    lim = settings.limit
-    return KeepOutTipMPC(robot, dt=dt, max_zones=lim.max_zones, margin=lim.margin,
-                         active_distance=lim.active_distance_m)
 
 
 class KeepOut:

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -96,7 +97,8 @@ class ControllerConfig:
     integration step of the reference; smoother limits [m/s], [m/s²], [m/s³];
     mpc_deadline_s [s]; mpc_every: solve the MPC every n-th step and follow the last
     plan in between (shifted by the steps since its solve); detect_stale: a fork sample equal
-    to the previous one counts as missing (a frozen sensor); gate hysteresis/dwell and blend ramp (see ``Arbiter``);
+    to the previous one counts as missing (a frozen sensor); min_dwell_s [s]: the least time between two
+    hand-overs (see ``Arbiter``);
     workspace (plate frame), reach_margin [m]; qp: ``robot.qp.QPConfig``;
     forecast_lead_s [s]: the reactive term aims at the forecast this far ahead (the latency
     after the reference: smoother, QP, servo; docs/design.md, "Latency budget");
@@ -107,8 +109,10 @@ class ControllerConfig:
     smoother_target (:data:`SMOOTHER_TARGETS`) and smoother_lead_s [s]; handover_s [s]: the
     gate's α ramp between the robot and the wearer (see ``Arbiter``); novelty_persist_s [s]: the
     novelty override acts once the novelty has stayed above the bundle's threshold this long (see
-    ``Arbiter``); strategy_options: settings
-    of the strategy's rule that override the bundle's choice (``mpcshare.control.strategies.gate``);
+    ``Arbiter``); strategy_settings: the strategy's settings (an instance of its registry spec's ``settings``
+    class, e.g. :class:`~mpcshare.control.strategies.gate.GateSettings`, or a mapping of its fields), which
+    replace the bundle's calibrated rule; None: the bundle's rule where it is for this strategy, else the
+    strategy's defaults;
     keepout: the wearer's body zones kept out of the knife's way
     (:class:`~mpcshare.control.keepout.KeepOutSettings`; None: off);
     fast_forecast: use the bundle's control-rate forecast when it has one (else, or False: the
@@ -135,10 +139,7 @@ class ControllerConfig:
     # every 2nd step: in the closed loop (default data, 30 s, gate) the tracking error is the same
     # as every step (20.2 mm) and the real-time factor 4.1-4.3x instead of 3.4x (same process).
     mpc_every: int = 2
-    on_threshold: float = 0.6
-    off_threshold: float = 0.5
     min_dwell_s: float = 0.5
-    blend_range: tuple[float, float] = (0.5, 0.9)
     detect_stale: bool = True
     workspace: WorkspaceBox = DEFAULT_WORKSPACE
     reach_margin: float = 0.01
@@ -156,7 +157,7 @@ class ControllerConfig:
     # 0.96 (world 0) and 1.05 to 1.03 (world 3) of the line with 0.3 s, the same as with no override at all;
     # unchanged where it never fired (family 7, default data). Body safety is the keep-out's, not this.
     novelty_persist_s: float = 0.3
-    strategy_options: dict[str, float] = field(default_factory=dict)
+    strategy_settings: Any = None
     keepout: KeepOutSettings | None = field(default_factory=KeepOutSettings)
     fast_forecast: bool = True
     fast_lead_s: float = 0.03

@@ -15,6 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from learning.atomic import atomic_open, write_json
+from mpcshare.control.strategies import by_role
 from mpcshare.evaluation import Comparison
 from mpcshare.reports.headline import headline_lines, lag_words, trials_words
 from mpcshare.reports.style import strategy_colour, strategy_ticks
@@ -152,9 +153,10 @@ def _table(strategies: dict[str, dict[str, Any]], columns: tuple) -> list[str]:
 
 
 def _who_leads_table(comp: Comparison) -> list[str]:
-    """Per mode: the share of steps the wearer leads in the closed loop (gate, blend) beside the
-    bundle's held-out voluntary share of that mode (what the gate said offline)."""
-    runs = [r for r in ("gate", "blend") if (comp.strategies.get(r) or {}).get("wearer_share_by_mode")]
+    """Per mode: the share of steps the wearer leads in the closed loop under each of the registry's ``shared``
+    strategies that ran (:func:`mpcshare.control.strategies.by_role`, registry order, read at call time) beside
+    the bundle's held-out voluntary share of that mode (what the gate said offline)."""
+    runs = [r for r in by_role("shared") if (comp.strategies.get(r) or {}).get("wearer_share_by_mode")]
     if not runs:
         return []
     offline = comp.offline_wearer_share_by_mode or {}

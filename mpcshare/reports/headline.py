@@ -101,7 +101,7 @@ def _task(name: str, m: dict[str, Any], rule_choice: dict[str, Any] | None, tria
 
 
 def chosen_row(rule_choice: dict[str, Any]) -> dict[str, Any] | None:
-    """The candidate ``rule_choice`` (``bundle.metrics["rule_choice"]``) chose: the one with its settings."""
+    """The candidate ``rule_choice`` (``bundle.rule.choice``) chose: the one with its settings."""
     return next((r for r in rule_choice.get("candidates", ()) if r.get("settings") == rule_choice.get("settings")),
                 None)
 
@@ -225,7 +225,7 @@ def headlines(strategies: dict[str, dict[str, Any]], rule_choice: dict[str, Any]
               trials: str = "its trials") -> list[Headline]:
     """The four answers (module docstring) for the runs present; [] when no shared strategy was run.
 
-    ``rule_choice``: the bundle's closed-loop choice of its hand-over rule (``bundle.metrics["rule_choice"]``),
+    ``rule_choice``: the bundle's closed-loop choice of its hand-over rule (``bundle.rule.choice``),
     ``trials``: the evaluation's trials and span in words (both for :func:`choice_note`)."""
     name = shared_strategy(strategies)
     if name is None:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from mpcshare.bundle import CalibratedRule
 from research.coming_error.fusion import fit_fusion, fusion_controller
 from research.coming_error.record import ROOT, world_bundle, world_data, world_dir
 
@@ -62,7 +63,7 @@ def evaluate_world(world: str, duration_s: float = 30.0, n_eval: int = 2, root: 
     cache = folder / "choice.json"
     if cache.exists():
         choice = json.loads(cache.read_text())
-        bundle.metrics["rule_settings"] = choice["settings"]
+        bundle.rule = CalibratedRule("gate", choice["settings"])
     else:
         choice = choose_for_bundle(bundle, demos, mode_names=mode_names, log=None, workers=1)
         cache.write_text(json.dumps({k: choice[k] for k in ("settings", "trials", "wearer_modes")}, default=float))

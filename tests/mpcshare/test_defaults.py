@@ -10,6 +10,8 @@ import pytest
 from mpcshare.cli import build_parser
 from mpcshare.control.arbitration import Arbiter
 from mpcshare.control.controller import SharedController
+from mpcshare.control.strategies.gate import GateSettings
+from mpcshare.control.strategies.paper_gate import PaperGateSettings
 from mpcshare.control.types import DEFAULT_BETA, ControllerConfig
 from mpcshare.training.config import DEFAULT_PERCENTILES, TrainConfig
 from sim.demonstrator import DEFAULT_MINUTES, DEFAULT_SUBJECTS, generate_demonstrations
@@ -21,8 +23,10 @@ def _defaults(f) -> dict:
 
 def test_the_arbiter_takes_the_controller_configs_defaults():
     arb, cfg = _defaults(Arbiter), ControllerConfig()
-    for name in ("on_threshold", "off_threshold", "min_dwell_s", "blend_range", "handover_s"):
+    for name in ("min_dwell_s", "handover_s", "novelty_persist_s"):
         assert arb[name] == getattr(cfg, name), name
+    paper, gate = PaperGateSettings(), GateSettings()  # the gate falls back to the paper's gate, its thresholds
+    assert (gate.on_threshold, gate.off_threshold) == (paper.on_threshold, paper.off_threshold)
     for f in (Arbiter, SharedController, SharedController.from_bundle):
         assert _defaults(f)["beta"] == DEFAULT_BETA
 

@@ -5,9 +5,27 @@ probability p, a linear ramp α = clip((p − p₀)/(p₁ − p₀), 0, 1) with 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from mpcshare.control.strategies.base import ArbiterView, StepInputs, StrategySpec, Target
 
-__all__ = ["Blend", "SPECS"]
+__all__ = ["Blend", "BlendSettings", "SPECS"]
+
+
+@dataclass(frozen=True)
+class BlendSettings:
+    """blend_range (p₀, p₁): the ramp's ends in the gate probability. ValueError unless 0 ≤ p₀ < p₁ ≤ 1."""
+
+    blend_range: tuple[float, float] = (0.5, 0.9)
+
+    def __post_init__(self) -> None:
+        try:
+            p0, p1 = (float(x) for x in self.blend_range)
+        except (TypeError, ValueError):
+            raise ValueError(f"blend_range must be two probabilities (p0, p1), got {self.blend_range!r}") from None
+        if not 0.0 <= p0 < p1 <= 1.0:
+            raise ValueError(f"blend_range must satisfy 0 <= p0 < p1 <= 1, got {self.blend_range!r}")
+        object.__setattr__(self, "blend_range", (p0, p1))
 
 
 class Blend:
@@ -28,4 +46,5 @@ class Blend:
 
 
 SPECS = (StrategySpec("blend", "Policy blending: alpha rises linearly with the gate's probability.", tunable=True,
-                      color="#ff7f0e", factory=lambda ctx: Blend(ctx.blend_range), order=6, role="shared"),)
+                      color="#ff7f0e", factory=lambda ctx: Blend(ctx.settings.blend_range), order=6, role="shared",
+                      settings=BlendSettings),)

@@ -63,51 +63,82 @@ the wearer's corrections (a_j < 1) lowers both the error and the corrections the
 constant ``mix50`` lies below the voluntary–reactive line on the family of worlds where the robot
 leading every mode at full share lies above it. Default: 1 in every mode (α = 1, the user's β).
 
-Settings (:data:`DEFAULTS`, ``wearer_modes`` and ``robot_alphas``) come from the controller's ``strategy_options``
-over the bundle's ``rule_settings``. A bundle without per-mode figures falls back to the paper's gate
-(:mod:`mpcshare.control.strategies.paper_gate`), and its reasons say so.
+Settings: :class:`GateSettings` (the controller's ``strategy_settings``, else the bundle's calibrated rule,
+else the defaults). A bundle without per-mode figures falls back to the paper's gate
+(:mod:`mpcshare.control.strategies.paper_gate`, with the settings' ``on_threshold`` and ``off_threshold``),
+and its reasons say so.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from mpcshare.control.strategies.base import ArbiterView, StepInputs, StrategyContext, StrategySpec, Target
-from mpcshare.control.strategies.paper_gate import PaperGate
+from mpcshare.control.strategies.paper_gate import PaperGate, PaperGateSettings, check_thresholds
 
-__all__ = ["DEFAULTS", "ModeCostGate", "SPECS", "check_settings", "mode_forecast", "robot_shares", "voluntary_shares",
+__all__ = ["GateSettings", "ModeCostGate", "SPECS", "mode_forecast", "robot_shares", "voluntary_shares",
            "wearer_indicator"]
 
-#: The rule's settings and their defaults (see the module docstring).
-DEFAULTS: dict[str, float] = {"share_on": 0.3, "share_off": 0.2, "lead_s": 0.5, "hold_s": 0.5,
-                              "push_mps": math.inf, "push_s": 0.3, "wearer_alpha": 0.0,
-                              "wearer_max_s": math.inf}
+_FLOATS = ("share_on", "share_off", "lead_s", "hold_s", "push_mps", "push_s", "wearer_alpha", "wearer_max_s",
+           "on_threshold", "off_threshold")
 
 
-def check_settings(options: dict[str, Any]) -> dict[str, float]:
-    """The rule's numeric settings: :data:`DEFAULTS` updated with ``options`` (``wearer_modes`` is read
-    by :func:`wearer_indicator`); ValueError naming a wrong one."""
-    unknown = sorted(set(options) - set(DEFAULTS) - {"wearer_modes", "robot_alphas"})
-    if unknown:
-        raise ValueError(f"unknown gate setting(s) {unknown}; valid: {', '.join(DEFAULTS)}, wearer_modes, "
-                         "robot_alphas")
-    s = {k: float(options.get(k, v)) for k, v in DEFAULTS.items()}
-    if not 0.0 <= s["share_off"] <= s["share_on"] <= 1.0:
-        raise ValueError(f"need 0 <= share_off <= share_on <= 1, got {s['share_off']!r}, {s['share_on']!r}")
-    for k in ("lead_s", "hold_s", "push_s"):
-        if not (math.isfinite(s[k]) and s[k] >= 0):
-            raise ValueError(f"gate setting {k} must be finite and >= 0 s, got {s[k]!r}")
-    if not 0.0 <= s["wearer_alpha"] < 0.5:
-        raise ValueError(f"gate setting wearer_alpha must be in [0, 0.5) (the wearer leads below 0.5), "
-                         f"got {s['wearer_alpha']!r}")
-    if not s["wearer_max_s"] > 0:
-        raise ValueError(f"gate setting wearer_max_s must be > 0 s (inf: no bound), got {s['wearer_max_s']!r}")
-    if not s["push_mps"] > 0:
-        raise ValueError(f"gate setting push_mps must be > 0 m/s (inf: off), got {s['push_mps']!r}")
-    return s
+@dataclass(frozen=True)
+class GateSettings:
+    """The rule's settings (module docstring): share_on, share_off (thresholds on the score s), lead_s [s],
+    hold_s [s], push_mps [m/s] (inf: off), push_s [s], wearer_alpha ∈ [0, 0.5), wearer_max_s [s] (inf: no
+    bound), wearer_modes (None: v from the bundle's figures), robot_alphas (K shares in [0.5, 1]; None: 1);
+    on_threshold, off_threshold: the paper's gate used without per-mode figures. ValueError naming a wrong
+    field (the per-mode lengths are checked against the mode model when the policy is built)."""
+
+    share_on: float = 0.3
+    share_off: float = 0.2
+    lead_s: float = 0.5
+    hold_s: float = 0.5
+    push_mps: float = math.inf
+    push_s: float = 0.3
+    wearer_alpha: float = 0.0
+    wearer_max_s: float = math.inf
+    wearer_modes: tuple[int, ...] | None = None
+    robot_alphas: tuple[float, ...] | None = None
+    on_threshold: float = PaperGateSettings.on_threshold
+    off_threshold: float = PaperGateSettings.off_threshold
+
+    def __post_init__(self) -> None:
+        for k in _FLOATS:
+            try:
+                object.__setattr__(self, k, float(getattr(self, k)))
+            except (TypeError, ValueError):
+                raise ValueError(f"gate setting {k} must be a number, got {getattr(self, k)!r}") from None
+        if not 0.0 <= self.share_off <= self.share_on <= 1.0:
+            raise ValueError(f"need 0 <= share_off <= share_on <= 1, got {self.share_off!r}, {self.share_on!r}")
+        for k in ("lead_s", "hold_s", "push_s"):
+            v = getattr(self, k)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"gate setting {k} must be finite and >= 0 s, got {v!r}")
+        if not 0.0 <= self.wearer_alpha < 0.5:
+            raise ValueError(f"gate setting wearer_alpha must be in [0, 0.5) (the wearer leads below 0.5), "
+                             f"got {self.wearer_alpha!r}")
+        if not self.wearer_max_s > 0:
+            raise ValueError(f"gate setting wearer_max_s must be > 0 s (inf: no bound), got {self.wearer_max_s!r}")
+        if not self.push_mps > 0:
+            raise ValueError(f"gate setting push_mps must be > 0 m/s (inf: off), got {self.push_mps!r}")
+        check_thresholds(self.on_threshold, self.off_threshold)
+        if self.wearer_modes is not None:
+            modes = tuple(int(j) for j in self.wearer_modes)
+            if any(j < 0 for j in modes):
+                raise ValueError(f"gate setting wearer_modes must be mode indices >= 0, got {self.wearer_modes!r}")
+            object.__setattr__(self, "wearer_modes", modes)
+        if self.robot_alphas is not None:
+            a = tuple(float(x) for x in self.robot_alphas)
+            if not all(0.5 <= x <= 1.0 for x in a):
+                raise ValueError(f"gate setting robot_alphas must be in [0.5, 1] (the robot leads from 0.5), "
+                                 f"got {self.robot_alphas!r}")
+            object.__setattr__(self, "robot_alphas", a)
 
 
 def robot_shares(alphas: Any, n_modes: int | None) -> np.ndarray | None:
@@ -124,18 +155,14 @@ def robot_shares(alphas: Any, n_modes: int | None) -> np.ndarray | None:
     return a
 
 
-def voluntary_shares(mode_stats: dict[str, Any] | None, n_modes: int | None = None) -> np.ndarray | None:
-    """(K,) v_j from ``mode_stats["voluntary_share"]`` (a list, or a dict mode → share); None when absent."""
-    if not mode_stats or mode_stats.get("voluntary_share") is None:
+def voluntary_shares(shares: Any) -> np.ndarray | None:
+    """(K,) v_j from the bundle's figures (``ModeFigures.voluntary_share``); None when absent. ValueError
+    unless K shares in [0, 1]."""
+    if shares is None:
         return None
-    raw = mode_stats["voluntary_share"]
-    if isinstance(raw, dict):
-        K = n_modes if n_modes is not None else 1 + max(int(k) for k in raw)
-        v = np.array([float(raw.get(str(j), raw.get(j, 0.0)) or 0.0) for j in range(K)])  # type: ignore[call-overload]
-    else:
-        v = np.asarray(raw, dtype=float)
+    v = np.asarray(shares, dtype=float)
     if v.ndim != 1 or not np.all(np.isfinite(v)) or np.any(v < 0) or np.any(v > 1):
-        raise ValueError(f"mode_stats voluntary_share must be K shares in [0, 1], got {raw!r}")
+        raise ValueError(f"the voluntary shares must be K shares in [0, 1], got {shares!r}")
     return v
 
 
@@ -172,11 +199,11 @@ class ModeCostGate:
 
     overrides = True
 
-    def __init__(self, v: np.ndarray, transmat: np.ndarray | None, model_dt: float, settings: dict[str, float],
+    def __init__(self, v: np.ndarray, transmat: np.ndarray | None, model_dt: float, settings: GateSettings,
                  min_dwell_s: float, robot_alphas: np.ndarray | None = None) -> None:
         self.settings = s = settings
         self.robot_alphas = robot_alphas
-        self.forecast = mode_forecast(v, transmat, round(s["lead_s"] / model_dt) if model_dt > 0 else 0)
+        self.forecast = mode_forecast(v, transmat, round(s.lead_s / model_dt) if model_dt > 0 else 0)
         self.min_dwell_s = float(min_dwell_s)
         self.reset()
 
@@ -206,13 +233,13 @@ class ModeCostGate:
     def _pushing(self, t: float, inputs: StepInputs) -> bool:
         """Leaky integral of the wearer pushing against the robot above push_mps (module docstring)."""
         s = self.settings
-        if not math.isfinite(s["push_mps"]) or inputs.u_v is None:
+        if not math.isfinite(s.push_mps) or inputs.u_v is None:
             return False
         dt = min(max(t - self._last_t, 0.0), 0.1) if math.isfinite(self._last_t) else 0.0
         u_v, u_r = inputs.u_v, inputs.u_r
         against = u_r is None or float(u_v @ u_r) < 0.0
-        push = against and float(u_v @ u_v) > s["push_mps"] ** 2
-        tau = max(s["push_s"], 1e-6)
+        push = against and float(u_v @ u_v) > s.push_mps ** 2
+        tau = max(s.push_s, 1e-6)
         self._push = self._push + dt * ((1.0 if push else 0.0) - self._push / tau) if tau > 0 else float(push)
         return self._push >= 0.63 * tau  # a sustained push: the integral has reached 1 − 1/e of its limit
 
@@ -232,31 +259,31 @@ class ModeCostGate:
         pushed = self._pushing(t, inputs)
         self._last_t = t
         dwell_ok = t - arbiter.last_switch_t >= self.min_dwell_s
-        on = math.isfinite(score) and score >= s["share_on"]
-        if self._spent and not (math.isfinite(score) and score >= s["share_off"]):
+        on = math.isfinite(score) and score >= s.share_on
+        if self._spent and not (math.isfinite(score) and score >= s.share_off):
             self._spent = False  # the wearer modes ended: the next entry is handed over afresh
         wants = (on and not self._spent) or pushed
-        if self.wearer and t - self._wearer_since >= s["wearer_max_s"] and dwell_ok and not pushed:
+        if self.wearer and t - self._wearer_since >= s.wearer_max_s and dwell_ok and not pushed:
             self.wearer, self._spent, self._below_since = False, True, math.inf
         elif wants:
             self._below_since = math.inf
             if not self.wearer and dwell_ok:
                 self.wearer, self._wearer_since = True, t
         elif self.wearer:
-            low = not (math.isfinite(score) and score >= s["share_off"])
+            low = not (math.isfinite(score) and score >= s.share_off)
             if low and not math.isfinite(self._below_since):
                 self._below_since = t
             if not low:
                 self._below_since = math.inf
-            elif t - self._below_since >= s["hold_s"] and dwell_ok:
+            elif t - self._below_since >= s.hold_s and dwell_ok:
                 self.wearer = False
         why = "the wearer pushes" if pushed else f"wearer-mode score {score:.2f}"
         if self._spent and not self.wearer:
-            why += f", the wearer's {s['wearer_max_s']:g} s lead spent"
+            why += f", the wearer's {s.wearer_max_s:g} s lead spent"
         if not self.wearer:
             a = self._robot_share(inputs.mode_proba)
             return Target(a, why + ": the robot leads", ramp=True, beta=1.0 - a if a < 1 else None)
-        a = s["wearer_alpha"]
+        a = s.wearer_alpha
         return Target(a, why + ": the wearer leads", ramp=True, beta=1.0 - a if a > 0 else None)
 
 
@@ -269,17 +296,16 @@ class _PaperFallback(PaperGate):
 
 
 def make(ctx: StrategyContext) -> ModeCostGate | PaperGate:
-    """The rule from the context's mode statistics, transition matrix and settings."""
-    settings = check_settings(ctx.options)
-    n = None if ctx.transmat is None else int(np.shape(ctx.transmat)[0])
-    v = wearer_indicator(ctx.options.get("wearer_modes"), n)
-    v = voluntary_shares(ctx.mode_stats, n) if v is None else v
+    """The rule from the context's settings (:class:`GateSettings`), the bundle's figures and the dwell."""
+    s: GateSettings = ctx.settings
+    f = ctx.figures
+    v = wearer_indicator(s.wearer_modes, f.n_modes)
+    v = voluntary_shares(f.voluntary_share) if v is None else v
     if v is None:
-        return _PaperFallback(ctx.on_threshold, ctx.off_threshold, ctx.min_dwell_s)
-    return ModeCostGate(v, ctx.transmat, ctx.model_dt, settings, ctx.min_dwell_s,
-                        robot_shares(ctx.options.get("robot_alphas"), n))
+        return _PaperFallback(s.on_threshold, s.off_threshold, ctx.min_dwell_s)
+    return ModeCostGate(v, f.transmat, f.model_dt, s, ctx.min_dwell_s, robot_shares(s.robot_alphas, f.n_modes))
 
 
 SPECS = (StrategySpec("gate", "The default shared strategy: whole modes the robot cannot predict go to the wearer, "
                       "handed over before they begin and held after they end.", tunable=True, color="#1f77b4",
-                      factory=make, order=4, role="shared"),)
+                      factory=make, order=4, role="shared", settings=GateSettings),)

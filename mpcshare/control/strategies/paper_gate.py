@@ -9,9 +9,33 @@ gate-driven switches, α moving along the hand-over ramp (``handover_s``), and t
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 from mpcshare.control.strategies.base import ArbiterView, StepInputs, StrategyContext, StrategySpec, Target
 
-__all__ = ["PaperGate", "SPECS"]
+__all__ = ["PaperGate", "PaperGateSettings", "SPECS", "check_thresholds"]
+
+
+def check_thresholds(on_threshold: float, off_threshold: float) -> None:
+    """ValueError unless 0 ≤ off_threshold ≤ on_threshold ≤ 1 (gate probabilities)."""
+    if not (0.0 <= off_threshold <= on_threshold <= 1.0) or math.isnan(on_threshold):
+        raise ValueError(f"need 0 <= off_threshold <= on_threshold <= 1, got off_threshold {off_threshold!r}, "
+                         f"on_threshold {on_threshold!r}")
+
+
+@dataclass(frozen=True)
+class PaperGateSettings:
+    """The hysteresis on the gate probability p: the robot takes the lead at p ≥ ``on_threshold`` and gives
+    it back below ``off_threshold``. ValueError unless 0 ≤ off_threshold ≤ on_threshold ≤ 1."""
+
+    on_threshold: float = 0.6
+    off_threshold: float = 0.5
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "on_threshold", float(self.on_threshold))
+        object.__setattr__(self, "off_threshold", float(self.off_threshold))
+        check_thresholds(self.on_threshold, self.off_threshold)
 
 
 class PaperGate:
@@ -39,10 +63,11 @@ class PaperGate:
 
 
 def make(ctx: StrategyContext) -> PaperGate:
-    """The paper's gate from the context's hysteresis and dwell."""
-    return PaperGate(ctx.on_threshold, ctx.off_threshold, ctx.min_dwell_s)
+    """The paper's gate from its settings and the Arbiter's dwell."""
+    s: PaperGateSettings = ctx.settings
+    return PaperGate(s.on_threshold, s.off_threshold, ctx.min_dwell_s)
 
 
 SPECS = (StrategySpec("paper_gate", "The paper's gate: the robot leads where the gate of the current mode says "
                       "predictable (with hysteresis, dwell and a ramp).", tunable=True, color="#17becf",
-                      factory=make, order=5, role="shared"),)
+                      factory=make, order=5, role="shared", settings=PaperGateSettings),)

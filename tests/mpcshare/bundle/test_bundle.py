@@ -8,7 +8,15 @@ import numpy as np
 import pytest
 
 import mpcshare
-from mpcshare.bundle import BUNDLE_FILES, FORMAT_VERSION, BundleError, load_bundle, save_bundle
+from mpcshare.bundle import (
+    BUNDLE_FILES,
+    FORMAT_VERSION,
+    RULE_VERSION,
+    BundleError,
+    CalibratedRule,
+    load_bundle,
+    save_bundle,
+)
 from mpcshare.training import train_bundle
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
@@ -157,15 +165,56 @@ def test_the_fast_forecaster_round_trips(bundle, saved):
     assert back.fast.channels_ == ("knife_x", "knife_y", "knife_z")
 
 
+def _as_version_2(b: Path, metrics_extra: dict) -> None:
+    """Rewrite the bundle folder ``b`` as format 2: no ``rule.json``, ``metrics_extra`` added to the metrics."""
+    (b / "rule.json").unlink()
+    for name in ("bundle.json", "manifest.json"):
+        d = json.loads((b / name).read_text())
+        d["format_version"] = 2
+        d.get("files", {}).pop("rule.json", None)
+        (b / name).write_text(json.dumps(d))
+    m = json.loads((b / "metrics.json").read_text())
+    (b / "metrics.json").write_text(json.dumps({**m, **metrics_extra}))
+    _rewrite_manifest(b)
+
+
+def test_the_rule_round_trips_and_a_version_2_bundles_rule_is_moved_out_of_its_metrics(bundle, tmp_path):
+    import dataclasses
+
+    rule = CalibratedRule("gate", {"wearer_modes": [1], "share_on": 0.5}, {"why": "measured"})
+    back = load_bundle(save_bundle(dataclasses.replace(bundle, rule=rule), tmp_path / "b"))
+    assert back.rule == CalibratedRule("gate", {"wearer_modes": (1,), "share_on": 0.5}, {"why": "measured"})
+    assert back.rule.version == RULE_VERSION and load_bundle(save_bundle(bundle, tmp_path / "none")).rule is None
+    old = _copy(tmp_path / "none", tmp_path / "v2")
+    _as_version_2(old, {"rule_settings": {"wearer_modes": [0], "lead_s": 1.5}, "rule_choice": {"why": "old"}})
+    migrated = load_bundle(old)
+    assert migrated.format_version == 2 and "rule_settings" not in migrated.metrics
+    assert migrated.rule == CalibratedRule("gate", {"wearer_modes": (0,), "lead_s": 1.5}, {"why": "old"}, 1)
+
+
+@pytest.mark.parametrize("rule,match", [({"version": 1, "strategy": "gate", "settings": {"lead_s": "1"}},
+                                         "rule setting 'lead_s' must be a finite number"),
+                                        ({"version": 9, "strategy": "gate", "settings": {}}, "rule version 9"),
+                                        ({"strategy": "gate", "settings": {}}, r"lacks \['version'\]")])
+def test_a_wrong_rule_is_refused_naming_the_file_and_field(saved, tmp_path, rule, match):
+    b = _copy(saved, tmp_path / "b")
+    (b / "rule.json").write_text(json.dumps({"rule": rule}))
+    _rewrite_manifest(b)
+    with pytest.raises(BundleError, match=match) as e:
+        load_bundle(b)
+    assert str(e.value).startswith(str(b / "rule.json"))
+
+
 def test_a_version_1_bundle_still_loads_without_the_fast_forecaster(saved, tmp_path):
     b = _copy(saved, tmp_path / "b")
     (b / "fast.json").unlink()
+    (b / "rule.json").unlink()
     info = json.loads((b / "bundle.json").read_text())
     info["format_version"] = 1
     (b / "bundle.json").write_text(json.dumps(info))
     m = json.loads((b / "manifest.json").read_text())
     m["format_version"] = 1
-    del m["files"]["fast.json"]
+    del m["files"]["fast.json"], m["files"]["rule.json"]
     (b / "manifest.json").write_text(json.dumps(m))
     _rewrite_manifest(b)
     old = load_bundle(b)

@@ -7,7 +7,7 @@ import pytest
 
 from mpcshare.calibration import rule_choice
 from mpcshare.calibration.rule_choice import candidate_sets, choice_trials, choose_rule, line_ratio
-from mpcshare.control.strategies.gate import check_settings, wearer_indicator
+from mpcshare.control.strategies.gate import GateSettings, wearer_indicator
 from mpcshare.reports.rule_choice import rule_markdown
 
 
@@ -17,7 +17,7 @@ def test_candidates_are_price_prefixes_with_and_without_the_cutting_modes():
     assert candidate_sets([1, 0], [], 2) == [[1], []]  # never every mode: that is `voluntary`
     assert candidate_sets([], [0], 3) == [[0], []]  # nothing worth its price: the cutting alone, or the robot
     for modes in candidate_sets([2, 0, 1], [3], 4):  # each is a valid gate setting
-        check_settings({"wearer_modes": modes, **rule_choice.HANDOVER_SETTINGS})
+        GateSettings(wearer_modes=tuple(modes), **rule_choice.HANDOVER_SETTINGS)
         assert wearer_indicator(modes, 4).sum() == len(modes)
 
 
@@ -162,14 +162,13 @@ def test_a_robot_share_while_the_wearer_leads_is_chosen_where_it_measures_better
     # each non-empty set alone and with the robot's share 0.25 while the wearer leads; the empty set once
     assert [c[1] for c in calls if c[0] == "gate"] == [(1,), (1,), (1, 2), (1, 2), ()]
     assert choice["settings"]["wearer_alpha"] == 0.0  # a tie: the wearer alone (tried first)
-    # every candidate writes its share out: a bundle's earlier choice (its rule_settings, under the
-    # controller's options) must not lend a candidate its own
+    # every candidate writes its share out (its settings replace a bundle's earlier rule as a whole)
     assert all(set(c["settings"]) >= {"wearer_modes", "wearer_alpha"} for c in choice["candidates"])
     by_modes[((1,), 0.25)] = (0.012, 0.042, None)  # 0.012 at 0.525x: line 0.74, better than 0.82
     assert choose_rule(_Bundle(), None, [3])["settings"]["wearer_alpha"] == 0.0  # not tried by default
     choice = choose_rule(_Bundle(), None, [3], wearer_alphas=(0.0, 0.25), timings=("prompt",))
     assert choice["wearer_modes"] == [1] and choice["settings"]["wearer_alpha"] == 0.25
-    assert check_settings(choice["settings"])["wearer_alpha"] == 0.25
+    assert GateSettings(**choice["settings"]).wearer_alpha == 0.25
     assert "| gate | [1] | prompt | 0.25 |" in rule_markdown(choice)
     # 2 sets x 2 timings + the empty set at the robot's full share while it leads; then the best two of
     # those ([1] early and prompt: a tie, 0.82) and the empty set at the robot's share 0.5
@@ -190,7 +189,7 @@ def test_the_early_hand_over_is_chosen_where_it_measures_better(monkeypatch):
     choice = choose_rule(_Bundle(), None, [3])
     assert choice["wearer_modes"] == [1] and choice["settings"] == {
         "wearer_modes": [1], **rule_choice.EARLY_HANDOVER_SETTINGS, "wearer_alpha": 0.0, "robot_alphas": [1.0] * 3}
-    assert check_settings(choice["settings"])["lead_s"] == 1.5
+    assert GateSettings(**choice["settings"]).lead_s == 1.5
     assert "| gate | [1] | early | 0 |" in rule_markdown(choice)
     with pytest.raises(ValueError, match="unknown hand-over timing.*valid: prompt, early"):
         choose_rule(_Bundle(), None, [3], timings=("late",))

@@ -30,7 +30,7 @@ def test_baselines_are_fixed():
 
 
 def test_blend_ramp_and_beta():
-    arb = Arbiter("blend", beta=0.4, blend_range=(0.5, 0.9))
+    arb = Arbiter("blend", beta=0.4, settings={"blend_range": (0.5, 0.9)})
     for p, a in [(0.2, 0.0), (0.5, 0.0), (0.7, 0.5), (0.9, 1.0), (1.0, 1.0)]:
         d = arb.decide(0.0, p)
         assert d.alpha == pytest.approx(a)
@@ -41,20 +41,21 @@ def test_blend_ramp_and_beta():
 
 def test_hysteresis_does_not_chatter():
     """A probability oscillating around 0.5 every tick leaves α where it was."""
-    arb = Arbiter("paper_gate", beta=0.5, on_threshold=0.6, off_threshold=0.4, min_dwell_s=0.0, handover_s=0.0)
+    arb = Arbiter("paper_gate", beta=0.5, settings={"on_threshold": 0.6, "off_threshold": 0.4}, min_dwell_s=0.0,
+                  handover_s=0.0)
     alphas = [arb.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert set(alphas) == {0.0} and arb.handovers == []
     arb.decide(10.0, 0.95)  # the robot leads, then the same oscillation: it keeps leading
     alphas = [arb.decide(10.1 + 0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert set(alphas) == {1.0} and len(arb.handovers) == 1
     # without hysteresis (thresholds equal) and without dwell it toggles every tick: the test can fail
-    raw = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.0, handover_s=0.0)
+    raw = Arbiter("paper_gate", settings={"on_threshold": 0.5, "off_threshold": 0.5}, min_dwell_s=0.0, handover_s=0.0)
     toggles = [raw.decide(0.1 * k, 0.5 + 0.08 * (-1) ** k).alpha for k in range(100)]
     assert len(raw.handovers) == 100 and len(set(toggles)) == 2
 
 
 def test_dwell_time_limits_switch_rate():
-    arb = Arbiter("paper_gate", on_threshold=0.5, off_threshold=0.5, min_dwell_s=0.5, handover_s=0.0)
+    arb = Arbiter("paper_gate", settings={"on_threshold": 0.5, "off_threshold": 0.5}, min_dwell_s=0.5, handover_s=0.0)
     for k in range(100):  # 10 s of a gate flipping between 0.1 and 0.9 every 0.1 s
         arb.decide(0.1 * k, 0.9 if k % 2 == 0 else 0.1)
     times = [h.t for h in arb.handovers]
@@ -104,7 +105,7 @@ def test_misuse_raises_clear_errors():
         with pytest.raises(ValueError, match="beta must be in"):
             Arbiter("paper_gate", beta=b)
     with pytest.raises(ValueError, match="off_threshold"):
-        Arbiter("paper_gate", on_threshold=0.3, off_threshold=0.6)
+        Arbiter("paper_gate", settings={"on_threshold": 0.3, "off_threshold": 0.6})
     assert STRATEGIES == ("voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "paper_gate", "blend")
 
 

@@ -276,7 +276,7 @@ def test_learned_part_failure_is_reported_not_raised():
     def broken(x):
         raise FloatingPointError("bad weights")
 
-    ctl._stream.step = broken
+    ctl.state.stream.step = broken
     cmds = _run(ctl, demos.trials[0], 120)
     assert cmds[0].status == "internal_error" and "bad weights" in cmds[0].reasons[0]
     assert all(c.alpha == 0.0 for c in cmds)  # π̂ not finite → α = 0
@@ -357,3 +357,20 @@ def test_the_default_gate_reads_the_modes_and_the_bundles_per_mode_figures(share
         assert np.all(alphas == 0.0) and ctl.handovers == []
     else:
         assert alphas[-1] == 1.0 and len(ctl.handovers) == 1 and "robot leads" in ctl.handovers[0].reason
+
+
+def test_the_strategy_runs_with_the_bundles_rule_unless_the_config_names_its_settings():
+    from mpcshare.bundle import CalibratedRule
+    from mpcshare.control.strategies.gate import GateSettings
+    from mpcshare.control.types import ControllerConfig
+    from mpcshare.errors import ControllerSetupError
+
+    _, plain = demos_and_bundle(0)
+    bundle = SimpleNamespace(**{**vars(plain), "rule": CalibratedRule("gate", {"wearer_modes": [1], "lead_s": 1.0})})
+    ctl = SharedController.from_bundle(bundle, strategy="gate")
+    assert ctl.arbiter.settings == GateSettings(wearer_modes=(1,), lead_s=1.0)
+    mine = ControllerConfig(strategy_settings={"share_on": 0.5, "share_off": 0.4})
+    assert SharedController(bundle, config=mine).arbiter.settings == GateSettings(share_on=0.5, share_off=0.4)
+    assert SharedController(bundle, strategy="paper_gate").arbiter.settings.on_threshold == 0.6  # not its rule
+    with pytest.raises(ControllerSetupError, match="strategy 'gate': unknown gate setting.*'lead'"):
+        SharedController(bundle, config=ControllerConfig(strategy_settings={"lead": 1.0}))

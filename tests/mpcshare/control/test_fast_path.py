@@ -3,11 +3,14 @@ MPC preview holds where the forecast has no skill, and the 10 Hz path is kept wh
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from learning.preprocessing.resample import causal_downsample
 from mpcshare.control import ControllerConfig, SharedController
+from mpcshare.control.preview import PreviewPlan
 from mpcshare.training import train_bundle
 from mpcshare.training.config import TrainConfig
 from mpcshare.training.fast import TIP, trial_designs
@@ -69,11 +72,14 @@ def test_the_preview_holds_where_the_forecast_has_no_skill(setup):
     for k in range(120):
         ctl.step(trial.t[k], trial.obs[k], trial.voluntary[k], q, v)
     sm = type("S", (), {"position": np.zeros(3), "velocity": np.zeros(3)})()
+    t = float(trial.t[119])  # the preview the MPC would get after the last step, the robot leading
+    sensed = SimpleNamespace(t=t, pose=ctl.state.pose, tick=ctl.state.tick)
+    arb = SimpleNamespace(plan=PreviewPlan(1.0, 0.5, np.zeros(3), t + ctl.lead_s))
     ctl.fast.skill = np.full_like(bundle.fast.preview_skill_, -0.1)
-    held = ctl._mpc_preview(sm, 20)  # noqa: SLF001 — the preview the MPC would get
+    held = ctl.mpc_preview(sm, 20, sensed, arb)
     assert np.allclose(held, held[0]), "no skill at any horizon: the preview is a hold"
     ctl.fast.skill = np.full_like(bundle.fast.preview_skill_, 0.2)
-    moving = ctl._mpc_preview(sm, 20)  # noqa: SLF001
+    moving = ctl.mpc_preview(sm, 20, sensed, arb)
     assert np.ptp(moving, axis=0).max() > 1e-5, "skill everywhere: the preview follows the forecast"
     assert ctl.fast.preview_until(1.0, np.array([1.0, 0.0, 0.0])) == pytest.approx(1.0 + 0.1 * (len(
         bundle.fast.preview_skill_[0]) - 1))

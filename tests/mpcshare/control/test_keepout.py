@@ -34,7 +34,7 @@ def _blade(ctl, q):
 
 def _hand_clearance(ctl, q, fork_pose):
     """Clearance [m] of the blade to the true hand (model frame; base pose at rest)."""
-    zone = body_zones(EATING.body, fork_pose, ctl._pose, parts=("hand",))[0]
+    zone = body_zones(EATING.body, fork_pose, ctl.state.pose, parts=("hand",))[0]
     tip, heel = _blade(ctl, q)
     return segment_zone_clearance(tip, heel, zone).distance
 

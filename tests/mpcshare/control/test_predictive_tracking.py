@@ -46,8 +46,7 @@ def test_the_preview_is_what_the_controller_follows(oracle_and_predictor):
 
 def test_the_gate_lets_go_below_even_odds_after_the_dwell():
     cfg = ControllerConfig()
-    arb = Arbiter("paper_gate", 0.5, on_threshold=cfg.on_threshold, off_threshold=cfg.off_threshold,
-                  min_dwell_s=cfg.min_dwell_s, handover_s=0.0)
+    arb = Arbiter("paper_gate", 0.5, min_dwell_s=cfg.min_dwell_s, handover_s=0.0)
     assert arb.decide(0.0, 0.95).alpha == 1.0
     # the cutting mode's calibrated probability hovered at 0.43-0.46 in the loop: the wearer must lead
     alphas = [arb.decide(0.1 * k, 0.45).alpha for k in range(1, 20)]

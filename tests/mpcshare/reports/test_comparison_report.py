@@ -54,6 +54,21 @@ def test_who_leads_per_mode_sits_beside_the_offline_share():
     assert "Who leads" not in comparison_markdown(no_modes, plot_name=None)
 
 
+def test_who_leads_has_a_column_per_shared_strategy_of_the_registry(monkeypatch):
+    """The columns are the registry's ``shared`` strategies that ran, in its order; the others have none."""
+    import mpcshare.reports.comparison as report
+
+    shares = {"cutting": 0.5}
+    runs = {name: _metrics(15.0, wearer_share_by_mode=shares) for name in ("reactive", "blend", "paper_gate", "gate")}
+    comp = Comparison(strategies=runs, per_trial={}, trials=[2], duration_s=30.0, runs=[])
+    head = next(line for line in comparison_markdown(comp, plot_name=None).splitlines() if "wearer leads" in line)
+    assert head == ("| mode | wearer leads, `gate` | wearer leads, `paper_gate` | wearer leads, `blend` | "
+                    "offline voluntary share |")
+    monkeypatch.setattr(report, "by_role", lambda role: ("blend", "probe") if role == "shared" else ())
+    head = next(line for line in comparison_markdown(comp, plot_name=None).splitlines() if "wearer leads" in line)
+    assert head == "| mode | wearer leads, `blend` | offline voluntary share |"
+
+
 def test_findings_state_the_line_ratio_and_when_the_wearer_alone_is_better():
     s = {"voluntary": _metrics(13.0, voluntary_effort=0.08, line_ratio=1.0), "reactive": _metrics(16.0, line_ratio=1.0),
          "gate": _metrics(15.0, line_ratio=1.07), "blend": _metrics(12.0, line_ratio=0.85)}

@@ -8,7 +8,7 @@ import pytest
 
 from learning.data import Demonstrations, Trial, save
 from learning.preprocessing.resample import causal_downsample
-from mpcshare.bundle import load_bundle
+from mpcshare.bundle import RULE_VERSION, load_bundle
 from mpcshare.cli import main
 from mpcshare.commands.train import TRAIN_COMMAND
 from mpcshare.training import TrainingError, prepare_training_data, train_bundle
@@ -146,8 +146,10 @@ def test_cli_trains_a_bundle_and_prints_the_metrics(data_file, demos, tmp_path, 
     b = load_bundle(out, expect_obs_names=demos.obs_names, expect_act_names=demos.act_names)
     assert b.percentile == 70 and b.n_modes == 3 and b.config["max_epochs"] == 2
     # the hand-over rule chosen in the closed loop on the last held-out trial, recorded with why
-    choice = b.metrics["rule_choice"]
-    assert b.metrics["rule_settings"] == choice["settings"] and choice["trials"] == b.heldout_trials[-1:]
+    choice = b.rule.choice
+    assert b.rule.strategy == "gate" and b.rule.version == RULE_VERSION
+    assert dict(b.rule.settings) == {k: tuple(v) if isinstance(v, list) else v for k, v in choice["settings"].items()}
+    assert choice["trials"] == b.heldout_trials[-1:] and "rule_settings" not in b.metrics
     assert "hand-over rule: the wearer leads modes" in text and choice["why"] in text
     assert choice["why"] in (out / "training.md").read_text()
 

@@ -8,15 +8,16 @@ import numpy as np
 import pytest
 
 from mpcshare.control.arbitration import Arbiter
-from mpcshare.control.strategies.gate import DEFAULTS, check_settings, mode_forecast
+from mpcshare.control.strategies.base import ModeFigures
+from mpcshare.control.strategies.gate import GateSettings, mode_forecast
 
 V = [0.05, 0.7, 0.0]  # mode 1 is a stroke mode: 70 % of its held-out points unpredictable
 A = np.array([[0.8, 0.2, 0.0], [0.0, 0.9, 0.1], [0.1, 0.0, 0.9]])  # 0 → 1 → 2 → 0
+FIGURES = ModeFigures(np.array(V), A, 0.1)
 
 
 def _arbiter(**options) -> Arbiter:
-    return Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.0, mode_stats={"voluntary_share": V},
-                   transmat=A, model_dt=0.1, options=options)
+    return Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.0, figures=FIGURES, settings=options)
 
 
 def _onehot(j: int) -> np.ndarray:
@@ -50,7 +51,7 @@ def test_anticipation_hands_over_before_the_stroke_mode():
     assert no_lead.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 1.0
     d = lead.decide(0.0, 0.9, mode_proba=_onehot(0))
     expected = max(np.linalg.matrix_power(A, k)[0] @ V for k in range(11))
-    assert d.alpha == 0.0 and expected >= DEFAULTS["share_on"] and f"{expected:.2f}" in d.reason
+    assert d.alpha == 0.0 and expected >= GateSettings().share_on and f"{expected:.2f}" in d.reason
     assert lead.decide(0.1, 0.9, mode_proba=_onehot(2)).alpha == 0.0  # held ...
     assert lead.decide(1.0, 0.9, mode_proba=_onehot(2)).alpha == 1.0  # ... then back to the robot
 
@@ -72,8 +73,7 @@ def test_the_wearer_pushing_against_the_robot_takes_the_lead():
 
 def test_overrides_dwell_and_fallback():
     arb = Arbiter("gate", beta=0.5, min_dwell_s=1.0, handover_s=0.0, novelty_threshold=5.0, novelty_persist_s=0.0,
-                  mode_stats={"voluntary_share": V},
-                  transmat=A, options={"lead_s": 0.0, "hold_s": 0.0})
+                  figures=FIGURES, settings={"lead_s": 0.0, "hold_s": 0.0})
     assert arb.decide(0.0, 0.9, mode_proba=_onehot(0)).alpha == 1.0
     assert arb.decide(0.5, 0.9, mode_proba=_onehot(1)).alpha == 1.0  # within the dwell
     assert arb.decide(1.0, 0.9, mode_proba=_onehot(1)).alpha == 0.0
@@ -83,17 +83,17 @@ def test_overrides_dwell_and_fallback():
     paper = Arbiter("gate", beta=0.5, min_dwell_s=0.0, handover_s=0.0)
     d = paper.decide(0.0, 0.9, mode_proba=_onehot(1))
     assert d.alpha == 1.0 and d.reason.startswith("no per-mode figures")
-    assert math.isnan(Arbiter("gate", mode_stats={"voluntary_share": V}).policy.score(None))
+    assert math.isnan(Arbiter("gate", figures=ModeFigures(np.array(V))).policy.score(None))
 
 
 def test_settings_are_checked():
-    assert check_settings({}) == DEFAULTS
+    assert Arbiter("gate", settings={}).settings == Arbiter("gate").settings == GateSettings()
     with pytest.raises(ValueError, match="unknown gate setting.*valid: share_on"):
         _arbiter(lead=1.0)
     with pytest.raises(ValueError, match="share_off <= share_on"):
         _arbiter(share_on=0.2, share_off=0.5)
-    with pytest.raises(ValueError, match="voluntary_share must be K shares"):
-        Arbiter("gate", mode_stats={"voluntary_share": [0.5, 1.5]})
+    with pytest.raises(ValueError, match="voluntary shares must be K shares"):
+        Arbiter("gate", figures=ModeFigures(np.array([0.5, 1.5])))
 
 
 def test_measured_wearer_modes_replace_the_shares():
@@ -108,7 +108,7 @@ def test_measured_wearer_modes_replace_the_shares():
     p = max(np.linalg.matrix_power(A, k)[1, 2] for k in range(11))  # from mode 1, into mode 2 within 1 s: 0.41
     assert p >= 0.4 and ahead.decide(0.0, 0.9, mode_proba=_onehot(1)).alpha == 0.0
     for bad in ([3], [-1]):
-        with pytest.raises(ValueError, match="valid: 0..2"):
+        with pytest.raises(ValueError, match="gate setting wearer_modes"):
             _arbiter(wearer_modes=bad)
 
 
@@ -161,4 +161,4 @@ def test_a_bounded_lead_hands_back_after_wearer_max_s_until_the_wearer_modes_end
     unbounded = _arbiter(lead_s=0.0, hold_s=0.0)
     assert all(unbounded.decide(0.1 * k, 0.5, mode_proba=_onehot(1)).alpha == 0.0 for k in range(1, 40))
     with pytest.raises(ValueError, match="wearer_max_s"):
-        check_settings({"wearer_max_s": 0.0})
+        GateSettings(wearer_max_s=0.0)

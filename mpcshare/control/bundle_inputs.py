@@ -1,9 +1,8 @@
-"""Construction-time checks of the controller: bundle channels, learned parts, MPC.
+"""What the controller takes from a bundle, checked once when it is built: the channel layout, the
+learned parts' interfaces, the shoulder map, the mode figures and the rule's settings.
 
-Everything here runs once in ``SharedController.__init__`` and raises
-``mpcshare.errors.ControllerSetupError`` (a ValueError; or
-RuntimeError for a missing optional part) naming what was wrong; nothing here runs in
-the loop.
+Everything here raises ``mpcshare.errors.ControllerSetupError`` (a ValueError) naming what is wrong;
+nothing here runs in the loop.
 """
 
 from __future__ import annotations
@@ -15,6 +14,7 @@ import numpy as np
 
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import decimation_factor
+from mpcshare.control.strategies.base import ModeFigures
 from mpcshare.errors import ControllerSetupError
 from robot.shoulder import ShoulderMap
 from sim.task import EATING
@@ -22,7 +22,7 @@ from sim.task import EATING
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["BundleLayout", "arbitration_inputs", "check_bundle", "make_mpc", "make_qp", "shoulder_map"]
+__all__ = ["BundleLayout", "check_bundle", "mode_figures", "rule_settings", "shoulder_map"]
 
 DEFAULT_TIP = ("knife_x", "knife_y", "knife_z")
 DEFAULT_FORK = ("fork_x", "fork_y", "fork_z")
@@ -119,46 +119,25 @@ def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> Sh
         raise ControllerSetupError(f"the bundle's vol_names: {exc}") from None
 
 
-def arbitration_inputs(bundle: ModelBundle, options: dict[str, float] | None = None) -> dict[str, Any]:
-    """What the Arbiter's strategies read of a bundle (``mpcshare.control.strategies.gate``).
-
-    ``mode_stats``: ``{"voluntary_share": [v_j per mode]}``, v_j = 1 − n_positive/n of the held-out
-    gate figures per mode (``bundle.metrics["gate"]["per_mode"]``; None when absent or a mode has no
-    held-out point); ``transmat``: the mode model's (K, K) transition matrix per model tick (None when
-    it has none); ``model_dt`` [s]; ``options``: the bundle's chosen rule settings
-    (``bundle.metrics["rule_settings"]``) updated with ``options``.
-    """
+def mode_figures(bundle: ModelBundle) -> ModeFigures:
+    """What the strategies read of a bundle (:class:`~mpcshare.control.strategies.base.ModeFigures`):
+    v_j = 1 − n_positive/n of the held-out gate figures per mode (``bundle.metrics["gate"]["per_mode"]``;
+    None when absent or a mode has no held-out point), the mode model's transition matrix per model tick
+    (None when it has none) and the model period [s]."""
     metrics = getattr(bundle, "metrics", None) or {}
     transmat = getattr(bundle.modes, "transmat_", None)
-    chosen = dict(metrics.get("rule_settings") or {})
-    chosen.update(options or {})
     per_mode = (metrics.get("gate") or {}).get("per_mode") or {}
     shares = [1.0 - m["n_positive"] / m["n"] if m.get("n") else None for _, m in sorted(per_mode.items(),
                                                                                         key=lambda kv: int(kv[0]))]
-    stats = {"voluntary_share": shares} if shares and None not in shares else None
-    return {"mode_stats": stats, "model_dt": 1.0 / float(bundle.model_hz), "options": chosen,
-            "transmat": None if transmat is None else np.asarray(transmat, dtype=float)}
+    return ModeFigures(np.asarray(shares, dtype=float) if shares and None not in shares else None,
+                       None if transmat is None else np.asarray(transmat, dtype=float), 1.0 / float(bundle.model_hz))
 
 
-def make_qp(robot, config, dt: float):
-    """The joint QP (``robot.qp.QPController``) on ``robot``'s tip frame and limits at period ``dt`` [s];
-    ``config`` (``QPConfig``) with its posture defaulting to the arm's home posture (the SuperLimb:
-    mid-range, the QP's own default)."""
-    from robot.qp import QPConfig, QPController
-
-    if abs(config.dt - dt) >= 1e-12:
-        config = QPConfig(**{**config.__dict__, "dt": dt})
-    return QPController.for_robot(robot, config)
-
-
-def make_mpc(robot, dt: float):
-    """The CasADi tip MPC (``robot.mpc.tip_mpc.TipMPC``) for ``robot`` (a description) at period ``dt`` [s]."""
-    try:
-        from robot.mpc.tip_mpc import TipMPC
-    except ImportError as exc:
-        raise RuntimeError("use_mpc=True needs robot.mpc.tip_mpc.TipMPC, which cannot be imported "
-                           f"({exc}); pass use_mpc=False to run the QP on the smoothed reference") from exc
-    mpc = TipMPC(robot, dt=dt)
-    if int(mpc.horizon) < 2:
-        raise ControllerSetupError(f"the MPC horizon must be ≥ 2 steps, got {mpc.horizon}")
-    return mpc
+def rule_settings(bundle: ModelBundle, strategy: str, given: Any = None) -> Any:
+    """The settings the strategy runs with: ``given`` (the controller's ``strategy_settings``) when not None,
+    else the bundle's calibrated rule's (``bundle.rule``) when it is for ``strategy``, else None (the
+    strategy's defaults). The Arbiter turns them into the strategy's typed settings."""
+    if given is not None:
+        return given
+    rule = getattr(bundle, "rule", None)
+    return rule.settings if rule is not None and rule.strategy == strategy else None

@@ -1,28 +1,24 @@
-"""The learned parts of :class:`~mpcshare.control.controller.SharedController`'s step (its module
-docstring, item 1): the gate and the streaming predictor on a 10 Hz model tick (:func:`models_tick`),
-and the control-rate forecast every step (:func:`fast_step`). A learned part that raises never stops
-the loop: the fault is reported (``internal_error``) and its output dropped (α falls to 0)."""
+"""The sensing stage of :class:`~mpcshare.control.controller.SharedController`'s step (its module docstring,
+item 1): the fork sample through the front end (:func:`sense`; any object with the
+:class:`~mpcshare.control.frontend.StreamingFrontEnd`'s ``step(t, obs) -> FrontEndOutput`` and ``reset()`` can
+stand in for it, e.g. one that replays recorded outputs), the gate and the streaming predictor on a 10 Hz model
+tick (:func:`models_tick`) and the control-rate forecast every step (:func:`fast_step`). A learned part that
+raises never stops the loop: the fault is reported (``internal_error``) and its output dropped (α falls to 0)."""
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+import math
+from typing import Any
 
 import numpy as np
 
+from mpcshare.control.bundle_inputs import BundleLayout
 from mpcshare.control.fastpath import FastPath
 from mpcshare.control.forecast import TipTrajectory
-from mpcshare.control.setup import BundleLayout
+from mpcshare.control.frontend import FrontEndOutput
+from mpcshare.control.records import TickState
 
-__all__ = ["TickState", "fast_step", "models_tick"]
-
-
-class TickState(NamedTuple):
-    """What a model tick leaves to the arbitration until the next tick."""
-
-    mode_proba: np.ndarray  # (K,) the mode posterior
-    novelty: float  # the window's novelty score
-    window_ready: bool  # whether the anti-aliased 10 Hz window is full
-    gate_proba: float | None  # the gate's probability of the most probable mode (None: no window or it failed)
+__all__ = ["TickState", "fast_step", "models_tick", "sense"]
 
 
 def models_tick(t: float, tick: Any, *, stream: Any, gates: Any, layout: BundleLayout, fast: FastPath | None,
@@ -69,3 +65,27 @@ def fast_step(t: float, fe: Any, mode_proba: np.ndarray, fast: FastPath, forecas
     except Exception as exc:  # noqa: BLE001 — a learned part must not stop the loop
         forecast.reset()
         faults.append(("internal_error", f"control-rate forecast failed: {exc}"))
+
+
+def sense(t: float, obs: Any, faults: list[tuple[str, str]], *, frontend: Any, d_o: int,
+          stale_after_s: float, keepout: Any = None, pose: np.ndarray | None = None) -> FrontEndOutput | None:
+    """The controller's front-end stage: the fork sample ``obs`` (d_o,) at t [s] checked (a wrong shape is
+    dropped, NaN or missing reported), ``frontend`` stepped and, with ``keepout`` (a
+    :class:`mpcshare.control.keepout.KeepOut`), the body zones moved with the base pose ``pose`` (4, 4).
+    Faults are appended to ``faults``; None: no fork sample was ever measured (the controller holds)."""
+    o = np.asarray(obs, dtype=float) if obs is not None else None
+    if o is not None and o.shape != (d_o,):
+        faults.append(("invalid_observation_shape", f"obs has shape {o.shape}, expected ({d_o},)"))
+        o = None
+    elif o is None or not math.isfinite(o.sum()):
+        faults.append(("missing_observation", "fork sample missing or NaN: Kalman prediction substituted"))
+    try:
+        fe = frontend.step(t, o)
+    except ValueError as exc:
+        faults.append(("no_observation", f"{exc}: holding"))
+        return None
+    if keepout is not None:
+        keepout.update(t, o, fe.fork_velocity, fe.stale, pose, faults)
+    if fe.stale and not fe.predicting_for_s > stale_after_s:
+        faults.append(("missing_observation", "fork sample repeated (stale): Kalman prediction substituted"))
+    return fe
