@@ -13,8 +13,9 @@ message's time, a clock that jumps back resets the controller, the watchdog and 
 
 Phases and collections go to ``RunLoop.profile`` (:class:`~mpcshare.runtime.tick_profile.TickProfile`).
 **Protective stop** (a required input older than ``stop_after_s``, a non-finite command, the end of the run):
-no controller call; each tick publishes the hold at q_stop (the joints measured at the first stop command) and
-``protective_stop``. A silent-input stop ends once every required input was fresh for ``resume_after_s``
+no controller call; each tick publishes ``protective_stop`` and the hold at q_stop (the joints measured at the
+first stop command: a trajectory point with zero velocities and accelerations; a Float64MultiArray of q_stop,
+zero velocities or zero efforts). A silent-input stop ends once every required input was fresh for ``resume_after_s``
 (controller reset, ``resumes`` counted); a non-finite command latches. Before the arm's first joint state only
 the status goes out (``waiting``). :meth:`RunLoop.shutdown` publishes the stop again, ≤ 0.2 s for acknowledgement.
 """
@@ -188,7 +189,7 @@ class RunLoop:
                 and now - self._fresh_since >= self.config.resume_after_s)
 
     def tick(self, k: int, t: float | None = None) -> str:
-        """Control tick k at time ``t`` (default k·T; module docstring, 1–3); returns the published status."""
+        """Control tick k at time ``t`` (default k·T; module docstring, 1–2); returns the published status."""
         t_k = k * self.config.period_s if t is None else t
         self._live_in = None
         self._t_step = self._t_live = 0.0
