@@ -2,29 +2,18 @@
 
 Per control step k (t_k = k·T, T = 10 ms):
 
-1. the torso is put at its sway pose, ``mj_step1`` gives the kinematics of the
-   state (q, v); the knife tip p(t_k) and the base pose ``T_plate_torso`` are read;
-2. the fork (mocap) is put at the demonstration's fork pose of sample k (or, with ``fork_truth``,
-   at that pose: the world's fork while the controller's marker reads otherwise), the
-   wearer's forearm with it on the steps a video frame shows (it is drawn only: contacts are off);
-3. the wearer (any :class:`sim.wearer_protocol.Wearer`; by default :mod:`sim.wearer`: their
-   plan and the delayed tip error against the intent) gives the shoulder angles; the α of
-   the previous step's command is their cue of who leads (NaN before the first command or
-   after a step without one);
-4. ``controller.step(t_k, obs_k, voluntary, q, v, base_pose)`` (timed);
-   a command that is not finite or not of the arm's joint shape (n,) makes the servo hold (status
-   ``invalid_command``), an exception inside ``step`` likewise (``controller_error``):
-   the loop never stops for the controller;
-5. ten physics steps: servo torque (:mod:`sim.servo`), ``mj_step2``; the realized
-   q, v and the applied actuator force are recorded and checked against the
-   limits (positions and velocities at 1e-6, torques at 1e-9 N·m).
+1. the torso at its sway pose, ``mj_step1``: the knife tip p(t_k) and the base pose ``T_plate_torso``;
+2. the fork (mocap) at the demonstration's pose of sample k (``fork_truth``: the world's fork where the
+   controller's marker reads otherwise); the wearer's forearm with it on video frames only (drawn, no contacts);
+3. the wearer (any :class:`sim.wearer_protocol.Wearer`; default :mod:`sim.wearer`) gives the shoulder angles,
+   cued by the previous command's α (NaN before the first command or after a step without one);
+4. ``controller.step(t_k, obs_k, voluntary, q, v, base_pose)`` (timed); a command that is not finite or not of
+   shape (n,) holds the servo (status ``invalid_command``), an exception in ``step`` too
+   (``controller_error``): the loop never stops for the controller;
+5. ten physics steps (servo torque, :mod:`sim.servo`; ``mj_step2``), q, v and the applied force recorded and
+   checked against the limits (positions and velocities at 1e-6, torques at 1e-9 N·m).
 
-The controller object needs only ``step`` (the interface of
-``mpcshare.control.controller.SharedController``); ``reset()`` is called first if it has one.
-``obs`` rows go to the controller in the trial's column order: reorder the trial
-to the controller's channel order first if they differ.
-
-Typical use::
+The controller needs only ``step`` (``reset()`` first if it has one); ``obs`` columns go in the trial's order. Use::
 
     ep = run_episode(controller, trial, duration_s=60.0, seed=0, render="trial.mp4")
     ep.save("run.npz")

@@ -1,44 +1,22 @@
-"""Synthetic bimanual-eating demonstrations (fork = observation, knife = action).
+"""Synthetic bimanual-eating demonstrations (fork = observation, knife = action), seeded: same ``seed``, same data.
 
-The real SuperLimb data set is not public; this generator behaves like it so that
-the analysis has something real to find:
+The real SuperLimb data set is not public; this generator behaves like it so that the analysis has something to find:
 
-* observation ``o`` (9): fork tip position [m] (x, y, z in the plate frame),
-  orientation [rad] (roll, pitch, yaw) and contact force [N] (fx, fy, fz);
-* action ``u`` (9): the knife's pose and force, same layout;
-* voluntary channel (3): shoulder elevation, protraction and abduction [rad] of
-  the wearer's affected arm, the signal a wearer would use to command the knife;
-* the four modes of the eating task (:data:`sim.task.eating.MODE_NAMES`, in their label order) with
-  semi-Markov transitions: ``cutting`` (fork holds the food
-  still and presses down while the knife saws back and forth: not predictable
-  from the fork), ``repositioning`` (the fork moves to the next piece, the knife
-  escorts it), ``collecting`` (the fork scoops, the knife pushes the piece on),
-  ``removing`` (the fork lifts to the mouth, the knife returns to rest).
+* observation ``o`` (9): fork tip position [m] (x, y, z, plate frame), orientation [rad] (roll, pitch, yaw) and
+  contact force [N] (fx, fy, fz); action ``u`` (9): the knife's, same layout;
+* voluntary channel (3): shoulder elevation, protraction and abduction [rad] of the wearer's affected arm;
+* the eating task's four modes (:data:`sim.task.eating.MODE_NAMES`, in label order), semi-Markov: ``cutting``
+  (the fork holds the food, the knife saws: not predictable from the fork), ``repositioning`` (the knife
+  escorts the fork to the next piece), ``collecting`` (the knife pushes the piece on), ``removing`` (the fork
+  lifts to the mouth, the knife returns to rest).
 
-Within a mode the knife is a smooth function of the fork's recent motion,
-``u = f_m(o_t, ȯ_t) + low-pass``; the fork's poses of different modes overlap, and
-there the functions ``f_m`` differ, so without the mode the data is confounding.
-Each subject has a style (speed, amplitude, mode durations, offsets). Everything
-is seeded: the same ``seed`` gives the same data.
-
-Calibration (see README, "Synthetic demonstrations"): the mode cues
-(``GeneratorConfig.overlap``), the knife contrast between modes, the knife's
-reaction time, the share and stillness of cutting and the sensor noise were tuned
-so that, after the default preprocessing (10 Hz, per-sensor unit-RMS scaling,
-1 s causal window normalised by √L), 41–48 % of a demonstration's points exceed
-K = 5 without modes and 12–13 % within HMM modes (seeds 0–3; Song & Asada: 40.1 %
-and 8.9 %), while a 4-state HMM on the fork alone recovers the modes at ≥ 98 %.
-
-Physical consistency with the simulated scene (:mod:`sim.scene`): the knife tip
-never goes below the plate's surface (z = 0 in the plate frame). Where the hand
-aims below it (cutting and collecting press down; 28 % of samples before this
-rule) the tip rests on the plate and presses harder (:func:`_rest_on_plate`);
-only the recorded sensor noise (σ = 0.5 mm) reads below zero. Every knife tip is
-reachable by the arm mounted on the swaying torso (tests/robot/test_kinematics.py).
-Re-measured after this change (3 subjects × 10 min, analysis without search):
-without modes / within HMM modes 48.1 % / 12.0 % (seed 0), 45.7 % / 11.7 %
-(seed 1), 47.1 % / 12.8 % (seed 2); before it 48.3 % / 12.0 % and 45.8 % / 11.7 %
-(seeds 0, 1); mode recovery 98.3–98.4 % either way.
+Within a mode the knife is a smooth function of the fork's recent motion, u = f_m(o_t, ȯ_t) + low-pass; the
+fork's poses of different modes overlap where the f_m differ, so without the mode the data confound. Each
+subject has a style (speed, amplitude, mode durations, offsets). The knife tip never goes below the plate
+(z = 0): where the hand aims lower it rests on the plate and presses harder (:func:`_rest_on_plate`; only the
+0.5 mm sensor noise reads below). Every tip is reachable by the arm on the swaying torso
+(tests/robot/test_kinematics.py). Calibration against the paper's shares of large quotients: docs/results.md,
+"How the synthetic demonstrations were calibrated". Bad sizes raise ValueError.
 """
 
 from __future__ import annotations

@@ -1,24 +1,21 @@
 """How close the knife came to the wearer: keep-out figures of one episode (``comparison.json`` keys).
 
-Per control step k the wearer's body zones (:func:`robot.wearer_body.body_zones`: hand,
-forearm, head, torso; the body parts themselves, no controller margin) are placed with the
-fork pose the scene showed (``Episode.fork_pose``, the truth) and the base pose; the knife
-is the segment from its tip to the blade's heel (``Episode.knife_heel``). With c_k,z the
-clearance (surface distance, negative inside) of the blade to zone z, n its normal (zone →
-knife) and ṗ_b the knife's own velocity at the closest blade point (backward difference):
+Per control step k the body zones (:func:`robot.wearer_body.body_zones`: hand, forearm, head, torso, without the
+controller's margin) are placed with the fork pose the scene showed (``Episode.fork_pose``) and the base pose;
+the knife is the segment from its tip to the blade's heel (``Episode.knife_heel``). With c_k,z the clearance
+[m] (surface distance, negative inside) of the blade to zone z, n its normal (zone → knife) and ṗ_b the
+knife's own velocity at the closest blade point (backward difference):
 
 * ``keepout_min_clearance_m`` = min_k,z c_k,z;  ``keepout_max_depth_m`` = max(0, −that);
 * ``keepout_time_inside_s`` = Δ·#{k: min_z c_k,z < 0};
-* ``keepout_steps_driven_in`` = #{k: some zone with c < 0 and the knife's own speed toward
-  it −n·ṗ_b > 0.05 m/s} ("driven in");
-* ``keepout_inside_zone_moving_s`` = Δ·#{inside steps where the zone comes toward the knife
-  faster than the knife toward the zone} (the person's own sweep outran the arm);
-* ``keepout_near_speed_mps`` = max of the knife's own speed toward a zone over the steps
-  with c < ``near_m`` (0.05 m) (speed near the person; 0 when never near);
+* ``keepout_steps_driven_in`` = #{k: some zone with c < 0 and −n·ṗ_b > 0.05 m/s};
+* ``keepout_inside_zone_moving_s`` = Δ·#{inside steps where the zone comes toward the knife faster than the
+  knife toward the zone} (the person's own sweep outran the arm);
+* ``keepout_near_speed_mps`` = max of the knife's own speed toward a zone over steps with c < ``near_m``
+  (0.05 m); 0 when never near;
 * ``keepout_min_clearance_by_zone_m``: zone → min_k c_k,z;
-* ``knife_min_height_m`` = min_k min(tip_k,z, heel_k,z): the blade's lowest point above the
-  plate's top (plate frame z; negative: into the plate, whose top the controller keeps as its
-  floor, ``ControllerConfig.floor_z``).
+* ``knife_min_height_m`` = min_k min(tip_k,z, heel_k,z) above the plate's top (negative: into the plate, whose
+  top the controller keeps as its floor, ``ControllerConfig.floor_z``).
 """
 
 from __future__ import annotations

@@ -1,25 +1,17 @@
 """Figures of one closed-loop episode (the keys of ``comparison.json``).
 
-With e_k = ‖p_k − p*_k‖ the knife tip's distance to the wearer's intent at
-control step k (plate frame, [m]) and Δ the control period:
+With e_k = ‖p_k − p*_k‖ the knife tip's distance to the wearer's intent at control step k (plate frame, [m]):
 
 * ``tracking_rmse_m`` = sqrt(mean e_k²);  ``tracking_p95_m`` = 95th percentile of e_k.
-* ``voluntary_effort`` [rad] = mean_k ‖θ_k‖₂, the mean magnitude of the shoulder
-  angles θ (elevation, protraction, abduction) away from the neutral posture: the
-  wearer's voluntary shoulder motion, the paper's effort measure (shoulder
-  displacement as the user's command effort).
-* ``reactive_share`` = fraction of control steps with α > 0.5.
-* ``handovers`` = number of crossings of α through 0.5 (either direction).
-* ``conflict_share`` = fraction of control steps where the wearer and the robot
-  push the tip in opposite directions.  The wearer's commanded tip velocity is
-  û_v = ShoulderMap.tip_velocity(θ_k) (the map's gain, dead zone and, where it is not
-  the default, matrix are stored in the episode); the robot's own (reactive) contribution is the rest of the
-  reference's motion, û_r,eff = ṙ_k − β_k·û_v, with ṙ_k the backward difference
-  of ``tip_reference`` [m/s].  A step is in conflict when both speeds exceed
-  ``speed_deadband`` (0.01 m/s) and û_v · û_r,eff < 0.
-* ``limit_violations`` = physics steps (1 kHz) where a realized joint position or
-  velocity exceeded its limit by more than 1e-6, or an applied torque its limit
-  (counted during the run, :mod:`sim.closed_loop`).
+* ``voluntary_effort`` [rad] = mean_k ‖θ_k‖₂, the shoulder angles θ (elevation, protraction, abduction) away
+  from the neutral posture: the paper's effort measure.
+* ``reactive_share`` = fraction of control steps with α > 0.5; ``handovers`` = crossings of α through 0.5.
+* ``conflict_share`` = fraction of steps where the wearer and the robot push the tip in opposite directions:
+  û_v = ShoulderMap.tip_velocity(θ_k) (the map's gain, dead zone and, if not the default, matrix are stored in
+  the episode), û_r,eff = ṙ_k − β_k·û_v with ṙ_k the backward difference of ``tip_reference`` [m/s]; in
+  conflict when both speeds exceed ``speed_deadband`` (0.01 m/s) and û_v · û_r,eff < 0.
+* ``limit_violations`` = physics steps (1 kHz) where a realized joint position or velocity exceeded its limit
+  by more than 1e-6, or an applied torque its limit (counted during the run, :mod:`sim.closed_loop`).
 * ``step_p50_ms``, ``step_p99_ms`` = percentiles of the controller's step time [ms].
 * ``realtime_factor`` = simulated time / wall-clock time of the whole loop.
 """

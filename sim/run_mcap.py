@@ -1,33 +1,23 @@
 """A closed-loop run as an MCAP file, with JSON schemas a viewer understands (Foxglove).
 
-:func:`write_run_mcap` writes an :class:`~sim.closed_loop.Episode` (a fresh one, or a
-run file read back with :meth:`Episode.load`) with the ``mcap`` package; nothing of
-mpcshare is needed to open the file. Messages are JSON (``message_encoding``
-``json``) with JSON-Schema schemas; log and publish times are ``start_ns`` + the
-episode's time [ns], and every message carries the same time in its
-``timestamp`` ({sec, nsec}). Topics, as topic (schema, rate): content:
+:func:`write_run_mcap` writes an :class:`~sim.closed_loop.Episode` (fresh, or read back with
+:meth:`Episode.load`) with the ``mcap`` package; opening it needs nothing of mpcshare. Messages are JSON with
+JSON-Schema schemas; log and publish times are ``start_ns`` + the episode's time [ns], as is each message's
+``timestamp`` ({sec, nsec}). Topics, topic (schema, rate): content:
 
-- ``/knife/tip`` (``foxglove.PoseInFrame``, control rate): the knife tip in the plate
-  frame (orientation identity: only the position is tracked);
-- ``/knife/reference`` (``foxglove.PoseInFrame``, control): the controller's tip
-  reference (steps without one are left out);
-- ``/wearer/intent`` (``foxglove.PoseInFrame``, control): the wearer's intended tip;
-- ``/fork/pose`` (``foxglove.PoseInFrame``, control): the fork tip, roll/pitch/yaw as a
-  quaternion; only when ``fork`` is given;
-- ``/tf`` (``foxglove.FrameTransform``, control): ``plate`` → ``torso``, the base pose
-  (torso sway);
-- ``/arm/joint_states`` (``mpcshare.JointState``, physics rate): q [rad], v [rad/s],
-  applied τ [N·m], laid out as sensor_msgs/JointState;
+- ``/knife/tip``, ``/knife/reference``, ``/wearer/intent`` (``foxglove.PoseInFrame``, control): the knife
+  tip, the controller's reference (steps without one left out), the wearer's intended tip; plate frame,
+  orientation identity;
+- ``/fork/pose`` (``foxglove.PoseInFrame``, control): the fork tip, roll/pitch/yaw as a quaternion; only with ``fork``;
+- ``/tf`` (``foxglove.FrameTransform``, control): ``plate`` → ``torso``, the base pose;
+- ``/arm/joint_states`` (``mpcshare.JointState``, physics rate): q [rad], v [rad/s], applied τ [N·m];
 - ``/wearer/shoulder`` (``mpcshare.JointState``, control): the shoulder angles [rad];
-- ``/control/arbitration`` (``mpcshare.Arbitration``, control): α, β, the mode (argmax
-  of the mode probabilities, −1 none), novelty;
-- ``/control/status`` (``mpcshare.ControllerStatus``, control): the status, ``ok`` flag;
-- ``/control/timing`` (``mpcshare.Timing``, control): the controller step's wall time
-  [ms] (filter, models, MPC and QP solves);
-- ``/control/log`` (``foxglove.Log``): one line each time the status changes.
+- ``/control/arbitration`` (``mpcshare.Arbitration``, control): α, β, the mode (argmax, −1 none), novelty;
+- ``/control/status`` (``mpcshare.ControllerStatus``), ``/control/timing`` (``mpcshare.Timing``: the step's
+  wall time [ms]), control rate; ``/control/log`` (``foxglove.Log``): a line at each status change.
 
-Values that are not finite (α before a first command, a missing novelty) are JSON
-``null``. The run's ``info`` scalars go into an MCAP metadata record ``mpcshare.run``.
+Non-finite values (α before a first command, a missing novelty) are JSON ``null``. The run's ``info`` scalars
+go into the metadata record ``mpcshare.run``.
 """
 
 from __future__ import annotations

@@ -1,35 +1,23 @@
 """The MuJoCo eating scene: a swaying torso wearing an arm (the SuperLimb by default), a table, a plate, food, the fork.
 
-Frames (all right-handed, metres):
+Frames (right-handed, metres): **world** — the seat under the wearer's sternum at the neutral posture, x forward,
+y to the wearer's left, z up; **torso** (a mocap body) — the model world frame of the arm's
+:class:`robot.description.RobotDescription`, its subtree (``RobotDescription.mjcf_body``) mounted at the
+description's mount; **plate** — origin at the plate's centre on its top surface, z up, x away from the wearer
+(``SceneConfig.plate_position``).
 
-* **world**: the seat under the wearer's sternum at the neutral posture, x
-  forward, y to the wearer's left, z up;
-* **torso** (a mocap body) = the model world frame of the arm's
-  :class:`robot.description.RobotDescription` (the Pinocchio model's ``world``); the arm's
-  subtree (``RobotDescription.mjcf_body``) is mounted in it at the description's mount (the
-  SuperLimb: on the right side of the chest);
-* **plate**: origin at the plate's centre on its top surface, z up, x away from
-  the wearer (fixed in the world at ``SceneConfig.plate_position``).
+The torso sways kinematically (:meth:`SceneConfig.torso_pose`):
 
-The torso sways kinematically (breathing and posture, :meth:`SceneConfig.torso_pose`):
+    p_torso(t) = Σ_k A_k · sin(2π f_k t + φ_k)  [m],   pitch(t) = P · sin(2π f_posture t + φ_posture)  [rad]
 
-    p_torso(t) = Σ_k A_k · sin(2π f_k t + φ_k)                    [m]
-    pitch(t)  = P · sin(2π f_posture t + φ_posture)                [rad]
+f = 0.25 Hz (breathing, a few mm: De Groote et al. 1997, J Appl Physiol 83:1531) and 0.05 Hz (postural drift,
+about a centimetre: Kuo 2005); mocap motion is no inertial load (≈ 0.01 m/s²). The controller's base pose is
+``T_plate_torso = T_world_plate⁻¹ · T_world_torso`` (``p_plate = R p_model + t``), as the paper's motion capture.
+Physics: 1 kHz, semi-implicit ``Euler`` (which :mod:`sim.servo` predicts exactly), contacts disabled (the
+demonstration's forces are logged, not simulated).
 
-with f = 0.25 Hz (breathing: chest-wall excursion of a few mm, e.g. De Groote
-et al. 1997, J Appl Physiol 83:1531) and 0.05 Hz (seated postural drift, about
-a centimetre; e.g. Kuo 2005). Mocap motion is not felt as an inertial load by the
-arm (accelerations ≈ (2π·0.25)²·4 mm ≈ 0.01 m/s², a thousandth of g).
-
-The base pose the controller receives is ``T_plate_torso = T_world_plate⁻¹ ·
-T_world_torso`` (``p_plate = R p_model + t``), as the paper's motion capture.
-Physics: 1 kHz, MuJoCo's semi-implicit ``Euler`` integrator (the joint servo
-of :mod:`sim.servo` predicts its step exactly), contacts disabled (the knife
-and fork forces of the demonstration are logged, not simulated: the knife
-would otherwise push against the plate through the servo).
-
-To render headless, ``MUJOCO_GL=egl`` must be set before MuJoCo is first imported
-(MuJoCo reads it once); the ``mpcshare`` command line and the test suite set it.
+Headless rendering needs ``MUJOCO_GL=egl`` before MuJoCo's first import; importing ``sim`` sets it when unset
+and there is no display (:mod:`sim.offscreen_gl`).
 """
 
 from __future__ import annotations

@@ -1,35 +1,23 @@
 """Joint servo at the physics rate: tracks the controller's command within every limit, in MuJoCo.
 
-Between two controller steps (period T = 10 ms) the servo follows the commanded
-constant-acceleration segment that ends at (q_cmd, v_cmd) [rad, rad/s]:
+Between two controller steps (T = 10 ms) it follows the constant-acceleration segment ending at (q_cmd, v_cmd)
+[rad, rad/s]: q_ref(s) = q_cmd − v_cmd·r + ½·a_cmd·r², v_ref(s) = v_cmd − a_cmd·r, r = t_end − s, with a PD
+law on the feed-forward acceleration: a_des = a_cmd + k_p·(q_ref − q) + k_d·(v_ref − v).
 
-    q_ref(s) = q_cmd − v_cmd·r + ½·a_cmd·r²,   v_ref(s) = v_cmd − a_cmd·r,   r = t_end − s,
-
-with a PD law on top of the feed-forward acceleration (as a motor driver's
-position loop):  a_des = a_cmd + k_p·(q_ref − q) + k_d·(v_ref − v).
-
-**Limits in the physics.** MuJoCo's ``Euler`` integrator is semi-implicit: with
-zero joint damping, one step h [s] gives exactly
+**Limits.** MuJoCo's semi-implicit ``Euler`` step h [s] with zero damping gives exactly
 
     v⁺ = v + h·M(q)⁻¹·(τ − b(q, v)),      q⁺ = q + h·v⁺
 
-(M: ``mj_fullM`` incl. armature; b: ``qfrc_bias``, gravity + Coriolis).  So the
-servo chooses the next velocity v⁺ inside the *viable* interval
+(M: ``mj_fullM`` with armature; b: ``qfrc_bias``). The servo keeps v⁺ in the *viable* interval
 
-    −v_max ≤ v⁺ ≤ v_max,     v⁺ ≤ u(q_max − q),     −v⁺ ≤ u(q − q_min),
-    u(gap) = −A·h + sqrt(A²h² + 2A·gap)     (A: braking acceleration),
+    −v_max ≤ v⁺ ≤ v_max,   v⁺ ≤ u(q_max − q),   −v⁺ ≤ u(q − q_min),   u(gap) = −A·h + sqrt(A²h² + 2A·gap)
 
-which keeps q⁺ + v⁺²/(2A) ≤ q_max: from there, braking at A (semi-implicit
-steps v ← v − A·h, q ← q + h·v, the last one partial) stops within v⁺²/(2A)
-(:func:`viable_next_velocity`; the set is invariant under braking).  The
-robot package's :func:`robot.constraints.viable_velocity_bound` is the same idea
-for the controller's *exact* constant-acceleration integration (q⁺ = q + h(v + v⁺)/2)
-and does not hold for MuJoCo's step, hence this variant.  Then τ = M·a + b; if
-|τ| exceeds τ_max the small QP  min ‖a − a_des‖²  s.t. the viable box and
-|M·a + b| ≤ τ_max  (DAQP through :mod:`robot.solvers`) picks the nearest
-feasible a.  It is always feasible when braking is: the servo checks every step
-that braking a_b = clip(−v/h, ±A) needs at most τ_max (``brake_infeasible``
-counts the steps where it would not), as the SuperLimb's A were chosen for.
+(A: braking acceleration), so q⁺ + v⁺²/(2A) ≤ q_max and braking at A stops in time
+(:func:`viable_next_velocity`; :func:`robot.constraints.viable_velocity_bound` is the same for the controller's
+exact integration, which MuJoCo's step is not). Then τ = M·a + b; beyond τ_max the QP min ‖a − a_des‖² s.t.
+the viable box and |M·a + b| ≤ τ_max (DAQP, :mod:`robot.solvers`) picks the nearest feasible a. It is feasible
+whenever braking a_b = clip(−v/h, ±A) needs at most τ_max, checked every step (``brake_infeasible`` counts
+the steps where it would not).
 """
 
 from __future__ import annotations

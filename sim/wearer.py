@@ -1,55 +1,23 @@
 """The simulated wearer: drives their own plan or corrects the robot, through the shoulder channel.
 
-The intent is the knife-tip motion of a held-out demonstration, p*(t) [m] in the
-plate frame (zero-phase low-passed at ``intent_cutoff_hz``: the plan, without the
-recording's sensor noise; it holds the rhythmic sawing strokes while cutting).
-The wearer's shoulder command has two parts (as in models of human manual control
-with a feed-forward path beside a delayed feedback path: McRuer & Jex 1967, IEEE
-Trans. HFE 8:231; pursuit and preview tracking,
-IEEE Trans. Human-Machine Syst. 50:68, 2020):
+Intent p*(t) [m, plate frame]: a held-out demonstration's knife tip, zero-phase low-passed at ``intent_cutoff_hz``.
+Feed-forward beside delayed feedback (McRuer & Jex 1967, IEEE Trans. HFE 8:231; IEEE Trans. HMS 50:68, 2020):
 
-**Self-generated motion (feed-forward).**  The person knows their own plan and
-anticipates their own dynamics, so this part has *no reaction delay*.  It is limited
-by the bandwidth of self-paced rhythmic movement f_r (``rhythmic_bandwidth_hz``):
-the plan is low-passed once, at construction, by a zero-phase filter whose gain is
+- **own plan**, no reaction delay: p*, zero-phase low-passed once at f_r (``rhythmic_bandwidth_hz``),
+  |G(f)| = 1 / (1 + (√2 − 1)·(f/f_r)⁴) (Butterworth 2nd order, forward and backward) → p_r, ṗ_r;
+- **corrections**, per control step k: e = p*(t_k − d) − p(t_k − d) (reaction delay d),
+  w = clip((‖e‖ − δ)/δ, 0, 1) (dead band δ), u_c = w·K·e;
+- **who leads**: ``step(k, tip, alpha_cue)`` gets the previous step's α, perceived d later; α ≥ 0.5: the robot
+  leads (λ = 0), else the wearer (λ = 1 with ``feedforward``); a missing cue (None, NaN) keeps the last
+  perceived leader, the wearer before any. u = λ·ṗ_r(t_k) + u_c, scaled to ‖u‖ ≤ ``max_speed_mps``;
+- **shoulder** (robot.shoulder.ShoulderMap, n angles, P⁺ for fewer than three): z = P⁻¹u/g, corrective part
+  through a critically damped low-pass at f_c (``bandwidth_hz``): z = LP_fc(z_c) + z_r; past the map's dead
+  zone δ_θ: θ₀ = z + δ_θ·clip(z/ε, −1, 1), ε = 0.1·δ_θ; motor noise θ = θ₀ + σ₀·n₁ + c·|θ₀|⊙n₂,
+  n ~ N(0, I) (Harris & Wolpert 1998, Nature 394:780). θ [rad].
 
-    |G(f)| = 1 / (1 + (√2 − 1)·(f/f_r)⁴)        (−3 dB at f_r, phase 0)
-
-(a 2nd-order Butterworth run forward and backward), giving p_r(t) and ṗ_r(t).
-Strokes faster than f_r come out smaller, never later.
-
-**Corrections (feedback).**  Every control step k (period Δ) the wearer
-
-1. perceives the tip error with the reaction delay d:  e = p*(t_k − d) − p(t_k − d);
-2. engages in proportion to how far it exceeds a tolerated band (deadband δ):
-   w = clip((‖e‖ − δ)/δ, 0, 1)  (intermittent control: small errors are tolerated);
-3. wants the corrective tip velocity u_c = w·K·e.
-
-**Who leads.**  The controller shows its arbitration weight α (a real system through
-haptic, visual or sound feedback): ``step(k, tip, alpha_cue)`` is given the α of the
-previous control step.  The wearer perceives it after the same reaction delay d (a
-delay line); a perceived α ≥ 0.5 means *the robot leads*, α < 0.5 *the wearer leads*.
-A missing cue (None or NaN, e.g. before the first command) changes nothing: the wearer
-keeps the leader last perceived, and before any cue was perceived *the wearer leads*
-(so callers that give no cue at all get a voluntary user).  With λ = 1 when the wearer
-leads (and ``feedforward``), 0 otherwise, the wanted tip velocity is
-
-    u = λ·ṗ_r(t_k) + u_c,      capped at ‖u‖ ≤ ``max_speed_mps`` (both parts scaled alike).
-
-**Shoulder.**  With the shoulder map's linear part z = P⁻¹u/g (robot.shoulder.ShoulderMap;
-P⁺, the least-squares angles, for a map of fewer than three angles: n angles in all),
-the corrective part goes through a critically damped second-order low-pass at the
-corrective bandwidth f_c (``bandwidth_hz``), the feed-forward part does not (its
-bandwidth was applied to the plan):  z = LP_fc(z_c) + z_r.  The wearer pushes past the
-map's dead zone δ_θ:  θ₀ = z + δ_θ·clip(z/ε, −1, 1), ε = 0.1·δ_θ, so tip_velocity(θ₀) = g·P·z
-wherever |z_i| ≥ ε (and θ₀ → 0 as z → 0).  Motor noise, constant plus signal-dependent:
-θ = θ₀ + σ₀·n₁ + c·|θ₀|⊙n₂,  n ~ N(0, I) (Harris & Wolpert 1998, Nature 394:780).
-
-``desired_velocity`` holds the last u [m/s] (feed-forward plus correction),
-``engagement`` the last w, ``wearer_leads`` the leader perceived.  The settings and
-their sources per kind of wearer are in :mod:`sim.wearer_presets`; ``WearerConfig()``
-is the default preset, ``hemiparetic_mild`` (the paper's users: a hemiparetic wearer
-commanding through the affected shoulder).
+``desired_velocity`` is the last u [m/s], ``engagement`` the last w, ``wearer_leads`` the leader perceived.
+Settings: :class:`WearerConfig` (default ``hemiparetic_mild``), sources in :mod:`sim.wearer_presets`;
+bad settings raise :class:`sim.errors.WearerConfigError`.
 """
 
 from __future__ import annotations

@@ -1,30 +1,22 @@
 """The wearer protocol: what the closed loop needs from a simulated person.
 
-:func:`sim.closed_loop.run_episode` drives any object with the members of
-:class:`Wearer`, or builds one per episode with a :class:`WearerFactory` called as
-``factory(intent, rate_hz, seed=seed)`` on the episode's intended knife tip (the
-trial's ``knife_x/y/z``, one row per control step). A new wearer behaviour is one
-class: a class whose ``__init__`` takes ``(intent, rate_hz, *, seed)`` is itself a
-factory, so ``run_episode(controller, trial, wearer=MyWearer)`` runs it.
+:func:`sim.closed_loop.run_episode` drives any object with the members of :class:`Wearer`, or builds one per
+episode with a :class:`WearerFactory`, ``factory(intent, rate_hz, seed=seed)``, from the trial's intended knife
+tip (``knife_x/y/z``, a row per control step). A class whose ``__init__`` takes ``(intent, rate_hz, *, seed)``
+is itself a factory: ``run_episode(controller, trial, wearer=MyWearer)``. Per episode the loop reads:
 
-The loop reads, per episode:
+- ``reset()``, once before the first step;
+- ``intent`` (≥ N, 3) [m], plate frame: the intended tip per control step (recorded as ``tip_intent``, the
+  metrics' reference; the arm starts at the configuration nearest ``intent[0]``);
+- ``step(k, tip, alpha_cue)`` → shoulder angles θ (n,) [rad] (n = 3, or the channels of its shoulder map), given
+  the measured tip (3,) [m] and the previous command's α (None before the first, NaN after a step without one);
+- ``info()`` → JSON-able settings for the episode's ``info``, with ``shoulder_gain`` and
+  ``shoulder_deadband_rad`` (:func:`sim.metrics.conflict_mask` maps θ back to a tip velocity with them), and
+  ``shoulder_matrix`` (its P) where it is not the task's ``sim.task.eating.SHOULDER_TO_PLATE``.
 
-- ``reset()``, called once before the first step;
-- ``intent`` (≥ N, 3) [m], plate frame: the tip the wearer intends at control step k
-  (the episode records ``intent[:N]`` as ``tip_intent``, the metrics' reference, and
-  starts the arm at the configuration nearest to ``intent[0]``);
-- ``step(k, tip, alpha_cue)`` → shoulder angles θ (n,) [rad] (n = 3, or the channels of the
-  shoulder map it commands through), once per control step,
-  given the measured knife tip (3,) [m] and the α of the controller's previous
-  command (None before the first, NaN after a step without a command);
-- ``info()`` → JSON-able settings stored in the episode's ``info``; it must hold
-  ``shoulder_gain`` and ``shoulder_deadband_rad`` (the shoulder map the wearer commands
-  through: :func:`sim.metrics.conflict_mask` maps θ back to a tip velocity with it), and
-  ``shoulder_matrix`` (its P, JSON) where that is not the task's ``sim.task.eating.SHOULDER_TO_PLATE``.
-
-:class:`sim.wearer.SimulatedWearer` is the project's wearer; its settings
-(:class:`sim.wearer.WearerConfig`, the presets in :mod:`sim.wearer_presets`) are
-factories of it.
+A wearer that lacks a member is refused before the first step with :class:`sim.errors.WearerError`.
+:class:`sim.wearer.SimulatedWearer` is the project's wearer; its settings (:class:`sim.wearer.WearerConfig`, the
+presets of :mod:`sim.wearer_presets`) are factories of it.
 """
 
 from __future__ import annotations

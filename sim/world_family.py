@@ -1,43 +1,23 @@
 """A randomised family of eating worlds: the *structure* of each world is drawn from its seed.
 
-The project's own generator (:mod:`sim.demonstrator`) has four named modes in a fixed cycle,
-a fork that eases between piecewise targets, and a knife that is an affine function of the
-fork's *current* pose plus a lead on its velocity. A world of this family differs in
-structure, not only in parameters (:func:`draw_world`, one :class:`WorldSpec` per seed):
+Unlike :mod:`sim.demonstrator` in structure, a world (:func:`draw_world`, one :class:`WorldSpec` a seed) draws:
 
-* **modes**: K ∈ {2, …, 5}; a transition matrix between different modes drawn from a
-  Dirichlet(1) (any cycle, any re-visits), gamma(3) dwell times of mean 2–9 s per mode;
-* **mode kinds**: label 0 is always the *stroke* mode (named ``cutting``, so that the
-  project's tools measure sawing on it): the knife makes a spontaneous rhythmic motion along a
-  drawn axis (frequency f ∈ [0.9, 2.8] Hz wandering ±10 %, half-stroke 0.8–3 cm, a new random
-  phase at every entry: not a function of the fork); every other mode is one of ``track``
-  (the knife follows the fork's recent history), ``fidget`` (the same plus band-limited
-  noise, 0.2–0.8 Hz, 0.6–1.5 cm: unpredictable but not rhythmic) or ``rest`` (the knife holds
-  a pose of its own with a slow drift, whatever the fork does), drawn with at least one
-  ``track``;
-* **the map from the fork's history to the knife**, per mode m (regime-dependent):
+* **modes**: K ∈ {2, …, 5}, transitions Dirichlet(1) between different modes, gamma(3) dwells of mean 2–9 s;
+  label 0 the *stroke* mode ``cutting`` (rhythmic knife motion along a drawn axis, 0.9–2.8 Hz ± 10 %,
+  half-stroke 0.8–3 cm, a new phase at each entry: no function of the fork); the others ``track``, ``fidget``
+  (plus noise of 0.2–0.8 Hz, 0.6–1.5 cm) or ``rest`` (the knife's own pose, slow drift), at least one ``track``;
+* **the knife**, per mode m:  k(t) = b_m + A_m·(h_m(t − d) − c) + ℓ_m·ḟ(t − d) + s_m(t)  [m], h_m the fork
+  position low-passed with τ_m ∈ [0.05, 0.8] s, A_m a rotation about z by ±60° times a gain in [0.4, 1.2],
+  ℓ_m ∈ [−0.4, 0.6] s, b_m the mode's offset, c the plate centre, s_m the stroke or fidget, d ∈ [0, 0.4] s
+  (the knife's labels switch d later too);
+* **the fork**: Ornstein–Uhlenbeck (0.4–2 s, 0.6–2.5 cm) around a per-mode anchor that moves 1–3 cm at each
+  entry, low-passed 0.1–0.4 s; orientation and force carry a per-mode cue of drawn size;
+* **noise** (fork 0.2–1.5 mm, knife 0.3–2 mm), the hand's low-pass (0.02–0.06 s, the stroke scaled by its
+  inverse gain), the shoulder gains (1.5–3 rad per m/s, :data:`sim.task.eating.SHOULDER_TO_PLATE` layout),
+  1–3 subjects whose pace scales dwells and stroke frequency (± 15 %).
 
-      k(t) = b_m + A_m · (h_m(t − d) − c) + ℓ_m · ḟ(t − d) + s_m(t)
-
-  with h_m the fork position through a first-order low-pass of time constant τ_m ∈
-  [0.05, 0.8] s (how far back the knife "remembers"), A_m a rotation about z by ±60° times a
-  diagonal gain in [0.4, 1.2], ℓ_m ∈ [−0.4, 0.6] s a lead on the fork velocity, b_m the
-  mode's own knife offset, c the plate centre, s_m the stroke or fidget motion; d ∈ [0, 0.4] s
-  the knife's delay after the fork (its mode labels switch d later, too);
-* **the fork**: an Ornstein–Uhlenbeck drift (time constant 0.4–2 s, spread 0.6–2.5 cm) around
-  a per-mode anchor on the plate that moves to a new piece at each entry (jitter 1–3 cm),
-  through a critically damped low-pass (0.1–0.4 s); orientation and pressing force carry a
-  per-mode cue of drawn size (how confounded the modes are);
-* **noise** (fork 0.2–1.5 mm, knife 0.3–2 mm), the hand's low-pass on the knife (0.02–0.06 s;
-  the stroke is scaled by its inverse gain at the stroke's frequency, so the drawn half-stroke is
-  what the knife makes),
-  the shoulder's gains (1.5–3 rad per m/s, the task's :data:`sim.task.eating.SHOULDER_TO_PLATE`
-  layout), and 1–3 subjects whose pace scales dwell times and stroke frequency (±15 %).
-
-The data have the project's channels (:data:`sim.demonstrator.OBS_NAMES`, ``ACT_NAMES``,
-``VOL_NAMES``; plate frame, metres, radians, newtons), ``mode`` = the fork's true mode, and
-the knife tip stays on or above the plate (z ≥ 0 before the noise) inside the region the
-project's demonstrations span. The same seed gives the same world and the same data.
+Channels as :data:`sim.demonstrator.OBS_NAMES` (plate frame; m, rad, N), ``mode`` the fork's true mode, the tip
+at z ≥ 0 (before noise) inside the project's demonstrations' region. Same seed, same world and data.
 """
 
 from __future__ import annotations

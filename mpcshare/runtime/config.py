@@ -1,43 +1,23 @@
 """The arm's configuration of ``mpcshare run``: a TOML file → :class:`RunConfig`, checked.
 
-Tables (examples: ``examples/ros2/superlimb.toml``, ``examples/ros2/panda.toml``)::
+Tables (every key: docs/design.md, "On a real arm"; examples ``examples/ros2/superlimb.toml``, ``panda.toml``)::
 
-    name = "superlimb"            # the status's hardware_id
-    rate_hz = 100.0               # the control rate: the model's rate
-    resume_after_s = 1.0          # after a protective stop for a silent input: resume once every required
-                                  #   input has been fresh this long [s]
-    tick = "arm"                  # "arm": on each arriving joint state within half a period of its tick
-                                  #   (mpcshare.runtime.loop); "schedule": every period of the monotonic clock
-    [network]                     # optional; default loopback: interface 127.0.0.1, peers [127.0.0.1],
-    interface = "192.168.1.10"    #   multicast off, domain_id 0 (ROS_DOMAIN_ID). CYCLONEDDS_URI, when set,
-    peers = ["192.168.1.2"]       #   replaces the whole table.
-    [robot]                       # optional; absent: the SuperLimb
-    file = "panda.urdf"           # URDF/MJCF (relative to this file), or "example-robot-data:PATH"
-    tip_frame = "panda_hand_tcp"; mount = [x, y, z]  # mount: the base in the plate frame [m], torso at rest
-    mount_rpy, locked_joints, velocity_limit [rad/s], acceleration_limit [rad/s²]  # caps: chosen when absent
-    [controller]                  # optional: strategy ("gate"), beta (0.5), mpc (false)
-    [inputs.arm]                  # required: the arm's sensor_msgs/msg/JointState
-    topic = "/joint_states"; joints = ["j1", ...]    # the model's joints, in the model's order
-    [inputs.NAME]                 # any other input: topic, type (INPUT_TYPES), optional (false),
-    deadline_s, stop_after_s, frame ("": any), reliability, depth
-    [inputs.torso]                # optional, special: geometry_msgs/msg/PoseStamped of the arm's base
-                                  #   (T_plate_torso) in the plate frame
-    [obs]                         # every observation channel of the model: "INPUT FIELD.PATH"
-    fork_x = "fork pose.position.x"; fork_roll = "fork pose.orientation@roll"
-    [voluntary]                   # every voluntary channel of the model (the wearer's shoulder)
-    shoulder_elevation = "shoulder position[0]"
-    [outputs.command]             # topic, type (COMMAND_TYPES), interface (Float64MultiArray: position,
-                                  #   velocity or effort), reliability, depth
-    [outputs.status]              # topic of the diagnostic_msgs/msg/DiagnosticArray
+    name = "superlimb"; rate_hz = 100.0   # the status's hardware_id; the control rate (the model's)
+    resume_after_s = 1.0                  # after a stop for a silent input: resume once all are fresh this long [s]
+    tick = "arm"                          # on each joint state within T/2 of its tick; "schedule": every period
+    [network]                             # optional; default loopback 127.0.0.1, no multicast, domain_id 0
+    [robot]                               # optional (absent: the SuperLimb): file, tip_frame, mount [m], caps
+    [controller]                          # optional: strategy ("gate"), beta (0.5), mpc (false)
+    [inputs.arm]                          # required: topic, joints (the model's, in its order)
+    [inputs.NAME]                         # topic, type, optional, deadline_s, stop_after_s, frame, reliability, depth
+    [obs] / [voluntary]                   # every channel of the model: "INPUT FIELD.PATH"
+    [outputs.command] / [outputs.status]  # topic, type, interface; the DiagnosticArray's topic
 
-Field paths are those of ``mpcshare import``'s mapping (:func:`learning.data.mapping.parse_field_path`):
-``a.b[i]``, a quaternion's ``@roll``/``@pitch``/``@yaw``. Every input has ``deadline_s`` (older: its
-channels are missing, the controller's fault path) and ``stop_after_s`` (older: protective stop);
-an optional input never stops the arm.
-
-Errors: :class:`RunConfigError`, one line naming the file, the table and the key. :func:`load_run_config`
-checks the file alone; :func:`check_against_model` checks it against the model (channels, joint
-names, rate) before anything is sent.
+Field paths as ``mpcshare import``'s (:func:`learning.data.mapping.parse_field_path`): ``a.b[i]``, ``@roll``.
+Older than ``deadline_s``: an input's channels are missing (the controller's fault path); older than
+``stop_after_s``: protective stop (never for an optional input). Errors: :class:`RunConfigError`, one line
+naming the file, the table and the key; :func:`load_run_config` checks the file alone,
+:func:`check_against_model` against the model (channels, joint names, rate) before anything is sent.
 """
 
 from __future__ import annotations

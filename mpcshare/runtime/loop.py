@@ -1,39 +1,23 @@
 """The loop of ``mpcshare run``: the shared controller at the control rate over ROS 2 topics.
 
-Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz; with ``sim_time``, t_k is each
-new ``/clock`` message's time instead):
+Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz; ``sim_time``: each new ``/clock``
+message's time, a clock that jumps back resets the controller, the watchdog and the latest inputs):
 
-1. take every new message of every input (arrival times feed the :class:`~mpcshare.runtime.watchdog.Watchdog`;
-   a message whose header frame_id differs from the input's ``frame`` is dropped and counted);
-2. the watchdog's verdict now: a stale input's values are withheld (NaN: the arm → the controller's
-   ``invalid_joint_state`` hold; a fork or wrench channel → the Kalman prediction and then
-   ``stale_fork_sensor``; the shoulder → ``invalid_shoulder``; the torso → ``invalid_base_pose``, last
-   pose kept); the status names the stale inputs;
-3. ``SharedController.step(t_k, obs, voluntary, q, v, base_pose)``, then the command (stamped with the
-   wall clock, ROS time; with ``sim_time`` the clock's time) and the status are published;
-4. collect the garbage due if the slack allows (:mod:`~mpcshare.runtime.gc_policy`; under the default
-   policy the heap set up before the loop is frozen), then sleep until t_{k+1} (the last 0.2 ms spun);
-   a tick that is already past is skipped (counted as ``late_ticks``). With the
-   configuration's ``tick = "arm"``, tick k+1 runs as soon as a joint state of the arm arrives after
-   t_{k+1} − T/2, and at t_{k+1} + T/2 at the latest; a tick on a joint state moves the schedule so that
-   t_k is that tick's time (phase-locked to the arm's publisher: a joint state waits for its tick only
-   as long as the loop takes to wake, not up to a period; the command period follows the arm's). With
-   ``sim_time``: wait for the next ``/clock`` message (``rosgraph_msgs/msg/Clock``, as a ROS 2 node with
-   ``use_sim_time``); a clock that jumps back (a new episode of the simulator) resets the controller,
-   the watchdog and the latest inputs.
+1. take every new message (arrivals feed the :class:`~mpcshare.runtime.watchdog.Watchdog`; a wrong frame_id is
+   dropped, counted); stale inputs withheld (NaN: the controller's fault path), named in the status;
+2. ``SharedController.step(t_k, obs, voluntary, q, v, base_pose)``; publish the command (stamped with ROS time,
+   or the clock's with ``sim_time``) and the status;
+3. collect the garbage due if the slack allows (:mod:`~mpcshare.runtime.gc_policy`), sleep to t_{k+1} (the last
+   0.2 ms spun); a tick already past is skipped (``late_ticks``). ``tick = "arm"``: tick k+1 runs on the first
+   arm joint state after t_{k+1} − T/2 (at t_{k+1} + T/2 at the latest) and the schedule moves to it.
 
-Each tick's phases and the garbage collections are recorded in ``RunLoop.profile``
-(:class:`~mpcshare.runtime.tick_profile.TickProfile`: the causes of long periods).
-
-**Protective stop** (a required input older than its ``stop_after_s``, a non-finite command, or the end
-of the run): the controller is not called; every tick publishes the stop command (hold the last
-measured joint positions q_stop, fixed at the first stop command: a trajectory point at q_stop with zero
-velocities and accelerations; a Float64MultiArray of q_stop, zero velocities or zero efforts) and the
-status ``protective_stop``. A stop for a silent input ends once every required input has been fresh
-(not stale) for ``resume_after_s``: the controller is reset and called again (counted as ``resumes``);
-a stop for a non-finite command is latched until the process restarts. Before the arm's first joint
-state no command can be formed: only the status is published (``waiting``). :meth:`RunLoop.shutdown`
-publishes the stop command once more and waits (≤ 0.2 s) for reliable readers to acknowledge it.
+Phases and collections go to ``RunLoop.profile`` (:class:`~mpcshare.runtime.tick_profile.TickProfile`).
+**Protective stop** (a required input older than ``stop_after_s``, a non-finite command, the end of the run):
+no controller call; each tick publishes ``protective_stop`` and the hold at q_stop (the joints measured at the
+first stop command: a trajectory point with zero velocities and accelerations; a Float64MultiArray of q_stop,
+zero velocities or zero efforts). A silent-input stop ends once every required input was fresh for ``resume_after_s``
+(controller reset, ``resumes`` counted); a non-finite command latches. Before the arm's first joint state only
+the status goes out (``waiting``). :meth:`RunLoop.shutdown` publishes the stop again, ≤ 0.2 s for acknowledgement.
 """
 
 from __future__ import annotations
@@ -205,7 +189,7 @@ class RunLoop:
                 and now - self._fresh_since >= self.config.resume_after_s)
 
     def tick(self, k: int, t: float | None = None) -> str:
-        """Control tick k at time ``t`` (default k·T; module docstring, 1–3); returns the published status."""
+        """Control tick k at time ``t`` (default k·T; module docstring, 1–2); returns the published status."""
         t_k = k * self.config.period_s if t is None else t
         self._live_in = None
         self._t_step = self._t_live = 0.0

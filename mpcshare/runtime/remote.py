@@ -1,29 +1,22 @@
 """The controller in another process, behind the controller's ``step`` interface: the robot stand-in's side.
 
-:class:`RemoteController` is what ``mpcshare sim --serve`` gives the closed-loop runner
-(:func:`sim.closed_loop.run_episode`): each ``step(t, obs, voluntary, q, v, base_pose)`` publishes the
-configuration's inputs (the arm's joint states by joint name; every other input built from the ``[obs]``
-and ``[voluntary]`` channels' field paths, a quaternion from its ZYX angles; the torso's pose when the
-configuration has that input) and returns the joint command that ``mpcshare run`` sends back, with α,
-β, the mode, novelty, the tip reference and the status read from its status message.
+:class:`RemoteController` is what ``mpcshare sim --serve`` gives :func:`sim.closed_loop.run_episode`: each
+``step(t, obs, voluntary, q, v, base_pose)`` publishes the configuration's inputs (the arm's joint states by
+name; the others built from the ``[obs]`` and ``[voluntary]`` field paths, a quaternion from its ZYX angles; the
+torso's pose if configured) and returns the joint command ``mpcshare run`` sends back, with α, β, the mode,
+novelty, the tip reference and the status read from its status message. Two clocks:
 
-Two clocks:
+- **sim time** (default): inputs stamped t, then ``/clock`` at t (``run --sim-time`` ticks on it); the step
+  waits for the command stamped t (``first_timeout_s`` before the first command, ``timeout_s`` after a step that
+  got one, ``lost_timeout_s`` after one that did not): lockstep, the inputs of one process at the same times;
+- **wall clock**: sleep to the episode's start + t, stamp with the wall clock, take the newest command that
+  arrives within 0.8 periods.
 
-- **sim time** (default): the inputs are stamped with t, then ``/clock`` is published at t; ``run --sim-time``
-  ticks on it, and the step waits for the command stamped t (up to ``first_timeout_s`` before the first
-  command, ``timeout_s`` after a step that got one, ``lost_timeout_s`` after one that did not). The loop is
-  then in lockstep: the same inputs at the same times as in one process.
-- **wall clock**: the step sleeps until the episode's start + t, publishes the inputs stamped with the wall
-  clock and takes the newest command that arrives within 0.8 periods.
-
-The command, in each form ``run`` sends, becomes the runner's segment over the period
-(:mod:`mpcshare.runtime.stand_in_command`). A ``Float64MultiArray`` has no header: its status (same stamp
-as the command, published after it) says whether a command went out (``alpha`` or ``stop_command = 1``),
-and the newest command received is taken.
-No command for a step: ``None`` (the runner holds the arm, as ros2_control's trajectory controller holds
-once its ``cmd_timeout`` passes). An :class:`Outage` silences an input over a time window: ``drop`` stops
-writing, ``restart`` deletes its DDS writer at the start and creates a new one at the end (a publisher
-restarted).
+Each command form becomes the runner's segment over the period (:mod:`mpcshare.runtime.stand_in_command`); a
+``Float64MultiArray`` has no header, so its status (same stamp, published after it) says whether a command went
+out (``alpha`` or ``stop_command = 1``). No command for a step: ``None`` (the runner holds the arm, as
+ros2_control's trajectory controller after ``cmd_timeout``). An :class:`Outage` silences an input over a time
+window: ``drop`` stops writing, ``restart`` deletes its DDS writer at the start and creates a new one at the end.
 """
 
 from __future__ import annotations

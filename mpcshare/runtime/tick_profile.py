@@ -1,24 +1,19 @@
 """Where the time of ``mpcshare run``'s ticks goes, and why a long period was long.
 
-:class:`TickProfile` records, per tick, into arrays allocated once (nothing is allocated on the tick):
-when the command was stamped (``sent``, monotonic [s]), the stamp of the arm's joint state it was
-computed from (ROS time [s]), the wall clock when the tick started, and how long its phases took:
-``poll`` (taking the inputs' DDS samples), ``step`` (the controller), ``publish`` (writing the command
-and the status), ``live`` (the live view); and, from :data:`gc.callbacks`, every garbage collection
-(generation, start, duration). Past ``capacity`` ticks or collections, later ones are not recorded
-(counted in ``dropped``).
+:class:`TickProfile` records per tick, into arrays allocated once (nothing allocated on the tick): the command's
+stamp (``sent``, monotonic [s]), the stamp of the arm's joint state it used (ROS time [s]), the wall clock at
+the tick's start, its phases' durations (``poll``: the DDS takes, ``step``: the controller, ``publish``: the
+command and the status, ``live``: the live view), and, from :data:`gc.callbacks`, every garbage collection
+(generation, start, duration). Beyond ``capacity`` ticks or collections nothing more is recorded (``dropped``).
 
-A **long period** is one whose command stamps lie more than T + ``long_after_s`` apart (the bench's
-jitter; a tick the loop skipped, ``late``, makes one). Its cause (:meth:`TickProfile.report`) is the
-largest of these excesses over the period [previous command, this command]:
+A **long period**: command stamps more than T + ``long_after_s`` apart (a skipped tick, ``late``, makes one).
+Its cause (:meth:`TickProfile.report`) is the largest excess over [previous command, this command]:
 
 - ``gc genN``: the collections inside it (N the oldest generation collected);
-- ``poll``, ``step``, ``publish``, ``live``: the phase's time above its median (publish and live: the
-  previous tick's, which follow its command);
-- ``input late``: the arm's joint state stamped later than one period after the previous one, or none new
-  (the tick waited out its window): its publisher was late, the other side of the loop;
-- ``woke late``: the time from the joint state's stamp to the tick's start above its median (delivery and
-  the operating system waking this process: the machine busy);
+- ``poll``, ``step``, ``publish``, ``live``: the phase's time above its median (publish and live: the previous
+  tick's, which follow its command);
+- ``input late``: the arm's joint state stamped later than one period after the previous one, or none new;
+- ``woke late``: from the joint state's stamp to the tick's start, above its median (the machine busy);
 - ``unexplained``: none of these reaches 0.5 ms.
 """
 

@@ -1,35 +1,20 @@
 """Held-out evaluation of a trained gate + reactive predictor at a threshold K.
 
-Held-out labels. Held-out points get their modes from the HMM fitted on the training
-trials (Viterbi over each held-out trial); their quotients are computed *within modes on
-the held-out data only* (pairs of held-out points), and compared with the training K:
-``Z_t = 1[q_t ≤ K]``. This keeps the held-out trials out of every fit, at the price of
-fewer partners per point than in training (a quotient is a maximum over partners, so the
-held-out reactive share at a given K is somewhat higher than the training one).
+Held-out points get their modes from the training trials' HMM (Viterbi per held-out trial) and their quotients
+within modes from pairs of held-out points only, Z_t = 1[q_t ≤ K] with the training K (no held-out trial in
+any fit; fewer partners, so a somewhat higher reactive share than in training: docs/training.md).
+Reported on the held-out windowed steps (a full causal window):
 
-Reported (all on held-out windowed steps, i.e. steps with a full causal window):
-
-- ``rmse_reactive`` / ``rmse_all``: the predictor's RMSE on R = {Z = 1} / on every step,
-  as one number in standardised action units, RMSE = sqrt(mean_{t, c} (û_{t,c} − u_{t,c})²);
-  the same per channel group in physical units (``*_by_group``, via
-  :func:`learning.predictor.rmse_by_group`); ``rmse_gated``: on the steps the gate hands
-  to the robot (ĥ = 1);
+- ``rmse_reactive`` / ``rmse_all`` / ``rmse_gated``: the predictor's RMSE on R = {Z = 1}, on every step, on the
+  steps the gate hands to the robot (ĥ = 1), sqrt(mean_{t, c} (û_{t,c} − u_{t,c})²) in standardised action
+  units; per channel group in physical units (``*_by_group``, :func:`learning.predictor.rmse_by_group`);
 - the gates' accuracy, F1 and Brier score per mode (:func:`learning.gates.metrics.gate_metrics`);
-- ``voluntary_share`` = mean_t (1 − ĥ_t): steps the gate hands to the wearer, ĥ_t =
-  1[gate probability ≥ 0.5];
-- ``voluntary_effort`` (Song & Asada: the wearer's command that the hand-over requires)::
-
-      E = (1/N) · Σ_t (1 − ĥ_t) · ‖θ_t‖
-
-  over the N held-out windowed steps, θ the voluntary channel (shoulder angles [rad]
-  away from the neutral posture, after causal downsampling); E in rad. It is the
-  closed loop's ``voluntary_effort`` (:mod:`sim.metrics`: mean_k ‖θ_k‖) with the
-  wearer at rest wherever the gate hands to the robot, so the two tables read on one
-  scale. A data set without a voluntary channel uses the knife speed as the proxy
-  (the shoulder commands a knife velocity, :class:`robot.shoulder.ShoulderMap`):
-  ‖u_t − u_{t−1}‖/Δt of the standardised action u, Δt = 1/model_hz, E in standardised
-  units/s. ``effort_source`` says which; ``effort_if_all_voluntary`` is E with ĥ ≡ 0
-  (the wearer does everything), the scale against which E is read.
+- ``voluntary_share`` = mean_t (1 − ĥ_t), ĥ_t = 1[gate probability ≥ 0.5];
+- ``voluntary_effort`` E = (1/N) · Σ_t (1 − ĥ_t) · ‖θ_t‖ [rad] over the N steps, θ the shoulder angles from the
+  neutral posture (causally downsampled): the closed loop's effort (:mod:`sim.metrics`) with the wearer at rest
+  wherever the gate hands to the robot. Without a voluntary channel θ_t is the proxy ‖u_t − u_{t−1}‖/Δt of the
+  standardised action (Δt = 1/model_hz; standardised units/s); ``effort_source`` says which;
+  ``effort_if_all_voluntary`` is E with ĥ ≡ 0.
 """
 
 from __future__ import annotations

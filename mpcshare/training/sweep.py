@@ -1,26 +1,17 @@
 """The paper's trade-off between the robot's accuracy and the wearer's effort.
 
-For each percentile p of the within-mode quotients of the training trials, K_p =
-percentile(q, p); gates and the reactive predictor are trained at K_p on the training
-trials (preprocessing, HMM modes and quotients are fitted once and shared) and measured
-on the held-out trials (:func:`mpcshare.training.evaluation.evaluate`). Expected (Song & Asada):
-as K is lowered, the predictor's RMSE on the reactive subset falls (R keeps only the
-predictable situations) and the wearer's effort rises (more is handed over).
+For each percentile p of the training trials' within-mode quotients, K_p = percentile(q, p); gates and the
+reactive predictor are trained at K_p on the training trials (preprocessing, HMM modes and quotients fitted
+once, shared) and measured on the held-out trials (:func:`mpcshare.training.evaluation.evaluate`). Expected
+(Song & Asada): as K is lowered, the predictor's RMSE on R falls and the wearer's effort rises.
 
-:func:`run_sweep` returns a :class:`SweepResult`;
-:func:`mpcshare.reports.sweep.write_sweep` writes it into a folder:
-
-- ``sweep.json`` — a list of rows ``{kind, percentile, K, rmse_reactive, rmse_all,
-  voluntary_share, voluntary_effort, gate_accuracy, …}``: one ``kind="gate+predictor"``
-  row per percentile, a ``kind="lstm_all"`` row (``percentile: null``: the same LSTM
-  trained on every point, no gate, so the robot acts everywhere: share 0, effort 0) and
-  a ``kind="ridge"`` row (ridge regression on the window, all points);
-- ``sweep.md`` — the table, the baselines on each R, and one sentence on whether RMSE
-  falls and effort rises as K is lowered;
-- ``sweep.png`` — RMSE and effort against the percentile.
-
-Units: ``rmse_*`` scalars are in standardised action units (RMS over channels; see
-``rmse_units``); ``*_by_group`` in physical units; effort per ``effort_units``.
+:func:`run_sweep` returns a :class:`SweepResult`; :func:`mpcshare.reports.sweep.write_sweep` writes
+``sweep.json`` (rows ``{kind, percentile, K, rmse_reactive, rmse_all, voluntary_share, voluntary_effort,
+gate_accuracy, …}``: ``kind="gate+predictor"`` per percentile; ``kind="lstm_all"``, ``percentile: null``, the
+same LSTM on every point without a gate, share 0 and effort 0; ``kind="ridge"``, ridge regression on the
+window), ``sweep.md`` (the table, the baselines on each R, whether RMSE falls and effort rises) and
+``sweep.png`` (RMSE and effort against the percentile). Units: ``rmse_*`` in standardised action units (RMS
+over channels, ``rmse_units``); ``*_by_group`` physical; effort per ``effort_units``.
 """
 
 from __future__ import annotations

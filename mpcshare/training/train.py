@@ -1,34 +1,23 @@
 """Training a model bundle from demonstrations: ``train_bundle(demos, config)``.
 
-Works on any data set in the project format (channel names need not be physical).
-Steps (all at the model rate ``model_hz``, default 10 Hz):
+Any data set in the project format, at ``model_hz`` (10 Hz); settings :class:`~mpcshare.training.config.TrainConfig`:
 
-1. split whole trials into training and held-out (``heldout_fraction``, seeded); the
-   training trials are split again by trial into fit / validation trials for the LSTM's
-   early stopping (everything else is fitted on all training trials);
-2. :func:`learning.preprocessing.resample.causal_downsample` (the controller reproduces it online,
-   never the zero-phase ``downsample``); the :class:`~learning.preprocessing.preprocess.Preprocessor`
-   (``Standardizer(scope="sensor")`` for obs and act) fitted on the training trials;
-   causal windows ``causal_windows(std, window_s, rms=True)``;
-3. HMM :class:`~learning.modes.TaskModes` on the standardised per-sample obs of the
-   training trials; Viterbi labels for the quotients, causal posteriors
-   (``filter_proba``) as the predictor's input;
-4. within-mode point-wise quotients ``q_t`` (windows → standardised act);
-   ``K = percentile(q, p)``; labels ``Z_t = 1[q_t ≤ K]``; the reactive subset R = {Z = 1};
-5. gates ``ModeGates.fit(windows, modes, Z)``; ``ReactivePredictor.fit`` on each trial's
-   sequence ``concat(o_t, p_t)`` with the loss masked to R (the first L−1 samples of a
-   trial have no window and so no label: masked out);
+1. whole trials split into training and held-out (``heldout_fraction``, seeded); the training trials again
+   into fit / validation trials for the LSTM's early stopping (all else fits on every training trial);
+2. :func:`learning.preprocessing.resample.causal_downsample` (as the controller online); the
+   :class:`~learning.preprocessing.preprocess.Preprocessor` (per-sensor ``Standardizer``) fitted on the training
+   trials; causal windows ``causal_windows(std, window_s, rms=True)``;
+3. HMM :class:`~learning.modes.TaskModes` on the standardised obs: Viterbi labels for the quotients, causal
+   posteriors (``filter_proba``) for the predictor;
+4. within-mode quotients q_t; K = percentile(q, p); Z_t = 1[q_t ≤ K]; the reactive subset R = {Z = 1};
+5. ``ModeGates.fit(windows, modes, Z)``; ``ReactivePredictor.fit`` on concat(o_t, p_t), loss masked to R;
 6. held-out evaluation (:mod:`mpcshare.training.evaluation`); the control-rate forecast
-   (:mod:`mpcshare.training.fast`) fitted on the fit trials from the raw-rate fork's Kalman
-   state and the LSTM's forecasts, its preview skill from the validation trials, its skill
-   table (per mode and horizon, against the hold and constant velocity) on the held-out trials;
-7. ``novelty_threshold`` = the 99.9th percentile of ``−log p(o_t | o_<t)`` per step on
-   the training trials (``TaskModes.log_predictive``).
+   (:mod:`mpcshare.training.fast`) fitted on the fit trials, its preview skill on the validation trials, its
+   skill table (per mode and horizon, against hold and constant velocity) on the held-out trials;
+7. ``novelty_threshold`` = 99.9th percentile of −log p(o_t | o_<t) per training step (``TaskModes.log_predictive``).
 
-Data preparation (1–4 without K, and 7) is :func:`prepare_training_data`; the sweep
-(:mod:`mpcshare.training.sweep`) and :func:`train_bundles` (one bundle per K, for ``mpcshare
-tune``) reuse it for every K. The settings are a
-:class:`~mpcshare.training.config.TrainConfig`.
+Steps 1–4 without K and 7: :func:`prepare_training_data`, reused per K by the sweep
+(:mod:`mpcshare.training.sweep`) and :func:`train_bundles` (``mpcshare tune``).
 """
 
 from __future__ import annotations

@@ -1,24 +1,19 @@
 """The figures a task's metrics are made of: is the tip on time, does it stroke as intended, per mode.
 
-The machinery every task composes (:mod:`sim.task.eating` picks its own; :class:`sim.task.Task`).
-Tracking RMS hides two failures a task may care about: a tip that follows the intent 0.4 s late,
-and a tip that never makes the intended strokes (a 2 cm stroke missed costs only about 14 mm RMS).
-With p the tip and p* the wearer's intent (plate frame [m], control period Δ [s]):
+The machinery every task composes (:mod:`sim.task.eating` picks its own; :class:`sim.task.Task`): tracking RMS
+hides a tip 0.4 s late and a tip that misses the strokes (a missed 2 cm stroke costs only about 14 mm RMS).
+With p the tip and p* the intent (plate frame [m], control period Δ [s]):
 
-* **lag** τ* [s]: the time shift of the tip against the intent that minimises the RMS,
-  τ* = argmin_τ sqrt(mean_k ‖p(t_k + τ) − p*(t_k)‖²), τ ∈ {−τ_max, …, τ_max} in steps of Δ
-  (positive: the tip is late); ``rms_at_lag_m`` is that minimum.
-* **stroke fidelity** in the stroke mode (the samples of ``cutting_mask``): both signals are
-  band-passed to the task's stroke band (zero-phase 2nd-order Butterworth over
-  the whole episode, so that the mask's edges see no filter transient); with b, b* the
-  band-passed tip and intent,
-  amplitude ratio = sqrt(Σ‖b_k‖² / Σ‖b*_k‖²), correlation = Σ b_k·b*_k / sqrt(Σ‖b_k‖² Σ‖b*_k‖²)
-  (no shift: a stroke a quarter cycle late scores 0, as it should).
-* **strokes executed**: the intent's band-passed motion along its principal direction while
-  in the mode is cut at its upward zero crossings into cycles; a cycle is executed when the tip's
-  peak-to-peak excursion along that direction in the cycle is at least ``stroke_fraction``
-  (default 0.5) of the intent's. The share is over cycles whose intended excursion is at
-  least ``min_stroke_m`` (default 5 mm).
+* **lag** τ* [s] = argmin_τ sqrt(mean_k ‖p(t_k + τ) − p*(t_k)‖²), τ ∈ {−τ_max, …, τ_max} in steps of Δ
+  (positive: late); ``rms_at_lag_m`` is that minimum.
+* **stroke fidelity** on the stroke mode's samples (``cutting_mask``), both signals band-passed to the task's
+  stroke band (zero-phase 2nd-order Butterworth over the whole episode: no transient at the mask's edges) to
+  b, b*: amplitude ratio = sqrt(Σ‖b_k‖² / Σ‖b*_k‖²), correlation = Σ b_k·b*_k / sqrt(Σ‖b_k‖² Σ‖b*_k‖²)
+  (no shift: a stroke a quarter cycle late scores 0).
+* **strokes executed**: the intent's band-passed motion along its principal direction in the mode, cut at
+  upward zero crossings into cycles; a cycle is executed when the tip's peak-to-peak excursion along it is at
+  least ``stroke_fraction`` (0.5) of the intent's; the share counts cycles whose intended excursion is at least
+  ``min_stroke_m`` (5 mm).
 * **RMS per mode**: the tracking RMS over the steps of each (true) mode.
 """
 
