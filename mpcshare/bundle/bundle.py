@@ -1,33 +1,22 @@
-"""Model bundles: everything the online controller needs, in one folder.
+"""Model bundles: everything the online controller needs, in one folder (docs/training.md, "Bundle format").
 
-A bundle (format version :data:`FORMAT_VERSION`) is a folder holding
+A bundle (format :data:`FORMAT_VERSION`) holds ``manifest.json`` (bytes and SHA-256 of every other file,
+so a missing, truncated or altered file is detected); ``bundle.json`` (format, channel names, rates [Hz],
+window [s], the threshold K (``null`` = +∞), its percentile, the novelty threshold, trial ids, training
+configuration, library versions); ``metrics.json`` (training and held-out metrics, no NaN);
+``preprocessor.json`` (the two standardizers as exact JSON numbers); ``predictor.pt`` (the predictor's
+state dict, read with ``torch.load(weights_only=True)``); ``fast.json`` (format 2: the control-rate
+forecast, :class:`learning.predictor.fast.FastForecaster`, ``{"model": null}`` when not trained);
+``rule.json`` (format 3: the calibrated rule, :class:`~mpcshare.bundle.rule.CalibratedRule`,
+``{"rule": null}`` before calibration); ``modes.joblib``, ``gates.joblib`` (:class:`~learning.modes.TaskModes`,
+:class:`~learning.gates.gate.ModeGates`; joblib files are pickles: load bundles you made or trust).
+A format-1 bundle loads with ``fast = None``; formats 1 and 2 have their rule moved out of ``metrics.json``
+(:func:`~mpcshare.bundle.rule.rule_from_metrics`).
 
-- ``manifest.json`` — ``{"format_version": 1, "files": {name: {"bytes": n, "sha256": hex}}}``
-  for every other file, so that a missing, truncated or altered file is detected;
-- ``bundle.json`` — format version, channel names, rates [Hz], window [s], the
-  threshold K (``null`` = +∞), its percentile, the novelty threshold, the trial ids,
-  the training configuration and the library versions that wrote it;
-- ``metrics.json`` — the training and held-out metrics (JSON, no NaN);
-- ``preprocessor.json`` — the two fitted standardizers (means, scales, sensor groups),
-  as exact JSON numbers (no pickle);
-- ``predictor.pt`` — the reactive predictor's torch state dict, read back with
-  ``torch.load(weights_only=True)``; its constructor settings are in ``bundle.json``;
-- ``fast.json`` (format 2) — the control-rate forecast (:class:`learning.predictor.fast.FastForecaster`,
-  its coefficients as exact JSON numbers; ``{"model": null}`` when it was not trained);
-  a version-1 bundle (without it) still loads, and the controller runs its 10 Hz forecast alone;
-- ``rule.json`` (format 3) — the calibrated hand-over rule (:class:`~mpcshare.bundle.rule.CalibratedRule`:
-  strategy, settings, the calibration's record, its version; ``{"rule": null}`` before calibration); a
-  format-1/2 bundle kept it in ``metrics.json`` and is migrated on loading
-  (:func:`~mpcshare.bundle.rule.rule_from_metrics`);
-- ``modes.joblib``, ``gates.joblib`` — the fitted :class:`~learning.modes.TaskModes`
-  and :class:`~learning.gates.gate.ModeGates` (scikit-learn / hmmlearn objects, joblib).
-  joblib files are pickles: load bundles you made or trust, like any scikit-learn model.
-
-:func:`save_bundle` writes into a temporary folder beside the target, fsyncs every
-file and the folder, then renames it onto the target: the bundle folder is complete
-or absent. :func:`load_bundle` checks the manifest before reading anything and
-raises one :class:`BundleError` whose message starts with the offending file.
-JSON encodings, checksums and fsync are in :mod:`mpcshare.bundle.files`.
+:func:`save_bundle` writes into a temporary folder beside the target, fsyncs every file and the folder,
+then renames it onto the target: the bundle is complete or absent. :func:`load_bundle` checks the
+manifest before reading anything and raises one :class:`BundleError` whose message starts with the
+offending file. JSON encodings, checksums and fsync: :mod:`mpcshare.bundle.files`.
 """
 
 from __future__ import annotations

@@ -4,22 +4,19 @@ Fusion in knife-tip velocity [m/s] (docs/design.md, "Online control"):
 
     û = α·û_r + β·û_v,    û_r = sat_{v_r}(ṗ̂ + k_r · (p̂ − p_ref)),    û_v = ShoulderMap.tip_velocity(θ)
 
-``p̂``, ``ṗ̂`` are the tip position and velocity the reactive predictor π̂ forecasts for the
-aimed time (the controller's ``forecast_lead_s`` ahead), ``p_ref`` the current tip
-reference, ``k_r`` [1/s] a P-gain and ``sat_v(x) = x · min(1, v/‖x‖)`` a speed cap.
+``p̂``, ``ṗ̂``: the tip position and velocity forecast for the aimed time (``forecast_lead_s`` ahead);
+``p_ref``: the tip reference; ``k_r`` [1/s]: a P-gain; ``sat_v(x) = x · min(1, v/‖x‖)``: a speed cap.
 
-α, β per strategy: the strategies live in :mod:`mpcshare.control.strategies`, one module each, in
-one registry (``REGISTRY``); each module's docstring holds its rule and sources. The
+α, β per strategy (:mod:`mpcshare.control.strategies`, one module each, in ``REGISTRY``). The
 :class:`Arbiter` builds the strategy's per-episode policy and turns its target into α, β:
 
-* the safety overrides (for the shared strategies: no gate decision available, π̂ not finite,
-  novelty above the bundle's ``novelty_threshold`` for ``novelty_persist_s``, gate probability not
-  finite) set α = 0, β = 1 at once and restart the policy;
+* the safety overrides (for the shared strategies: no gate decision, π̂ not finite, novelty above the
+  bundle's ``novelty_threshold`` for ``novelty_persist_s``, gate probability not finite) set α = 0,
+  β = 1 at once and restart the policy;
 * a ramped target moves α at most 1/``handover_s`` per second (0: at once);
 * β = 1 − α·(1 − β_user) unless the policy names its own β (the paper's β at α ∈ {0, 1}).
 
-Every change of who leads (α crossing 0.5) is logged as a :class:`Handover` with its
-time and reason.
+Every change of who leads (α crossing 0.5) is logged as a :class:`Handover` with its time and reason.
 """
 
 from __future__ import annotations

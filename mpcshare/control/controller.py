@@ -1,40 +1,23 @@
-"""The online shared controller, every 10 ms (docs/design.md, "Online control").
+"""The online shared controller: one :meth:`SharedController.step` every 10 ms (docs/design.md, "Online control").
 
-Per :meth:`SharedController.step`:
+Each step, as stages that return typed records (:mod:`mpcshare.control.records`):
 
-1. front end (:mod:`mpcshare.control.frontend`): Kalman filter over the fork, anti-aliased
-   10 Hz window, mode filter and novelty; on the 10 Hz ticks (:mod:`mpcshare.control.sensing`)
-   the gate of the most probable mode (``gates.proba_one``) and the streaming reactive predictor
-   (``predictor.make_stream().step(concat(o_t, p_t))``), whose forecast of the tip over
-   its horizon becomes a continuous trajectory p̂(·) (:class:`~mpcshare.control.forecast.ForecastTrack`:
-   a spline, cross-faded between ticks; held when the predictor has no forecast); with the
-   bundle's control-rate forecast (:mod:`mpcshare.control.fastpath`), the trajectory is
-   re-made every step from the fork's Kalman state, the mode posterior and the LSTM's forecast;
-2. arbitration (:mod:`mpcshare.control.arbitration`, the strategy of :mod:`mpcshare.control.strategies`
-   given the gate probability, the mode posterior, û_r and û_v): α, β; û = α·û_r + β·û_v [m/s] with the
-   reactive term aimed ``forecast_lead_s`` ahead to cancel the latency after the
-   reference, û_r = sat(ṗ̂(t + τ) + k·(p̂(t + τ) − p_ref)); û integrated into the tip reference
-   p_ref (plate frame), clamped to the workspace box and the reach shell
-   (:mod:`mpcshare.control.workspace`), then moved into the arm's model frame with the base pose;
-3. ``robot.smoothing.ReferenceSmoother`` (ruckig, jerk-limited) toward (p_ref, û, α·p̈̂(t + τ));
-4. optional MPC (``robot.mpc.tip_mpc.TipMPC``; with the keep-out, ``KeepOutTipMPC``: the wearer's
-   body zones as constraints over its horizon, moving with the hand's forecast) over its horizon on the preview
-   (:mod:`mpcshare.control.preview`)
-   r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (the robot's share from the forecast,
-   the wearer's extrapolated; ``mpc_preview=False``: the smoothed reference p_s extrapolated at
-   its velocity; with the control-rate forecast, the forecast is read only up to the horizons
-   where its skill against the hold is above 0 in the current mode, held beyond), solved every
-   ``mpc_every`` steps and followed in between
-   (:class:`~mpcshare.control.mpc_follow.MPCFollower`); its planned tip at t + dt (position,
-   central-difference velocity and acceleration) is the reference of
-5. ``robot.qp.QPController``, which enforces joint position, velocity, acceleration and
-   torque limits at the control rate and, ranked above tracking, keeps the knife's blade out of
-   the wearer's body zones (:mod:`mpcshare.control.keepout`). When the MPC fails or runs out of time, the QP
-   tracks the smoothed reference alone.
+1. sense (:mod:`mpcshare.control.sensing`): the front end (:mod:`mpcshare.control.frontend`), on 10 Hz
+   ticks the gate and the streaming predictor, the forecast tip p̂(·) (:class:`~mpcshare.control.forecast.ForecastTrack`,
+   re-made every step by :mod:`mpcshare.control.fastpath` where the bundle has it);
+2. arbitrate (:mod:`mpcshare.control.arbitration`, :mod:`mpcshare.control.strategies`): α, β and
+   û = α·û_r + β·û_v [m/s], û_r = sat(ṗ̂(t + τ) + k·(p̂(t + τ) − p_ref)), τ = ``forecast_lead_s``;
+   û integrated into the plate-frame reference p_ref, clamped by :mod:`mpcshare.control.workspace`;
+3. track: ``robot.smoothing.ReferenceSmoother`` (ruckig) toward p_ref, the optional MPC on the preview
+   r_k = p_s + α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt (:mod:`mpcshare.control.preview`, followed
+   between solves by :class:`~mpcshare.control.mpc_follow.MPCFollower`), then ``robot.qp.QPController``,
+   which enforces the joint limits and, above tracking, the keep-out (:mod:`mpcshare.control.keepout`);
+   a failed or late MPC leaves the QP tracking the smoothed reference;
+4. command: :class:`~mpcshare.control.types.ControlCommand`.
 
-``step`` never raises: every fault gives a safe command and a status, the most severe of the
-step's faults (:data:`~mpcshare.control.types.STATUSES`, where each is listed with what the step
-does; ``reasons`` lists every fault of the step).
+``step`` never raises: every fault gives a safe command and a status, the most severe of the step's
+faults (:data:`~mpcshare.control.types.STATUSES`, each listed with what the step does; ``reasons`` lists
+every fault).
 """
 
 from __future__ import annotations

@@ -1,30 +1,23 @@
 """Streaming front end of the controller: fork signal at 100 Hz → model inputs at 10 Hz.
 
-Per control step (one raw sample of the fork, ``rate_hz``):
+Per control step (one raw fork sample, ``rate_hz``):
 
-1. :class:`ForkKalman` — a constant-velocity Kalman filter per channel (equal to filterpy's),
-   state ``[x_j, ẋ_j]``: x⁺ = x + ẋ·Δt, ẋ⁺ = ẋ + w·Δt (white acceleration w).
-   It predicts through missing (NaN) channels and stale samples (a sample bit-for-bit
-   equal to the previous one: a frozen sensor) and says for how long it has been
-   predicting (``predicting_for_s``); its velocity state is the fork velocity.
-2. The sample that goes on into the features is the **raw** sample when present
-   (so online and offline features are identical), the KF prediction where it is
-   missing or stale.
-3. :class:`learning.preprocessing.resample.StreamingDecimator` (anti-aliasing low-pass, keep every
-   f-th sample; equal to ``causal_downsample`` offline), then the bundle's obs
-   standardiser, then the causal window of ``window_s`` RMS-normalised as
-   ``learning.preprocessing.preprocess.causal_windows(..., rms=True)`` builds it:
-   ``w_t = [o_t, o_{t−1}, …, o_{t−L+1}] / √L``.
-4. The :class:`learning.modes.ModeFilter` stepped on every standardised
-   model-rate sample; novelty = −log p(o_t | o_<t) (``inf`` when the sample is
-   impossible under every mode).
+1. :class:`ForkKalman` — a constant-velocity Kalman filter per channel (equal to filterpy's), state
+   ``[x_j, ẋ_j]``: x⁺ = x + ẋ·Δt, ẋ⁺ = ẋ + w·Δt (white acceleration w); it predicts through missing (NaN)
+   channels and stale samples (bit-for-bit equal to the previous one: a frozen sensor) and says for how
+   long (``predicting_for_s``);
+2. the sample that goes on is the **raw** one when present (online and offline features identical), the
+   Kalman prediction where it is missing or stale;
+3. :class:`learning.preprocessing.resample.StreamingDecimator` (anti-aliasing low-pass, every f-th sample;
+   equal to ``causal_downsample``), the bundle's obs standardiser, the causal window of ``window_s``
+   RMS-normalised as ``causal_windows(..., rms=True)``: ``w_t = [o_t, o_{t−1}, …, o_{t−L+1}] / √L``;
+4. :class:`learning.modes.ModeFilter` stepped on every model-rate sample; novelty = −log p(o_t | o_<t)
+   (``inf`` when the sample is impossible under every mode).
 
-The Kalman state itself (``FrontEndOutput.fork_position``, ``fork_velocity``: no anti-aliasing
-filter, no 10 Hz hold) is the input of the control-rate forecast (:mod:`mpcshare.control.fastpath`);
-:func:`kalman_batch` runs the same filter over a recorded trial for training.
-
-A recorded trial streamed sample by sample gives the offline windows,
-posteriors and novelty scores (tests/mpcshare/control/test_frontend.py, 1e-9).
+The Kalman state (``FrontEndOutput.fork_position``, ``fork_velocity``) is the control-rate forecast's
+input (:mod:`mpcshare.control.fastpath`); :func:`kalman_batch` runs the same filter over a recorded trial.
+Streamed sample by sample, a trial gives the offline windows, posteriors and novelty to 1e-9
+(tests/mpcshare/control/test_frontend.py).
 """
 
 from __future__ import annotations
@@ -54,11 +47,9 @@ class ForkKalman:
     (Q as filterpy's ``Q_discrete_white_noise(2, Δt, σ²)``); measurement noise ``meas_std[j]``
     [unit]. A NaN channel is left out of that step's update.
 
-    The channels are independent (block-diagonal F, Q, R), so the filter is d 2-state
-    filters, vectorised over channels here: filterpy's ``KalmanFilter`` on the stacked
-    2d-state (an 18×18 covariance and a 9×9 inverse per step) takes ~0.3 ms of the 1 ms
-    step budget, this ~30 µs. The update is filterpy's (Joseph form); the test checks
-    equality with filterpy's ``KalmanFilter`` per channel to 1e-12.
+    The channels are independent (block-diagonal F, Q, R), so the filter is d 2-state filters,
+    vectorised over channels; the update is filterpy's (Joseph form), equal to filterpy's
+    ``KalmanFilter`` per channel to 1e-12 (tests/mpcshare/control/test_frontend.py).
     """
 
     def __init__(self, n_channels: int, dt: float, accel_std: np.ndarray, meas_std: np.ndarray) -> None:

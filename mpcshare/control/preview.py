@@ -1,4 +1,4 @@
-"""The MPC's preview of the tip reference over its horizon (the controller's module docstring, item 4):
+"""The MPC's preview of the tip reference over its horizon (the controller's module docstring, item 3):
 r_k = p_s + R_bᵀ·(α·(p̂(t + τ + k·dt) − p̂(t + τ)) + β·û_v·k·dt), k = 0 … H, in the arm's model frame
 (R_b: the base pose's rotation, plate ← model); else p_s + v_s·k·dt, the smoothed reference extrapolated
 at its velocity."""

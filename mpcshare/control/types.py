@@ -1,33 +1,23 @@
 """What the online controller returns every step, and its settings.
 
-The statuses of ``SharedController.step`` (:data:`STATUSES`, most severe first), and what the
-step does in each (it never raises):
+The statuses of ``SharedController.step`` (:data:`STATUSES`, most severe first) and what the step does
+in each (it never raises):
 
-==========================  ==========================================================
-status                      what the step does
-==========================  ==========================================================
-internal_error              an unexpected exception (or a learned part raised): brake
-                            toward the smoothed reference within limits; a failing
-                            gate/predictor only sets α = 0
-invalid_joint_state         q or v NaN / wrong shape: the QP holds its last command
-time_went_backwards         t ≤ previous t (or NaN): nothing is updated, brake and hold
-no_observation              no fork sample ever measured: brake and hold
-qp_failed                   both QPs failed: the QP's brake (torque limits hold)
-keepout_robot               the knife moved into a body zone's margin (never expected: the
-                            keep-out rows forbid it; :mod:`mpcshare.control.keepout`)
-keepout_retreat             the keep-out rows and the limits cannot all be met: the safest
-                            feasible action (retreat, else stop)
-keepout_person              the wearer moved onto a knife that was not moving into them
-stale_fork_sensor           fork predicted for > ``stale_after_s``: α = 0, β = 1 (the
-                            wearer has control), the reactive term is dropped
-invalid_shoulder            shoulder angles NaN / wrong shape: û = 0, reference held
-mpc_timeout / mpc_failed    the QP tracks the smoothed reference alone
-invalid_observation_shape   the sample is ignored, the Kalman prediction substitutes it
-missing_observation         NaN channels / repeated sample: Kalman prediction substitutes
-keepout_stale_zone          fork marker lost: the hand and forearm zones grow with its age
-invalid_base_pose           the last valid base pose is kept (none yet: the arm is held)
-reference_unreachable       the reference is clamped to the workspace box / reach shell
-==========================  ==========================================================
+- ``internal_error``: an unexpected exception: brake toward the smoothed reference within limits (a
+  failing gate or predictor only sets α = 0); ``invalid_joint_state`` (q or v NaN, wrong shape): the QP
+  holds its last command; ``time_went_backwards`` (t ≤ previous t, or NaN): nothing updated, brake and
+  hold; ``no_observation`` (no fork sample yet): brake and hold; ``qp_failed``: the QP's brake;
+- ``keepout_robot``: the knife moved into a body zone's margin (never expected: the keep-out rows forbid
+  it, :mod:`mpcshare.control.keepout`); ``keepout_retreat``: the rows and the limits cannot all be met:
+  the safest feasible action (retreat, else stop); ``keepout_person``: the wearer moved onto a knife
+  that was not moving into them;
+- ``stale_fork_sensor`` (fork predicted for > ``stale_after_s``): α = 0, β = 1, no reactive term;
+  ``invalid_shoulder`` (NaN, wrong shape): û = 0, reference held; ``mpc_timeout``, ``mpc_failed``: the
+  QP tracks the smoothed reference alone;
+- ``invalid_observation_shape``, ``missing_observation`` (NaN channels, a repeated sample): the Kalman
+  prediction stands in; ``keepout_stale_zone`` (fork marker lost): the hand and forearm zones grow with
+  its age; ``invalid_base_pose``: the last valid pose kept (none yet: the arm held);
+  ``reference_unreachable``: the reference clamped to the workspace box and reach shell.
 """
 
 from __future__ import annotations
@@ -122,12 +112,8 @@ class ControllerConfig:
     ``floor``: its settings) and the workspace box's floor is raised to it.
     """
 
-    # Reactive gain, speed cap and smoother limits measured in the closed loop (default data,
-    # 2 held-out trials x 30 s, `reactive`, no MPC). Before the forecast: 8 /s, 0.5 m/s and
-    # (0.6 m/s, 4 m/s², 60 m/s³) with the smoother aiming at (p_ref, û): 18.9 / 31.1 mm RMS, the
-    # tip 400-410 ms late, 190 ms of it in the smoother (ruckig chasing a noisy target
-    # velocity). These, with the smoother aiming at the position only: 12.9 / 19.0 mm, 140 /
-    # 180 ms late; with the true intent as the preview (oracle_preview) 2.0 / 1.9 mm and 0-10 ms.
+    # the gain, caps, smoother limits, mpc_every and novelty_persist_s as measured: docs/results.md,
+    # "The controller's defaults"
     reactive_gain: float = 20.0
     reactive_max_speed: float = 1.0
     stale_after_s: float = 0.5
@@ -136,8 +122,6 @@ class ControllerConfig:
     max_acceleration: float = 10.0
     max_jerk: float = 200.0
     mpc_deadline_s: float = 0.003
-    # every 2nd step: in the closed loop (default data, 30 s, gate) the tracking error is the same
-    # as every step (20.2 mm) and the real-time factor 4.1-4.3x instead of 3.4x (same process).
     mpc_every: int = 2
     min_dwell_s: float = 0.5
     detect_stale: bool = True
@@ -151,11 +135,6 @@ class ControllerConfig:
     forecast_fade_s: float | None = 0.0
     smoother_lead_s: float = 0.05
     handover_s: float = 0.5
-    # the novelty threshold is the training data's 99.9th percentile per step, so held-out data of the same
-    # world cross it for single ticks (family worlds 0 and 3: 0.2-0.8 % of the steps); each crossing handed
-    # the wearer the lead at once and back (two pick-ups): the robot leading every mode went from 1.06 to
-    # 0.96 (world 0) and 1.05 to 1.03 (world 3) of the line with 0.3 s, the same as with no override at all;
-    # unchanged where it never fired (family 7, default data). Body safety is the keep-out's, not this.
     novelty_persist_s: float = 0.3
     strategy_settings: Any = None
     keepout: KeepOutSettings | None = field(default_factory=KeepOutSettings)

@@ -1,72 +1,23 @@
-"""``gate``: the default shared strategy, who leads decided by expected cost over whole modes.
+"""``gate``: the default shared strategy; whole modes the robot cannot predict go to the wearer
+(docs/design.md, "The default gate").
 
-Why: within a mode whose unpredictability is a matter of phase (a sawing
-stroke), the paper's per-point gate keeps or drops the stroke by chance, and a hand-over *at*
-a mode boundary costs about a second of large error while the wearer perceives the cue and
-picks up; the wearer leading the whole stroke mode, from before it begins until after it ends,
-tracks far below the voluntary–reactive line. This rule hands whole modes to the wearer,
-early, and keeps them there a while.
+Score: v_j ∈ [0, 1] per task mode j is the held-out unpredictable share (``ModeFigures.voluntary_share``),
+or, with the ``wearer_modes`` setting (the calibrated rule), the indicator of those modes; with the mode
+model's transition matrix A per model period Δ [s], s_t = max_{k = 0..n} π_t·A^k·v, n = round(lead_s / Δ).
 
-**Per-mode cost.** For each task mode j of the bundle's mode model, v_j ∈ [0, 1] is its
-held-out unpredictable share: the share of the mode's held-out points whose Lipschitz quotient
-exceeds K (``1 − n_positive/n`` of the bundle's ``metrics["gate"]["per_mode"]``; points the
-robot's predictor cannot follow). With the robot's expected excess error in mode j taken
-proportional to v_j and the wearer's to a constant c, the robot's expected excess cost of
-leading at mode probabilities π is π·v − c: the wearer should lead where π·v ≥ c (Song &
-Asada's reading, per mode rather than per point: a reciprocating cut cannot be a function of
-the fork, so the whole mode goes to the wearer).
+Who leads: the wearer from s_t ≥ ``share_on``; the robot again once s_t < ``share_off`` has held ``hold_s``
+[s], never sooner than the Arbiter's ``min_dwell_s`` after the last hand-over; α ramps over ``handover_s``
+and the Arbiter's safety overrides apply. The wearer also takes the lead by pushing: ‖û_v‖ > ``push_mps``
+[m/s] against the robot (û_v·û_r < 0), a leaky integral x' = 1[push] − x/push_s reaching 1 − 1/e of its
+limit (off at inf). With ``wearer_max_s`` [s] finite the wearer leads a stretch of wearer modes at most that
+long, then the robot until s_t < ``share_off``.
 
-**Anticipation.** The mode model's transition matrix A (per model period Δ) forecasts the
-mode probabilities k periods ahead as π_t·A^k. The rule looks ``lead_s`` ahead:
-
-    s_t = max_{k = 0..n} π_t·A^k·v,     n = round(lead_s / Δ)
-
-so the wearer is handed a wearer-led mode before it is most probable, by the time the
-hand-over (the wearer's reaction, the ramp) takes.
-
-**Hysteresis, hold, dwell.** The wearer takes the lead when s_t ≥ ``share_on``; the robot
-takes it back when s_t < ``share_off`` has held for ``hold_s`` (the wearer keeps a stroke
-mode until after it ends, and the hand-over's own cost is paid only for gains longer than
-the hold), and never sooner than the Arbiter's ``min_dwell_s`` after the last hand-over. α
-moves along the hand-over ramp (``handover_s``); the safety overrides of the Arbiter apply.
-
-**The wearer's push.** While the robot leads, the wearer's own command is evidence: a
-wearer commanding a tip speed ‖û_v‖ above ``push_mps`` against the robot (û_v·û_r < 0) for
-``push_s`` (a leaky integral x' = 1[push] − x/push_s reaching 1 − 1/e of its limit) takes the
-lead, and keeps it for ``hold_s`` after the evidence fades (off when ``push_mps`` is inf).
-
-**A bounded lead.** With ``wearer_max_s`` finite, the wearer leads a wearer mode for at most that long:
-then the robot takes back (at its share, below) until the score has fallen below ``share_off``, so the
-next entry into a wearer mode is handed over afresh. The splice bound under the task's own measure
-(``research/sawing_bound.py``) found, on some worlds, the best sawing schedules giving the
-wearer the first one or two seconds of each cutting stretch, where the robot cannot predict the intent's
-jump, and the robot the rest at a shared α; the hand-back costs little (the robot's P-gain takes up at
-once). Default: inf (the wearer keeps the mode).
-
-**Measured wearer modes.** Where ``mpcshare train`` chose the wearer's modes in the closed loop
-(:mod:`mpcshare.calibration.rule_choice`, by what each mode costs under each party), the setting
-``wearer_modes`` lists them and v is their indicator (v_j = 1 for a wearer mode, else 0): s_t is
-then the forecast probability of being in a wearer mode within ``lead_s``.
-
-**The robot's share while the wearer leads.** With ``wearer_alpha`` a_w > 0 (below 0.5, so the
-wearer still reads that they lead) a wearer-led mode is the constant mixture û = a_w·û_r +
-(1 − a_w)·û_v rather than the wearer alone: where the robot's forecast and the wearer's plan err
-partly independently, the mixture's error a_w·e_r + (1 − a_w)·e_v has less variance than either
-(the constant ``mix25`` lies below the voluntary–reactive line on the project's data).
-Where the robot is far worse than the wearer it only adds error, so the closed-loop choice decides.
-
-**The robot's share while it leads, per mode.** With ``robot_alphas`` a = (a_1 … a_K), a_j ∈ [0.5, 1]
-(the wearer still reads that the robot leads), a robot-led step is the mixture û = α·û_r + (1 − α)·û_v
-with α = π·a, the share expected under the mode posterior π (smooth: no hand-over, the wearer's role does
-not change). Where the robot's forecast of a mode errs partly at random, shrinking its command toward
-the wearer's corrections (a_j < 1) lowers both the error and the corrections the wearer must make: the
-constant ``mix50`` lies below the voluntary–reactive line on the family of worlds where the robot
-leading every mode at full share lies above it. Default: 1 in every mode (α = 1, the user's β).
+Shares: while the wearer leads, û = a_w·û_r + (1 − a_w)·û_v with a_w = ``wearer_alpha`` ∈ [0, 0.5); while
+the robot leads, α = π·a with a = ``robot_alphas`` ∈ [0.5, 1]^K (default 1, β the user's).
 
 Settings: :class:`GateSettings` (the controller's ``strategy_settings``, else the bundle's calibrated rule,
-else the defaults). A bundle without per-mode figures falls back to the paper's gate
-(:mod:`mpcshare.control.strategies.paper_gate`, with the settings' ``on_threshold`` and ``off_threshold``),
-and its reasons say so.
+else the defaults; ValueError names a wrong field). Without per-mode figures in the bundle: the paper's
+gate (:mod:`mpcshare.control.strategies.paper_gate`; ``on_threshold``, ``off_threshold``; reasons say so).
 """
 
 from __future__ import annotations
