@@ -51,7 +51,9 @@ from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_c
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
+from mpcshare.evaluation.distinct import map_distinct
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
+from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
 from sim.task.eating import STROKE_MODE
@@ -127,14 +129,33 @@ def _variants(sets: list[list[int]], timings: Sequence[str], wearer_alphas: Sequ
 def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
                 specs: Sequence[tuple[str, dict | None]], duration_s: float | None, wearer: WearerConfig | None,
                 seed: int, mode_names: Sequence[str] | None = None,
-                pool: EpisodePool | None = None) -> list[tuple[dict[str, float], list[Any]]]:
+                pool: EpisodePool | None = None,
+                seen: dict[int, np.ndarray] | None = None,
+                ran: list[int] | None = None) -> list[tuple[dict[str, float], list[Any]]]:
     """:func:`pooled_run` of each (strategy, gate options) in ``specs``, every episode in one batch of
-    ``pool`` (default: this process), in the order of ``specs``."""
+    ``pool`` (default: this process), in the order of ``specs``. With ``seen`` (trial → what its arbitration
+    sees, :func:`mpcshare.evaluation.frontend_replay.decisions`) the front end is computed once per process and
+    trial and replayed; empty, it is filled; filled, the episodes whose arbitration decides the same on it run
+    once (:func:`~mpcshare.evaluation.distinct.map_distinct`). The figures are the same either way.
+    ``ran``: the number of episodes simulated is appended to it."""
     jobs = [EpisodeJob(int(tid), StrategyRun(strategy, strategy),
                        {"config": ControllerConfig(strategy_settings=dict(options))} if options else {})
             for strategy, options in specs for tid in trials]
-    done = (pool or EpisodePool(demos)).map(simulate_episode, bundle, jobs, beta=0.5, duration_s=duration_s,
-                                           seed=seed, wearer=wearer, mode_names=mode_names)
+    settings = {"beta": 0.5, "duration_s": duration_s, "seed": seed, "wearer": wearer, "mode_names": mode_names}
+    pool = pool or EpisodePool(demos)
+    n_run = len(jobs)
+    if seen is None:
+        done = pool.map(simulate_episode, bundle, jobs, **settings)
+    elif not seen:  # the first batch: what each trial's arbitration sees
+        first = pool.map(simulate_cached, bundle, jobs, **settings)
+        for job, (_, _, inputs) in zip(jobs, first):
+            if inputs is not None:
+                seen.setdefault(int(job.trial), inputs)
+        done = [r[:2] for r in first]
+    else:
+        done, n_run = map_distinct(pool, bundle, jobs, seen, **settings)
+    if ran is not None:
+        ran.append(n_run)
     n = len(trials)
     return [_pooled(done[i * n:(i + 1) * n]) for i in range(len(specs))]
 
@@ -218,6 +239,23 @@ def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, A
                   f"{len(within)} of {len(rows)} candidates with effort <= {max_effort:g}x voluntary{task}")
 
 
+def _check_variants(timings: Sequence[str], robot_alphas: Sequence[float]) -> None:
+    """ValueError naming an unknown hand-over timing or a robot share outside [0.5, 1]."""
+    unknown = sorted(set(timings) - set(HANDOVER_TIMINGS))
+    if unknown or not timings:
+        raise ValueError(f"unknown hand-over timing(s) {unknown or timings!r}; valid: {', '.join(HANDOVER_TIMINGS)}")
+    bad = [a for a in robot_alphas if not 0.5 <= float(a) <= 1.0]
+    if bad or not robot_alphas:
+        raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
+
+
+def _log_ran(log: Callable[[str], None] | None, ran: int, planned: int) -> None:
+    """Say how many of the choice's episodes were simulated, where some were not (they repeat one)."""
+    if log is not None and ran < planned:
+        log(f"  {ran} of the {planned} episodes simulated: the others decide as one of them at every step "
+            "(the same episode)")
+
+
 def _second_stage(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any], max_effort: float,
                   top: int) -> list[dict[str, Any]]:
     """The first stage's ``top`` rows in the criterion's order (:func:`_criterion` applied again to what
@@ -250,7 +288,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
     ``"pruned"``). Returns ``{"settings", "wearer_modes", "why", "criterion", "candidates", "pruned", "voluntary",
     "reactive", "mode_costs", "price_order", "cutting_modes", "cutting_effort_vs_voluntary"
-    (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s", "seconds"}``. Raises
+    (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s", "episodes_run" (simulated: an
+    episode that decides as another at every step is that episode), "seconds"}``. Raises
     ValueError when the bundle has no mode model or no trial is given.
     """
     if not len(trials):
@@ -258,20 +297,18 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     n_modes = _n_modes(bundle)
     t0 = time.perf_counter()
 
+    seen: dict[int, np.ndarray] = {}  # what each trial's arbitration sees (the first batch); episodes simulated
+    ran: list[int] = []
+
     def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
-        return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool)
+        return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran)
 
     (vol, vol_eps), (rea, rea_eps) = run([("voluntary", None), ("reactive", None)])
     costs = mode_costs(vol_eps, rea_eps, n_modes)
     order = price_order(costs)
     cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
     rows: list[dict[str, Any]] = []
-    unknown = sorted(set(timings) - set(HANDOVER_TIMINGS))
-    if unknown or not timings:
-        raise ValueError(f"unknown hand-over timing(s) {unknown or timings!r}; valid: {', '.join(HANDOVER_TIMINGS)}")
-    bad = [a for a in robot_alphas if not 0.5 <= float(a) <= 1.0]
-    if bad or not robot_alphas:
-        raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
+    _check_variants(timings, robot_alphas)
 
     def evaluate(variants: list[tuple[list[int], str, float, float]]) -> None:
         # each candidate's settings replace a bundle's earlier rule as a whole
@@ -297,6 +334,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
               for r in _second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
     best, why = _criterion(rows, vol, rea, max_effort)
+    _log_ran(log, sum(ran), len(trials) * (2 + len(rows)))
     task_effort = cutting_effort(costs, cutting)
     if task_effort is not None and task_effort > max_effort and not (saws(best) and
                                                                      best["effort_vs_voluntary"] <= max_effort):
@@ -308,7 +346,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
             "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
             "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
             "trials": [int(t) for t in trials], "duration_s": duration_s,
-            "seconds": round(time.perf_counter() - t0, 1)}
+            "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}
 
 
 def choice_trials(heldout: Sequence[int], n_trials: int | None = None) -> list[int]:

@@ -33,6 +33,7 @@ from mpcshare.channel_map import bundle_wearer
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.evaluation.episode import _from_bundle, intent_preview, simulate_episode
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool
+from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.evaluation.handover import (
     LINE_ORACLE_MAX_EFFORT,
     SCHEDULE_SOURCES,
@@ -184,9 +185,10 @@ class _Runner:
         self.done: dict[tuple[str, int], list[tuple[Any, dict[str, Any]]]] = {}
 
     def _batch(self, wanted: list[tuple[StrategyRun, int, dict[str, Any]]], save: set[str]) -> None:
-        """Simulate ``wanted`` (run, trial, options) in one batch; runs named in ``save`` get run files."""
+        """Simulate ``wanted`` (run, trial, options) in one batch; runs named in ``save`` get run files. Each
+        process computes a trial's front end once and replays it (:func:`simulate_cached`: the same episodes)."""
         jobs = [EpisodeJob(tid, run, {**self.extra, **options}) for run, tid, options in wanted]
-        results = self.pool.map(simulate_episode, self.bundle, jobs, **self.settings)
+        results = [r[:2] for r in self.pool.map(simulate_cached, self.bundle, jobs, **self.settings)]
         counts: dict[tuple[str, int], int] = {}
         for run, tid, _ in wanted:
             counts[(run.name, tid)] = counts.get((run.name, tid), 0) + 1

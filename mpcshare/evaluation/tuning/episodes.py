@@ -123,10 +123,12 @@ def load_inputs(task: EpisodeTask) -> None:
 
 
 def run_task(task: EpisodeTask) -> dict[str, Any]:
-    """Simulate one episode (any process: the bundle and data are loaded once per process) → its row."""
+    """Simulate one episode (any process: the bundle and data are loaded once per process, and the front end of
+    a bundle and trial computed once, :func:`mpcshare.evaluation.frontend_replay.simulate_cached`) → its row."""
     import torch
 
-    from mpcshare.evaluation import StrategyRun, simulate_episode
+    from mpcshare.evaluation import StrategyRun
+    from mpcshare.evaluation.frontend_replay import simulate_cached
     from mpcshare.evaluation.handover import random_schedules_from, schedule_record
     from sim.wearer_presets import wearer_preset
 
@@ -145,9 +147,9 @@ def run_task(task: EpisodeTask) -> dict[str, Any]:
                     strategy_code(task.matched_to or "gate")]
             options["schedule"] = random_schedules_from(dict(task.schedule or ()), task.draw + 1, seed)[task.draw]
         beta = 0.5 if task.beta is None else task.beta
-        episode, metrics = simulate_episode(_bundle(task.bundle_dir), demos, trial, run, options, beta=beta,
-                                            duration_s=task.duration_s, seed=task.seed,
-                                            wearer=wearer_preset(task.wearer), mode_names=task.mode_names)
+        episode, metrics, _ = simulate_cached(_bundle(task.bundle_dir), demos, trial, run, options, beta=beta,
+                                              duration_s=task.duration_s, seed=task.seed,
+                                              wearer=wearer_preset(task.wearer), mode_names=task.mode_names)
     finally:
         torch.set_num_threads(threads)
     row = {k: v for k, v in asdict(task).items()

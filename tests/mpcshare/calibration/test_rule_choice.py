@@ -76,7 +76,7 @@ def _fake_runs(figures, by_modes, calls):
         return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
                 "saw_amplitude_ratio": 0.9}, [ep]
 
-    def fake_many(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names=None, pool=None):
+    def fake_many(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names=None, pool=None, **_):
         return [fake(bundle, demos, trials, s, o, duration_s, wearer, seed, mode_names) for s, o in specs]
     return fake_many
 

@@ -220,3 +220,21 @@ def test_default_sweep_has_at_least_ten_pairs():
         assert t == min(5, n_heldout) and t * s >= 10 and 0.5 ** (t * s) * 6 < 0.01  # Holm over 6 settings
     assert default_trials_and_seeds(4, None, None) == (4, 3)  # the default data: 4 held-out trials
     assert default_trials_and_seeds(4, 2, None) == (2, 5) and default_trials_and_seeds(4, 2, 1) == (2, 1)
+
+
+def test_replaying_the_front_end_gives_the_rows_of_live_episodes(data, swept, monkeypatch):
+    from mpcshare.evaluation import frontend_replay
+    from mpcshare.evaluation.tuning import episodes
+
+    bundles = {p: str(swept / "bundles" / f"p{p:g}") for p in (90.0, 70.0)}
+    trial = json.loads((swept / "episodes.jsonl").read_text().splitlines()[0])["trial"]
+    tasks = plan_tasks([90.0, 70.0], [0.0, 1.0], ["gate"], [trial], [1], bundles, str(data), 1.0, "hemiparetic_mild",
+                       MODE_NAMES)
+    frontend_replay._CACHE.clear()
+    replayed = [episodes.run_task(t) for t in tasks]  # the first of each bundle records, the rest replay
+    assert len(frontend_replay._CACHE) == 2
+    monkeypatch.setattr(frontend_replay, "_MAX_CACHED", 0)  # nothing kept: every episode live
+    frontend_replay._CACHE.clear()
+    live = [episodes.run_task(t) for t in tasks]
+    assert not frontend_replay._CACHE
+    assert _comparable(replayed) == _comparable(live)
