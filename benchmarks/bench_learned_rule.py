@@ -14,7 +14,7 @@ LSTM epochs, cached as ``bench_coming_error.py`` caches it; ``gate``'s rule chos
 * evaluation trials: the held-out trials the gate's choice does not use (the first 30 s of 2, as
   ``bench_family.py --quick``). On them: ``voluntary``, ``reactive``, ``mix25``/``mix50``/``mix75``,
   ``paper_gate``, ``gate``, every learned iterate, ``random_handover`` matched to the chosen iterate (mean of
-  5 draws) and the priced oracle (the same search on these trials, knowing their future, best replay).
+  ``--draws`` draws) and the priced oracle (the same search on these trials, knowing their future, best replay).
 
 Per world one JSON line: per run RMS [mm], effort, line ratio, effort × the wearer's, stroke correlation
 (mean and least over trials), lag, least clearance, time in a body zone, limit violations, robot share; the
@@ -23,7 +23,7 @@ Then one summary object. ``--markdown`` prints the per-world table instead of th
 
 Cost: about 70 closed-loop episodes of 30 s a world (≈ 5 min of one core). Usage:
 ``python benchmarks/bench_learned_rule.py [--worlds 0 1 2] [--workers 2] [--fit 4] [--rounds 2] [--dagger 2]
-[--out DIR] [--markdown]``.
+[--draws 5] [--seconds 30] [--out DIR] [--markdown]``.
 """
 
 from __future__ import annotations
@@ -80,7 +80,8 @@ def _learner_runs(w: Any, trials: list[int], rule: Any) -> tuple[list[tuple[Any,
     return done, logs
 
 
-def run_world(world: str, n_fit: int, rounds: int, dagger: int, root: Path, seconds: float = 30.0) -> dict[str, Any]:
+def run_world(world: str, n_fit: int, rounds: int, dagger: int, root: Path, seconds: float = 30.0,
+              draws: int = DRAWS) -> dict[str, Any]:
     """The module docstring's figures for one world."""
     import torch
     from scipy import stats as st
@@ -145,12 +146,12 @@ def run_world(world: str, n_fit: int, rounds: int, dagger: int, root: Path, seco
         if i == chosen:
             runs["learned"] = done
     rand = [[w.run(t, "schedule", {"schedule": s}, name="random_handover")
-             for s in random_schedules_from(schedule_record(ep), DRAWS, [0, j])]
+             for s in random_schedules_from(schedule_record(ep), draws, [0, j])]
             for j, (t, (ep, _)) in enumerate(zip(eval_trials, runs["learned"]))]
-    draws = [pooled([rand[j][k] for j in range(len(eval_trials))], vol, rea) for k in range(DRAWS)]
-    out["random_handover"] = {k: float(np.mean([d[k] for d in draws])) for k in ("rms_mm", "effort", "line_ratio",
+    drawn = [pooled([rand[j][k] for j in range(len(eval_trials))], vol, rea) for k in range(draws)]
+    out["random_handover"] = {k: float(np.mean([d[k] for d in drawn])) for k in ("rms_mm", "effort", "line_ratio",
                                                                                  "effort_vs_voluntary")}
-    rand_rms = np.mean([d["per_trial_rms_m"] for d in draws], axis=0)
+    rand_rms = np.mean([d["per_trial_rms_m"] for d in drawn], axis=0)
     ctx_eval = step_figures(w, eval_trials, {s: runs[s] for s in LEVELS})
     oracle = priced_teacher(w, ctx_eval, rounds, say)
     if oracle["best"] is not None:
@@ -220,15 +221,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rounds", type=int, default=2, help="the priced search's replayed rounds (default 2)")
     p.add_argument("--dagger", type=int, default=2, help="DAgger rounds after behaviour cloning (default 2)")
     p.add_argument("--out", default="/tmp/learned-rule", help="cache of bundles, choices and per-world results")
+    p.add_argument("--draws", type=int, default=DRAWS, help=f"matched random draws (default {DRAWS})")
     p.add_argument("--seconds", type=float, default=30.0, help="episode length [s] (default 30)")
     p.add_argument("--markdown", action="store_true")
     a = p.parse_args(argv)
-    if a.fit < 1 or a.rounds < 1 or a.dagger < 0 or a.workers < 1 or not a.seconds > 0:
-        p.error("need --fit >= 1, --rounds >= 1, --dagger >= 0, --workers >= 1, --seconds > 0")
+    if a.fit < 1 or a.rounds < 1 or a.dagger < 0 or a.workers < 1 or not a.seconds > 0 or a.draws < 1:
+        p.error("need --fit >= 1, --rounds >= 1, --dagger >= 0, --workers >= 1, --seconds > 0, --draws >= 1")
     worlds = [f"family:{s}" for s in a.worlds]
     results = []
     with ProcessPoolExecutor(max_workers=a.workers) as pool:
-        futures = [pool.submit(run_world, wd, a.fit, a.rounds, a.dagger, Path(a.out), a.seconds) for wd in worlds]
+        futures = [pool.submit(run_world, wd, a.fit, a.rounds, a.dagger, Path(a.out), a.seconds, a.draws)
+                   for wd in worlds]
         for f in as_completed(futures):
             results.append(f.result())
             print(json.dumps(results[-1], default=float), flush=True)
