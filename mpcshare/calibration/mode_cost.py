@@ -1,11 +1,8 @@
 """What each task mode costs under each party, measured in the closed loop.
 
-The Lipschitz quotient says where the *data* are unpredictable; whether the robot or the wearer
-should lead a mode depends on how each *tracks* it and what leading costs the wearer, which the
-data alone do not say (the wearer's error is not recorded). :func:`mode_costs` reads them off two
-closed-loop runs on the same held-out trials, one with the wearer alone (``voluntary``) and one
-with the robot alone (``reactive``), grouped by the controller's own mode estimate (the
-``mode`` of each control step, what the online rule sees too). Per mode j:
+:func:`mode_costs` reads two closed-loop runs on the same held-out trials, the wearer alone (``voluntary``) and
+the robot alone (``reactive``), grouped by the controller's own mode estimate (the ``mode`` of each control step,
+what the online rule sees too). Per mode j:
 
     p_j = share of the control steps in mode j (over both runs),
     m_j^w, m_j^r = mean squared tracking error  (1/n_j)·Σ ‖p_k − p*_k‖²  [m²] of the wearer and the robot,
@@ -15,11 +12,10 @@ and the *price* of handing mode j to the wearer, the squared error saved per uni
 
     ρ_j = (m_j^r − m_j^w) / max(E_j^w − E_j^r, ε)      [m²/rad],  ρ_j = 0 where m_j^r ≤ m_j^w.
 
-Handing the wearer the modes in decreasing ρ_j traces the lower hull of (effort, mean squared
-error) over whole-mode assignments (the greedy order of a fractional knapsack, hand-over costs
-left out: the closed-loop check of :mod:`mpcshare.calibration.rule_choice` puts them back).
-:func:`price_order` gives that order; :func:`cutting_modes` the modes that carry the labelled
-cutting (the task the wearer must lead wherever only they saw).
+:func:`price_order` gives the modes in decreasing ρ_j, the lower hull of (effort, mean squared error) over
+whole-mode assignments, hand-over costs left out (the greedy order of a fractional knapsack; the closed-loop
+check of :mod:`mpcshare.calibration.rule_choice` puts them back); :func:`cutting_modes` the modes that carry the
+labelled cutting. Why the costs are measured rather than read off the data: docs/design.md.
 """
 
 from __future__ import annotations

@@ -1,40 +1,22 @@
 """The default gate's wearer modes chosen in the closed loop on held-out trials of the user's own data.
 
-The rule (:mod:`mpcshare.control.strategies.gate`) hands the wearer whole modes, before they
-begin. Which modes those should be depends on how well the robot and the wearer *track* each
-mode and what leading costs the wearer, which the data alone do not say (the wearer's error is
-not recorded), so :func:`choose_rule` measures it:
+:func:`choose_rule` simulates (:func:`mpcshare.evaluation.simulate_episode`, a simulated wearer) on the trials:
 
-1. it simulates the closed loop (:func:`mpcshare.evaluation.simulate_episode`, the default
-   wearer) on the given held-out trials with ``voluntary`` and ``reactive``, and reads what each
-   mode costs under each party (:func:`mpcshare.calibration.mode_cost.mode_costs`: the squared
-   error the wearer saves per unit of effort, the *price* ρ_j);
-2. candidates (:func:`candidate_sets`): the wearer leads the top 1, 2, … modes by price (the
-   lower hull of effort against error over whole-mode assignments); each of them together
-   with the modes that carry the labelled cutting, where the data name one (the task: the knife
-   must saw, and only the wearer knows the stroke); and the robot leading every mode; each set with
-   two hand-over timings (:data:`HANDOVER_TIMINGS`: ``prompt``, the wearer leads once a wearer mode is
-   likely within 0.5 s; ``early``, once it is possible within 1.5 s, kept 1 s longer), with the robot's
-   full share while it leads; then, a second stage, the best :data:`SECOND_STAGE_TOP` of those by the
-   criterion and the empty set with the robot's share 0.5 while it leads (:data:`ROBOT_ALPHAS`, the
-   gate's ``robot_alphas``: at 0.5 a robot-led step is the mixture 0.5·û_r + 0.5·û_v, ``mix50``). The
-   share changes only the robot-led steps, so it is tried on the sets that win without it rather than on
-   all of them: that halves the choice's cost. A set the per-mode costs put at no less effort and error than
-   the wearer leading every mode is not simulated (:func:`mpcshare.calibration.mode_cost.prune_sets`);
-3. each candidate is simulated in the closed loop (hand-over costs included) and scored by its
-   **line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to
-   that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
+1. ``voluntary`` and ``reactive``, read as each mode's price ρ_j [m²/rad]
+   (:func:`mpcshare.calibration.mode_cost.mode_costs`);
+2. the candidates (:func:`candidate_sets`): the wearer leads the top 1, 2, … modes by price, each also with the
+   labelled cutting modes, or none (the robot leads every mode); each non-empty set with each hand-over timing
+   of :data:`HANDOVER_TIMINGS`, the robot at full share while it leads; a set the per-mode costs put at no
+   less effort and error than the wearer alone is not simulated (:func:`mpcshare.calibration.mode_cost.prune_sets`);
+3. the best :data:`SECOND_STAGE_TOP` of those and the empty set with the other shares of :data:`ROBOT_ALPHAS`.
 
-Criterion (:data:`CRITERION`): among the candidates whose effort is at most ``max_effort`` × the
-voluntary effort (the effort target 0.75), those that saw while cutting (:func:`saws`: the
-task's stroke correlation and amplitude) where the wearer alone saws, and of those the lowest line
-ratio; where the line is ill-posed (the robot alone costs the wearer at least ``max_effort`` × the
-effort of doing it alone), the lowest tracking RMS of those. When none is within the effort cap,
-the same without the cap (sawing first, the lowest line ratio; the lowest RMS where no line ratio is
-defined): the lowest RMS alone would pick the candidate that hands the wearer nearly everything (the
-early timing's, at 1.00x the effort, on the demo's choice trials). The choice, every candidate's
-figures, the per-mode costs and why are returned for the bundle's ``metrics`` (and, in words,
-:mod:`mpcshare.reports.rule_choice`).
+Each candidate's score is its line ratio r = RMS / RMS_line(e) (:func:`line_ratio`; below 1: better than mixing
+the two parties at the same effort e). :data:`CRITERION`: within ``max_effort`` × the voluntary effort, those that
+saw while cutting (:func:`saws`) where the wearer alone saws, and of those the lowest r (the lowest RMS where the
+line is ill-posed); if none is within the cap, the same without it. Returns the choice, every candidate's
+figures, the per-mode costs and why, for the bundle's rule (in words: :mod:`mpcshare.reports.rule_choice`);
+raises ValueError without a mode model or a trial. Why these candidates and this criterion, and what they
+measured: docs/design.md, "Chosen in the closed loop, by what each mode costs".
 """
 
 from __future__ import annotations
@@ -72,24 +54,17 @@ CRITERION = ("among the candidates with effort <= max_effort x voluntary, those 
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GateSettings().lead_s,
                      "hold_s": GateSettings().hold_s}
 #: the early timing: the wearer takes the lead at a forecast probability of 0.2 within 1.5 s and keeps it
-#: for 1 s after it falls below 0.1. A hand-over to the wearer costs most when it comes just after the
-#: knife's intent has jumped into a wearer mode (the pick-up, docs/design.md); earlier, while the robot
-#: still tracks, the wearer inherits a small error and leads through the jump (family world 0, modes
-#: [0, 1]: line 1.04 → 0.97; default data [0, 2]: 0.76 → 0.71; at more effort: 0.34 → 0.46, 0.60 → 0.72)
+#: for 1 s after it falls below 0.1, while the robot still tracks, before the knife's intent jumps into a wearer
+#: mode (the pick-up it avoids: docs/design.md)
 EARLY_HANDOVER_SETTINGS = {"share_on": 0.2, "share_off": 0.1, "lead_s": 1.5, "hold_s": 1.0}
 #: the hand-over timings each non-empty wearer-mode set is tried with: name → the gate's settings
 HANDOVER_TIMINGS = {"prompt": HANDOVER_SETTINGS, "early": EARLY_HANDOVER_SETTINGS}
-#: the robot's shares α while the wearer leads that each non-empty wearer-mode set is tried with (the gate's
-#: ``wearer_alpha``). Only 0, the wearer alone: 0.25 (``mix25`` within the wearer's modes) was tried on 5
-#: worlds (bench_family --quick, every candidate on the evaluation trials): it lowered the line ratio of 2
-#: of 20 sets by more than 0.01 (default data [0, 1]: 1.05 → 0.80, [0, 1, 2]: 0.97 → 0.73) and raised it
-#: on 16 (up to 1.60 → 3.21 on the family, where the robot's stroke is noise), at twice the choice's
-#: cost; pass ``wearer_alphas`` to try it.
+#: the robot's shares α while the wearer leads (the gate's ``wearer_alpha``) each non-empty wearer-mode set is
+#: tried with: only 0, the wearer alone (why: docs/design.md, "The robot's share while the wearer leads");
+#: pass ``wearer_alphas`` to try others
 WEARER_ALPHAS = (0.0,)
-#: the robot's shares α while it leads (the gate's ``robot_alphas``, the same in every mode) that each set is
-#: tried with. The robot at full share (α = 1, the user's β) lay above the voluntary–reactive line on the
-#: family of worlds where the mixture at 0.5 lay below it (family worlds 0 and 3, the robot leading every
-#: mode: line 0.96 and 1.02 at 1, 0.90 and 0.99 at 0.5; docs/design.md, "The robot's share while it leads").
+#: the robot's shares α while it leads (the gate's ``robot_alphas``, the same in every mode): the first with
+#: every candidate, the others in the second stage (why: docs/design.md, "The robot's share while it leads")
 ROBOT_ALPHAS = (1.0, 0.5)
 #: how many of the first stage's candidates (at the first robot share) the other shares are tried on, beside
 #: the empty set (the robot leading every mode)

@@ -77,8 +77,7 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
         options = {**options, "robot": scene.robot}
     wearer = bundle_wearer(bundle, wearer)
     controller = make_controller(bundle, strategy=run.strategy, use_mpc=run.use_mpc, beta=beta, **options)
-    # one BLAS thread: the controller's products are small (a 7-joint MPC's take ≈ 2 ms a solve on one
-    # thread, ≈ 20 ms with OpenBLAS's threads on a shared 2-core machine; docs/design.md)
+    # one BLAS thread: faster for the controller's dense products than OpenBLAS's threads (docs/design.md)
     with threadpool_limits(limits=1, user_api="blas"):
         episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
                               obs_names=list(demos.obs_names), act_names=list(demos.act_names),

@@ -1,26 +1,22 @@
 """The controller's observation-only stages computed once per trial and replayed.
 
 In :func:`sim.closed_loop.run_episode` the fork samples are replayed from the trial and the time runs on a
-fixed grid, so the stages of :class:`mpcshare.control.controller.SharedController` that read nothing else
-give the same outputs in every episode of a trial, whatever the strategy, the wearer and the arm do: the
-front end (Kalman filter, 10 Hz window, mode filter: ``controller.frontend``), the reactive predictor's
-stream and the gate on the model ticks (``controller.bundle.predictor``, ``.gates``), the control-rate
-forecast (``controller.fast``) and the tip trajectory the arbitration reads (``controller.forecast``:
-``ready``, ``at``). :class:`FrontEndRecording` holds what each of those calls returned (or raised), in call
-order, with the control step it came in (a step is one ``frontend.step``), and the arbitration's
-observation-only inputs (``controller.arbiter.decide``: time, gate probability, novelty, prediction finite,
-available, mode posterior; the arbitration itself always runs). :func:`record_front_end` wraps a live
-controller's parts so that its episode records them; :func:`replay_front_end` puts parts in their place that
-give the recording back instead of computing it (about a fifth of an episode's CPU); :func:`simulate_cached`
-does either, per process, bundle and trial. Nothing in ``controller.py`` changes: the parts are swapped on
-the built controller.
+fixed grid, so the stages of :class:`mpcshare.control.controller.SharedController` that read nothing else give
+the same outputs in every episode of a trial: the front end (``controller.frontend``), the reactive predictor's
+stream and the gate on the model ticks (``controller.bundle.predictor``, ``.gates``), the control-rate forecast
+(``controller.fast``) and the tip trajectory the arbitration reads (``controller.forecast``: ``ready``, ``at``).
+:class:`FrontEndRecording` holds what each of those calls returned (or raised), in call order, with its control
+step (one ``frontend.step``), and the arbitration's observation-only inputs (``controller.arbiter.decide``:
+time, gate probability, novelty, prediction finite, available, mode posterior; the arbitration always runs).
+:func:`record_front_end` wraps a live controller's parts so that its episode records them;
+:func:`replay_front_end` swaps in parts that give the recording back; :func:`simulate_cached` does either, per
+process, bundle and trial.
 
-Exactness: each replayed call is checked against the recording (the front end's time and fork sample
-byte for byte, the trajectory's query time, the arbitration's inputs, the step of every call); at the first
-call that differs, or when the episode ends with recorded calls left, the replay is *diverged* and
-:func:`simulate_cached` runs the episode again live. A replayed episode is therefore the live one, to the
-last bit. Not replayed (run live): the MPC (its preview reads the trajectory at times of its own), a known
-preview (``oracle_preview``) and scenarios that transform the trial.
+Exactness: each replayed call is checked against the recording (time and fork sample byte for byte, the
+trajectory's query time, the arbitration's inputs, the step of every call); at the first difference, or with
+recorded calls left at the end, the replay is *diverged* and :func:`simulate_cached` runs the episode again
+live, so a replayed episode is the live one to the last bit. Run live: the MPC, a known preview
+(``oracle_preview``) and scenarios that transform the trial. What it saves: docs/design.md.
 """
 
 from __future__ import annotations

@@ -1,32 +1,23 @@
 """The schedules of the replayed runs ``random_handover`` and ``oracle_handover`` from episodes.
 
-* ``random_handover`` (the placebo): from the gate's episode on the trial, the schedule
-  ``on[k] = α_k ≥ 0.5`` (the robot leads), replayed at the gate's mean α over those steps (its
-  share while it leads, ``robot_alphas``); each draw is :func:`mpcshare.evaluation.schedule.random_schedule` with the
-  same steps on, hand-overs and first state, and interior segments ≥ the dwell
-  d = ⌈``min_dwell_s`` / Δ⌉ steps (or the gate's own shortest interior segment, if shorter:
-  the gate's overrides switch without dwell), seeded by (seed, trial, draw).
-* ``oracle_handover`` (the upper bound, never worse than the better party): the candidates of
-  :func:`oracle_handover_schedules` — :func:`mpcshare.evaluation.schedule.oracle_schedule` on the
-  per-step tracking errors e_k = ‖p_k − p*_k‖ of the ``voluntary`` and ``reactive`` episodes on
-  the trial, with dwell d, at the switch costs λ_c = c · (1/Δ) · mean(e_v² + e_r²)/2 for c in
-  :data:`ORACLE_SWITCH_COSTS_S` (a hand-over costs c seconds of the parties' mean squared error:
-  the wearer's pick-up and the ramp that the pure runs' errors leave out) — are each replayed in
-  the closed loop, and the run keeps, per trial, the episode with the lowest tracking RMS among
-  those replays *and the pure runs' own episodes* (the all-wearer and all-robot schedules). So
-  per trial, and pooled (√ of weighted mean squares), it is never worse than the better party.
-* ``oracle_line`` (the upper bound on the line ratio): :func:`line_oracle_schedules`, the
-  same search with the wearer's effort priced in. Per step the cost of a party is e_k² + μ·ε_k (ε_k
-  the shoulder's ‖θ_k‖ [rad] in that party's run) with μ = c·(m_r − m_v)/(E_v − E_r), c times the
-  line's own exchange rate of mean squared error for effort, for c in :data:`LINE_ORACLE_WEIGHTS`,
-  at the switch costs :data:`LINE_ORACLE_SWITCH_COSTS_S`. Each is replayed, and the run keeps, per
-  trial, the replay with the lowest line ratio (against that trial's pure runs) among those costing
-  at most :data:`LINE_ORACLE_MAX_EFFORT` × the trial's ``voluntary`` effort, the pure runs included
-  (line ratio 1): what a hand-over schedule that knows the future reaches. Not a strict bound (the
-  search prices the pure runs' errors, not the replay's), but every figure is a replayed closed loop.
+* ``random_handover`` (the placebo): the gate's schedule on the trial, ``on[k] = α_k ≥ 0.5`` (the robot leads),
+  redrawn by :func:`mpcshare.evaluation.schedule.random_schedule` with the same steps on, hand-overs and first
+  state, interior segments ≥ the dwell d = ⌈``min_dwell_s`` / Δ⌉ steps (or the gate's shortest interior segment,
+  if shorter), seeded by (seed, trial, draw); replayed at the gate's mean α over its robot-led steps.
+* ``oracle_handover`` (never worse than the better party): :func:`mpcshare.evaluation.schedule.oracle_schedule`
+  on the per-step errors e_k = ‖p_k − p*_k‖ [m] of the ``voluntary`` and ``reactive`` episodes, with dwell d, at
+  the switch costs λ_c = c · (1/Δ) · mean(e_v² + e_r²)/2 for c in :data:`ORACLE_SWITCH_COSTS_S` [s]
+  (:func:`oracle_handover_schedules`); each is replayed and the run keeps, per trial, the episode with the lowest
+  tracking RMS among the replays and the two pure runs' own episodes.
+* ``oracle_line``: :func:`line_oracle_schedules`, the same search with the cost of a party e_k² + μ·ε_k
+  (ε_k = ‖θ_k‖ [rad], the shoulder in that party's run), μ = c·(m_r − m_v)/(E_v − E_r) for c in
+  :data:`LINE_ORACLE_WEIGHTS`, at the switch costs :data:`LINE_ORACLE_SWITCH_COSTS_S`; the run keeps, per trial,
+  the replay with the lowest line ratio among those costing at most :data:`LINE_ORACLE_MAX_EFFORT` × the
+  ``voluntary`` effort, the pure runs included (ratio 1). Not a strict bound: the search prices the pure runs'
+  errors, not the replay's.
 
-Both are replayed by the controller's ``schedule`` strategy, read ``handover_s``/2 ahead so
-that α's ramp crosses 0.5 on the scheduled step (:class:`mpcshare.evaluation.schedule.StepSchedule`).
+All are replayed by the controller's ``schedule`` strategy, read ``handover_s``/2 ahead so that α's ramp crosses
+0.5 on the scheduled step (:class:`mpcshare.evaluation.schedule.StepSchedule`); why: docs/design.md.
 """
 
 from __future__ import annotations

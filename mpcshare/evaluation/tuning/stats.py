@@ -1,24 +1,19 @@
 """Statistics of a sweep's rows: per-setting summaries, the gate against chance, Pareto, recommendation.
 
-* **Summary** per setting (strategy, matched_to, percentile, β): for each of
-  :data:`SUMMARY_KEYS` the mean over its episodes (trials × seeds) and a 95 % bootstrap CI
-  of that mean (``scipy.stats.bootstrap``, percentile method, 2000 resamples, seed 0;
-  None with fewer than 2 episodes).
-* **Line ratio** per setting (:mod:`mpcshare.line_ratio`): its mean tracking RMS over the line
-  from ``reactive`` (at the setting's percentile; the highest one for settings without one) to
-  ``voluntary`` at its mean effort.
-* **Tests** per setting of a tunable strategy (``gate``, ``paper_gate``, ``blend``): paired over
-  (trial, seed), the difference d = e_random − e_setting of the tracking RMS [m] against the
-  setting's matched ``random_handover``, e_random the *mean over the pair's draws*; one-sided
-  Wilcoxon signed-rank test of H1: d > 0 (the setting tracks better than its placebo; exact for
-  small n), the effect mean(d) [m] with its bootstrap CI, and the relative effect
-  mean(d) / mean(e_random). ``n_forced``: the setting's episodes with at most one hand-over,
-  where the matched schedule is the setting's own (nothing to draw). **Holm's correction**
-  across the m settings tested: ``p_holm`` = max over the settings ranked at or before this one
-  of min(1, (m − rank + 1)·p) (ranks by ascending p, from 1); ``beats_random`` uses ``p_holm``.
-* **Pareto set**: among the realisable settings (the registry's user strategies: not the upper
-  bound ``oracle_preview`` nor the placebo), those that no other beats on both the mean tracking
-  RMS and the mean voluntary effort (both lower is better).
+* **Summary** per setting (strategy, matched_to, percentile, β): for each of :data:`SUMMARY_KEYS` the mean over
+  its episodes (trials × seeds) and a 95 % bootstrap CI of that mean (``scipy.stats.bootstrap``, percentile
+  method, 2000 resamples, seed 0; None with fewer than 2 episodes).
+* **Line ratio** per setting (:mod:`mpcshare.line_ratio`): its mean tracking RMS over the line from ``reactive``
+  (at the setting's percentile; the highest one for settings without one) to ``voluntary`` at its mean effort.
+* **Tests** per setting of a tunable strategy: paired over (trial, seed), d = e_random − e_setting of the
+  tracking RMS [m] against the setting's matched ``random_handover``, e_random the *mean over the pair's
+  draws*; one-sided Wilcoxon signed-rank test of H1: d > 0 (exact for small n), the effect mean(d) [m] with its
+  bootstrap CI, and the relative effect mean(d) / mean(e_random). ``n_forced``: the setting's episodes with at
+  most one hand-over (the matched schedule is its own). **Holm's correction** across the m settings tested:
+  ``p_holm`` = max over the settings ranked at or before this one of min(1, (m − rank + 1)·p) (ranks by
+  ascending p, from 1); ``beats_random`` uses ``p_holm``.
+* **Pareto set**: among the realisable settings (the registry's user strategies: not the upper bound
+  ``oracle_preview`` nor the placebo), those no other beats on both mean tracking RMS and mean voluntary effort.
 * **Recommended** (:data:`CRITERION`).
 """
 
