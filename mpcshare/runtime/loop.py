@@ -40,7 +40,7 @@ from mpcshare.runtime.convert import (
     joint_state,
     pose_matrix,
     read_path,
-    status_message,
+    status_cdr,
 )
 from mpcshare.runtime.effort_command import EffortCommand
 from mpcshare.runtime.gc_policy import CollectorPolicy
@@ -278,7 +278,7 @@ class RunLoop:
 
     def _status(self, stamp, level: int, status: str, message: str, values: dict[str, object]) -> str:
         values = {"status": status, "stamp": f"{stamp.sec}.{stamp.nanosec:09d}", **values}
-        self.status_writer.write(status_message(stamp, "mpcshare: shared controller", self.config.name, level,
+        self.status_writer.write_cdr(status_cdr(stamp, "mpcshare: shared controller", self.config.name, level,
                                                 message, values))
         self.summary.statuses[status] = self.summary.statuses.get(status, 0) + 1
         if self.live is not None:
