@@ -276,6 +276,23 @@ def test_every_command_form_gives_back_the_controllers_segment(tmp_path, kind, i
     assert remote._segment(bad, q, v) is None  # not the arm's joints
 
 
+def test_the_stand_in_plays_a_driver_that_adds_gravity(tmp_path):
+    pin = pytest.importorskip("pinocchio")
+    kind = "std_msgs/msg/Float64MultiArray"
+    config = load_run_config(write_config(tmp_path, PANDA, replace={
+        r"^interface = \"position\"": 'interface = "effort"\ndriver_compensates_gravity = true'}))
+    robot = robot_description(config)
+    remote = RemoteController(config, Transport(NetworkSettings(domain_id=DOMAIN)),
+                              obs_names=list(config.names("obs")), vol_names=list(config.names("voluntary")))
+    remote.bind(robot)
+    rng = np.random.default_rng(4)
+    q, v, a = rng.uniform(-1, 1, 7), rng.uniform(-0.5, 0.5, 7), rng.uniform(-3, 3, 7)
+    data = robot.model.createData()
+    sent = pin.rnea(robot.model, data, q, v, a) - pin.computeGeneralizedGravity(robot.model, data, q)
+    msg = command_message(kind, "effort", config.arm.joints, Time(1, 0), T, q, v, a, sent)
+    assert np.allclose(remote._segment(msg, q, v)[2], a, rtol=0, atol=1e-9)  # τ − g(q) + g(q): the same motion
+
+
 def test_the_panda_over_forward_commands_tracks_as_in_one_process(served, tmp_path):
     """The Panda of examples/ros2/panda.toml (a Float64MultiArray position command) against ``sim --robot
     panda``; with the torso's pose as an input, since the simulator sways the arm's base with the torso."""
