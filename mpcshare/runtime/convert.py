@@ -11,6 +11,7 @@ stamp) or a ``Float64MultiArray`` (q_cmd, v_cmd or τ per the interface), and th
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any, Sequence
 
@@ -140,21 +141,22 @@ def status_message(stamp: Time, name: str, hardware_id: str, level: int, message
     return DiagnosticArray(Header(stamp, ""), [DiagnosticStatus(level, name, message, hardware_id, kv)])
 
 
-_ROSBAGS: list[Any] = []  # rosbags' ROS 2 Humble typestore and its status types, made at the first use
+@functools.cache
+def _rosbags_status_types() -> tuple[Any, ...]:
+    """rosbags' ROS 2 Humble typestore and its DiagnosticArray, DiagnosticStatus, KeyValue, Header, Time."""
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    return store, *(store.types[t] for t in (
+        "diagnostic_msgs/msg/DiagnosticArray", "diagnostic_msgs/msg/DiagnosticStatus", "diagnostic_msgs/msg/KeyValue",
+        "std_msgs/msg/Header", "builtin_interfaces/msg/Time"))
 
 
 def status_cdr(stamp: Time, name: str, hardware_id: str, level: int, message: str,
                values: dict[str, object]) -> bytes:
     """:func:`status_message`'s XCDR1 bytes (encapsulation header included), serialised by rosbags' ROS 2 CDR
     serialiser (generated per type; the same bytes as Cyclone's, a fraction of its CPU: docs/results.md)."""
-    if not _ROSBAGS:
-        from rosbags.typesys import Stores, get_typestore
-
-        store = get_typestore(Stores.ROS2_HUMBLE)
-        _ROSBAGS.extend([store, *(store.types[f"{t}"] for t in (
-            "diagnostic_msgs/msg/DiagnosticArray", "diagnostic_msgs/msg/DiagnosticStatus",
-            "diagnostic_msgs/msg/KeyValue", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"))])
-    store, array, status, key_value, header, time_ = _ROSBAGS
+    store, array, status, key_value, header, time_ = _rosbags_status_types()
     msg = array(header(time_(stamp.sec, stamp.nanosec), ""), [status(
         level, name, message, hardware_id, [key_value(k, status_text(v)) for k, v in values.items()])])
     return bytes(store.serialize_cdr(msg, "diagnostic_msgs/msg/DiagnosticArray"))

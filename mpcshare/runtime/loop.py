@@ -116,6 +116,7 @@ class RunLoop:
         self.latest: dict[str, Any] = {}
         self.wrong_frame: dict[str, int] = {n: 0 for n in config.inputs}
         self.summary = RunSummary()
+        status_cdr(ros_time(0.0), "", "", OK, "", {})  # rosbags' serialiser made now (~0.2 s), not in a tick
         cmd = config.command
         self._efforts = cmd.type.endswith("Float64MultiArray") and cmd.interface == "effort"
         self.effort = EffortCommand(getattr(controller, "robot", None) if self._efforts else None, config.period_s,
