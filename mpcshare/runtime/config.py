@@ -11,7 +11,7 @@ Tables (every key: docs/design.md, "On a real arm"; examples ``examples/ros2/sup
     [inputs.arm]                          # required: topic, joints (the model's, in its order)
     [inputs.NAME]                         # topic, type, optional, deadline_s, stop_after_s, frame, reliability, depth
     [obs] / [voluntary]                   # every channel of the model: "INPUT FIELD.PATH"
-    [outputs.command] / [outputs.status]  # topic, type, interface; the DiagnosticArray's topic
+    [outputs.command] / [outputs.status]  # topic, type, interface, driver_compensates_gravity; the status topic
 
 Field paths as ``mpcshare import``'s (:func:`learning.data.mapping.parse_field_path`): ``a.b[i]``, ``@roll``.
 Older than ``deadline_s``: an input's channels are missing (the controller's fault path); older than
@@ -88,12 +88,15 @@ class ChannelSpec:
 
 @dataclass(frozen=True)
 class CommandSpec:
-    """The joint command's topic, type (:data:`COMMAND_TYPES`), interface (:data:`INTERFACES`) and QoS."""
+    """The joint command's topic, type (:data:`COMMAND_TYPES`), interface (:data:`INTERFACES`) and QoS;
+    ``driver_compensates_gravity`` (effort only): the driver adds g(q) itself, so g(q) is subtracted from every
+    effort sent (efforts are otherwise total joint torques, gravity included)."""
 
     topic: str
     type: str
     interface: str = "position"
     qos: QosSettings = field(default_factory=lambda: QosSettings("reliable", 1))
+    driver_compensates_gravity: bool = False
 
 
 @dataclass(frozen=True)
@@ -254,7 +257,8 @@ def parse_run_config(doc: dict[str, Any], source: str, folder: Path | None = Non
     outputs = d.table(doc, "outputs", "[outputs]", required=True)
     d.keys(outputs, ("command", "status"), "[outputs]")
     cmd = d.table(outputs, "command", "[outputs.command]", required=True)
-    d.keys(cmd, ("topic", "type", "interface", "reliability", "depth"), "[outputs.command]")
+    d.keys(cmd, ("topic", "type", "interface", "reliability", "depth", "driver_compensates_gravity"),
+           "[outputs.command]")
     ctype = d.text(cmd, "type", "[outputs.command]", COMMAND_TYPES[0])
     if ctype not in COMMAND_TYPES:
         raise d.fail("[outputs.command] type", f"unknown message type {ctype!r} for the command "
@@ -263,6 +267,10 @@ def parse_run_config(doc: dict[str, Any], source: str, folder: Path | None = Non
     if ctype == COMMAND_TYPES[0] and interface != "position":
         raise d.fail("[outputs.command] interface", "a JointTrajectory carries positions, velocities and "
                                                     "accelerations: leave interface out")
+    compensated = d.flag(cmd, "driver_compensates_gravity", "[outputs.command]", False)
+    if compensated and interface != "effort":
+        raise d.fail("[outputs.command] driver_compensates_gravity", "applies to an effort command only "
+                                                                     f"(interface = \"effort\"), not {interface}")
     status = d.table(outputs, "status", "[outputs.status]")
     d.keys(status, ("topic", "type", "reliability", "depth"), "[outputs.status]")
     d.text(status, "type", "[outputs.status]", STATUS_TYPES[0], STATUS_TYPES)
@@ -273,7 +281,7 @@ def parse_run_config(doc: dict[str, Any], source: str, folder: Path | None = Non
                                   d.flag(controller, "mpc", "[controller]", False)),
         inputs=inputs, channels=_channels(d, doc, inputs),
         command=CommandSpec(d.topic(cmd, "[outputs.command]"), ctype, interface,
-                            d.qos(cmd, "[outputs.command]", QosSettings("reliable", 1))),
+                            d.qos(cmd, "[outputs.command]", QosSettings("reliable", 1)), compensated),
         status_topic=d.topic(status, "[outputs.status]") if "topic" in status else "/mpcshare/status",
         status_qos=d.qos(status, "[outputs.status]", QosSettings("reliable", 1)),
         resume_after_s=float(d.number(doc, "resume_after_s", "top level", 1.0)),

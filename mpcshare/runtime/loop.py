@@ -2,7 +2,6 @@
 
 Per tick k (t_k = k·T on the monotonic clock from the start, T = 1/rate_hz; ``sim_time``: each new ``/clock``
 message's time, a clock that jumps back resets the controller, the watchdog and the latest inputs):
-
 1. take every new message (arrivals feed the :class:`~mpcshare.runtime.watchdog.Watchdog`; a wrong frame_id is
    dropped, counted); stale inputs withheld (NaN: the controller's fault path), named in the status;
 2. ``SharedController.step(t_k, obs, voluntary, q, v, base_pose)``; publish the command (stamped with ROS time,
@@ -10,14 +9,15 @@ message's time, a clock that jumps back resets the controller, the watchdog and 
 3. collect the garbage due if the slack allows (:mod:`~mpcshare.runtime.gc_policy`), sleep to t_{k+1} (the last
    0.2 ms spun); a tick already past is skipped (``late_ticks``). ``tick = "arm"``: tick k+1 runs on the first
    arm joint state after t_{k+1} − T/2 (at t_{k+1} + T/2 at the latest) and the schedule moves to it.
-
 Phases and collections go to ``RunLoop.profile`` (:class:`~mpcshare.runtime.tick_profile.TickProfile`).
 **Protective stop** (a required input older than ``stop_after_s``, a non-finite command, the end of the run):
-no controller call; each tick publishes ``protective_stop`` and the hold at q_stop (the joints measured at the
-first stop command: a trajectory point with zero velocities and accelerations; a Float64MultiArray of q_stop,
-zero velocities or zero efforts). A silent-input stop ends once every required input was fresh for ``resume_after_s``
-(controller reset, ``resumes`` counted); a non-finite command latches. Before the arm's first joint state only
-the status goes out (``waiting``). :meth:`RunLoop.shutdown` publishes the stop again, ≤ 0.2 s for acknowledgement.
+no controller call; each tick publishes ``protective_stop`` and the hold at q_stop (measured at the first stop):
+a trajectory point at rest; a Float64MultiArray of q_stop, zero velocities, or efforts braking to rest at q_stop,
+gravity included (:mod:`robot.holding_torque`, the controller's ``robot``; g(q) alone while the arm's state is
+stale, zeros without a model: status ``stop_torque``). Efforts are total joint torques; with
+``driver_compensates_gravity`` g(q) is subtracted from each. A silent-input stop ends once every required input
+was fresh for ``resume_after_s`` (controller reset); a non-finite command latches. Before the arm's first joint
+state only the status goes out. :meth:`RunLoop.shutdown` publishes the stop again, ≤ 0.2 s for acknowledgement.
 """
 
 from __future__ import annotations
@@ -40,8 +40,9 @@ from mpcshare.runtime.convert import (
     joint_state,
     pose_matrix,
     read_path,
-    status_message,
+    status_cdr,
 )
+from mpcshare.runtime.effort_command import EffortCommand
 from mpcshare.runtime.gc_policy import CollectorPolicy
 from mpcshare.runtime.messages import MESSAGE_TYPES, Clock, DiagnosticArray, ros_time, seconds
 from mpcshare.runtime.tick_profile import TickProfile
@@ -82,7 +83,9 @@ class RunLoop:
     base pose (T_plate_torso) given to the controller while no torso pose is configured or has arrived
     (None: none, the controller's own mount, given at its construction); ``live``: a
     :class:`mpcshare.runtime.live.LiveView` given every tick (its failure ends it, named in ``live_error``);
-    ``gc_policy``: :data:`mpcshare.runtime.gc_policy.GC_POLICIES` (ValueError naming them otherwise)."""
+    ``gc_policy``: :data:`mpcshare.runtime.gc_policy.GC_POLICIES` (ValueError naming them otherwise). An effort
+    command takes the arm's model from ``controller.robot`` (a :class:`robot.description.RobotDescription`);
+    ValueError when ``driver_compensates_gravity`` is set and the controller has none."""
 
     def __init__(self, config: RunConfig, controller: Any, transport: Transport, *, obs_names: list[str],
                  vol_names: list[str], clock: Callable[[], float] = time.monotonic,
@@ -113,6 +116,12 @@ class RunLoop:
         self.latest: dict[str, Any] = {}
         self.wrong_frame: dict[str, int] = {n: 0 for n in config.inputs}
         self.summary = RunSummary()
+        status_cdr(ros_time(0.0), "", "", OK, "", {})  # rosbags' serialiser made now (~0.2 s), not in a tick
+        cmd = config.command
+        self._efforts = cmd.type.endswith("Float64MultiArray") and cmd.interface == "effort"
+        self.effort = EffortCommand(getattr(controller, "robot", None) if self._efforts else None, config.period_s,
+                                    len(self.joints), compensated=cmd.driver_compensates_gravity,
+                                    where=f"{config.source}, [outputs.command]")
         self._restart(clock())
 
     def _sim_clock(self) -> float:
@@ -130,6 +139,8 @@ class RunLoop:
                                   for n, s in self.config.inputs.items()], start)
         self.latest.clear()
         self._q_last: np.ndarray | None = None  # last finite measured joint positions
+        self._v_last: np.ndarray | None = None  # and velocities
+        self._arm_stale = True  # the arm's joint state older than its deadline at the last check
         self._q_stop: np.ndarray | None = None  # the positions the stop holds, latched at the stop
         self._stop_reason: str | None = None
         self._stop_latched = False  # a stop that no input's return ends (a non-finite command)
@@ -148,9 +159,10 @@ class RunLoop:
                 self.latest[name] = msg
                 self.watchdog.seen(name, now)
         if "arm" in self.latest:
-            q, _ = joint_state(self.latest["arm"], self.joints)
+            q, v = joint_state(self.latest["arm"], self.joints)
             if np.isfinite(q).all():
                 self._q_last = q
+                self._v_last = v if np.isfinite(v).all() else None
 
     def _values(self, channels, stale: tuple[str, ...]) -> np.ndarray:
         return np.array([read_path(self.latest[c.input], c.path) if c.input in self.latest and c.input not in stale
@@ -168,8 +180,10 @@ class RunLoop:
         if self._q_stop is None and self._q_last is not None:
             self._q_stop = self._q_last.copy()
         q = self._q_stop if self._q_stop is not None else zeros
+        v = None if self._arm_stale else self._v_last
+        tau = self.effort.stop(self._q_last, v, self._q_stop) if self._efforts else zeros
         return command_message(self.config.command.type, self.config.command.interface, self.joints,
-                               self._stamp() if stamp is None else stamp, self.config.period_s, q, zeros, zeros, zeros)
+                               self._stamp() if stamp is None else stamp, self.config.period_s, q, zeros, zeros, tau)
 
     def _publish_stop(self, stamp: Any = None) -> bool:
         msg = self.stop_command(stamp)
@@ -198,6 +212,7 @@ class RunLoop:
         self._t_poll = time.perf_counter() - p0
         now = self.clock()
         watch = self.watchdog.check(now)
+        self._arm_stale = "arm" in watch.stale
         values: dict[str, object] = {"tick": k, "t": t_k}
         values.update({f"age_{n}": a for n, a in watch.ages.items()})
         values["stale_inputs"] = ",".join(watch.stale)
@@ -215,7 +230,8 @@ class RunLoop:
             stamp = self._stamp()  # the stop command's and its status's
             sent = self._publish_stop(stamp)
             values.update(protective_stop=self._stop_reason, stop_command=int(sent))
-            return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
+            return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}"
+                                f"{self.effort.note(values)}", values)
         if "arm" not in self.latest:
             stamp = self._stamp()
             return self._status(stamp, STALE, "waiting", f"waiting for the arm's joint states on "
@@ -237,12 +253,19 @@ class RunLoop:
                          self.summary.step_times[-1])
         arrays = [np.asarray(getattr(cmd, a, np.nan), dtype=float) for a in ("q_cmd", "v_cmd", "a_cmd", "tau")]
         stamp = self._stamp()
-        if not all(x.shape == (len(self.joints),) and np.isfinite(x).all() for x in arrays):
-            self._stop_reason = f"the controller gave a non-finite command (status {getattr(cmd, 'status', '?')})"
+        finite = all(x.shape == (len(self.joints),) and np.isfinite(x).all() for x in arrays)
+        if finite and self.config.command.driver_compensates_gravity:
+            arrays[3] = self.effort.command(arrays[3], q, self._q_last)
+            if not np.isfinite(arrays[3]).all():
+                self._stop_reason, finite = "g(q) for the driver's gravity compensation could not be computed", False
+        if not finite:
+            self._stop_reason = self._stop_reason or \
+                f"the controller gave a non-finite command (status {getattr(cmd, 'status', '?')})"
             self._stop_latched = True
             self._publish_stop(stamp)
             values["protective_stop"] = self._stop_reason
-            return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}", values)
+            return self._status(stamp, ERROR, "protective_stop", f"protective stop: {self._stop_reason}"
+                                f"{self.effort.note(values)}", values)
         self.command_writer.write(command_message(self.config.command.type, self.config.command.interface,
                                                   self.joints, stamp, self.config.period_s, *arrays))
         self.summary.commands += 1
@@ -256,7 +279,7 @@ class RunLoop:
 
     def _status(self, stamp, level: int, status: str, message: str, values: dict[str, object]) -> str:
         values = {"status": status, "stamp": f"{stamp.sec}.{stamp.nanosec:09d}", **values}
-        self.status_writer.write(status_message(stamp, "mpcshare: shared controller", self.config.name, level,
+        self.status_writer.write_cdr(status_cdr(stamp, "mpcshare: shared controller", self.config.name, level,
                                                 message, values))
         self.summary.statuses[status] = self.summary.statuses.get(status, 0) + 1
         if self.live is not None:
@@ -368,8 +391,10 @@ class RunLoop:
         """Publish the stop command and wait up to 0.2 s for reliable readers to acknowledge it."""
         stamp = self._stamp()
         sent = self._publish_stop(stamp)
+        values: dict[str, object] = {"stop_command": int(sent)}
+        note = self.effort.note(values)
         self._status(stamp, ERROR if self._stop_reason else OK, "stopped",
-                     "stopped: " + (self._stop_reason or "end of the run"), {"stop_command": int(sent)})
+                     "stopped: " + (self._stop_reason or "end of the run") + note, values)
         if sent:
             self.command_writer.flush(0.2)
         self.status_writer.flush(0.05)

@@ -253,7 +253,7 @@ class RemoteController:
 
     def _segment(self, msg: Any, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, ...] | None:
         return command_segment(msg, self.interface, self.config.arm.joints, self.config.period_s, q, v,
-                               self._dynamics)
+                               self._dynamics, self.config.command.driver_compensates_gravity)
 
     def _command(self, msg: Any, values: dict[str, str], q: np.ndarray, v: np.ndarray) -> RemoteCommand | None:
         segment = self._segment(msg, q, v)

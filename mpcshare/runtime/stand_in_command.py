@@ -7,7 +7,8 @@ form gives back the controller's segment, to the wire's rounding):
 - ``JointTrajectory`` (one point): positions, velocities, accelerations as they are (by joint name);
 - ``Float64MultiArray`` position: q₁ given, a = 2·(q₁ − q − v·T)/T²;
 - velocity: v₁ given, a = (v₁ − v)/T;
-- effort: τ given, a = M(q)⁻¹·(τ − h(q, v)) in the arm's rigid-body model (pinocchio's ABA).
+- effort: τ given, a = M(q)⁻¹·(τ − h(q, v)) in the arm's rigid-body model (pinocchio's ABA); with the
+  configuration's ``driver_compensates_gravity`` the stand-in is that driver: τ + g(q).
 
 :func:`remote_command` adds what the status of the same stamp says (α, β, novelty, the tip reference,
 the mode probabilities, the status; NaN and ``no_status`` where it did not arrive).
@@ -48,11 +49,12 @@ def _floats(text: str) -> np.ndarray:
 
 
 def command_segment(msg: Any, interface: str, joints: Sequence[str], period_s: float, q: np.ndarray, v: np.ndarray,
-                    dynamics: tuple[Any, Any] | None = None) -> tuple[np.ndarray, ...] | None:
+                    dynamics: tuple[Any, Any] | None = None,
+                    add_gravity: bool = False) -> tuple[np.ndarray, ...] | None:
     """(q₁, v₁, a) of the command ``msg`` (module docstring); ``interface``: ``trajectory`` (a JointTrajectory)
     or the Float64MultiArray's position, velocity, effort; ``dynamics``: the arm's (pinocchio model, data),
-    needed for effort (RuntimeError without). None: not a command for ``joints`` (a wrong length, a missing
-    joint, a non-finite value)."""
+    needed for effort (RuntimeError without); ``add_gravity``: the effort is τ − g(q) (the driver adds g). None:
+    not a command for ``joints`` (a wrong length, a missing joint, a non-finite value)."""
     n, T = len(joints), period_s
     if interface == "trajectory":
         if len(msg.points) != 1:
@@ -77,6 +79,8 @@ def command_segment(msg: Any, interface: str, joints: Sequence[str], period_s: f
             raise RuntimeError("an effort command needs the arm's model: bind the arm first")
         import pinocchio as pin
 
+        if add_gravity:
+            data = data + pin.computeGeneralizedGravity(*dynamics, q)
         a = np.array(pin.aba(*dynamics, q, v, data), dtype=float)
     return q + (v + 0.5 * T * a) * T, v + a * T, a
 

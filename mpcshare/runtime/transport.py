@@ -9,7 +9,8 @@ discovery from the configured interface and peers only.
 
 QoS: readers default to best effort (they match both reliable and best-effort ROS 2 publishers,
 e.g. the sensor-data profile), writers to reliable (matched by ROS 2's default subscribers);
-history keep-last ``depth``; volatile durability.
+history keep-last ``depth``; volatile durability. :meth:`Writer.write_cdr` sends a sample already serialised
+(XCDR1 with its encapsulation header, e.g. by rosbags' ROS 2 CDR serialiser, faster than Cyclone's Python one).
 """
 
 from __future__ import annotations
@@ -28,6 +29,11 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 
 from mpcshare.runtime.messages import dds_topic
+
+try:  # what DataWriter.write itself sends its serialised sample with
+    from cyclonedds._clayer import ddspy_write as _write_serialized
+except ImportError:  # pragma: no cover - another cyclonedds layout: Writer.write_cdr deserialises, then writes
+    _write_serialized = None
 
 __all__ = ["RELIABILITIES", "NetworkSettings", "QosSettings", "Reader", "Transport", "Writer", "cyclone_config"]
 
@@ -102,6 +108,17 @@ class Writer(Generic[M]):
     def __init__(self, writer: DataWriter, topic: str) -> None:
         self._writer: DataWriter | None = writer
         self.topic = topic
+
+    def write_cdr(self, data: bytes) -> None:
+        """Send a sample of the topic's type given as its XCDR1 bytes (encapsulation header included), as
+        :meth:`write` would send it; RuntimeError after :meth:`close` or for a DDS error."""
+        if self._writer is None:
+            raise RuntimeError(f"the writer of {self.topic} is closed")
+        if _write_serialized is None:  # pragma: no cover
+            self._writer.write(self._writer.data_type.deserialize(data))
+            return
+        if _write_serialized(self._writer._ref, data.ljust((len(data) + 3) & ~3, b"\0")) < 0:
+            raise RuntimeError(f"the writer of {self.topic} failed to send a serialised sample")
 
     def write(self, message: M) -> None:
         """Send ``message``; RuntimeError after :meth:`close`."""

@@ -65,6 +65,12 @@ BAD = [  # (replace {regex: text}, append, what the one line names)
     ({r'^tick = "arm"': 'tick = "fork"'}, "",
      "top level tick: 'fork' is not one of schedule, arm"),
     ({r'^resume_after_s = 1.0': "resume_after_s = -1"}, "", "top level resume_after_s: must be a number > 0"),
+    ({r'^type = "trajectory_msgs/msg/JointTrajectory"': 'type = "std_msgs/msg/Float64MultiArray"\n'
+                                                       'interface = "velocity"\ndriver_compensates_gravity = true'},
+     "", "[outputs.command] driver_compensates_gravity: applies to an effort command only"),
+    ({r'^type = "trajectory_msgs/msg/JointTrajectory"': 'type = "std_msgs/msg/Float64MultiArray"\n'
+                                                       'interface = "effort"\ndriver_compensates_gravity = 1'},
+     "", "[outputs.command] driver_compensates_gravity: must be true or false"),
 ]
 
 

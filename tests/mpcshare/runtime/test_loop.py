@@ -211,3 +211,59 @@ def test_without_a_torso_pose_the_controller_is_given_the_rest_pose(setup):
     clock.t += 0.01
     loop.tick(2)
     np.testing.assert_allclose(ctl.calls[-1][5][:3, 3], [-0.2, 0.1, 0.0])
+
+
+class ArmRecorder(Recorder):
+    """A Recorder on the SuperLimb's model (``robot``, as the shared controller has it)."""
+
+    def __init__(self):
+        super().__init__()
+        from robot.default_arm import as_description
+
+        self.robot = as_description(None)
+
+
+@pytest.mark.parametrize("compensated", [False, True])
+def test_an_effort_stop_holds_the_arm_against_gravity(tmp_path, compensated):
+    pin = pytest.importorskip("pinocchio")
+    cfg = load_run_config(write_config(tmp_path, replace={
+        r'^topic = "/joint_trajectory_controller/joint_trajectory"\ntype = .*$':
+            f'topic = "/test_effort_{compensated}/commands"\ntype = "std_msgs/msg/Float64MultiArray"\n'
+            f'interface = "effort"\ndriver_compensates_gravity = {str(compensated).lower()}',
+        r'^topic = "/mpcshare/status"': f'topic = "/test_effort_{compensated}/status"'}))
+    t = Transport(NetworkSettings(domain_id=DOMAIN))
+    clock, ctl = Clock(), ArmRecorder()
+    loop = RunLoop(cfg, ctl, t, obs_names=OBS, vol_names=VOL, clock=clock, wall=lambda: 1234.5)
+    arm = t.writer(cfg.inputs["arm"].topic, JointState)
+    commands = t.reader(f"/test_effort_{compensated}/commands", Float64MultiArray, QosSettings("reliable", 100))
+    status = t.reader(f"/test_effort_{compensated}/status", DiagnosticArray, QosSettings("reliable", 100))
+    end = time.monotonic() + 5.0
+    while not arm.matched and time.monotonic() < end:
+        time.sleep(0.01)
+    q = np.array([0.1, 0.4, -0.3])  # base_yaw, shoulder, elbow: at rest
+    arm.write(JointState(Header(Time(1, 0), ""), ["base_yaw", "shoulder", "elbow"], list(q), [0.0] * 3, []))
+    time.sleep(0.05)
+    loop.tick(0)
+    g = pin.computeGeneralizedGravity(ctl.robot.model, ctl.robot.model.createData(), q)
+    sent = np.array(_wait(commands)[-1].data)
+    np.testing.assert_allclose(sent, 2.0 - g if compensated else 2.0, atol=1e-12)  # the controller's, less g
+    clock.t += 1.0  # every input silent: protective stop
+    assert loop.tick(100) == "protective_stop"
+    stop = np.array(_wait(commands)[-1].data)
+    # the arm's joint state is stale: gravity alone at the last measured posture (zeros for the driver's own)
+    np.testing.assert_allclose(stop, 0.0 if compensated else g, atol=1e-12)
+    values = {kv.key: kv.value for kv in _wait(status, 2)[-1].status[0].values}
+    assert values["stop_torque"] == "gravity"
+    arm.write(JointState(Header(Time(2, 0), ""), ["base_yaw", "shoulder", "elbow"], list(q), [0.0] * 3, []))
+    time.sleep(0.05)
+    clock.t += 0.01  # the arm fresh again, the other inputs still silent: the brake, at rest the holding torque
+    assert loop.tick(101) == "protective_stop" and loop.effort.source == "brake"
+    np.testing.assert_allclose(np.array(_wait(commands)[-1].data), 0.0 if compensated else g, atol=1e-12)
+
+
+def test_gravity_compensation_by_the_driver_needs_an_arm_model(tmp_path):
+    cfg = load_run_config(write_config(tmp_path, replace={
+        r'^type = "trajectory_msgs/msg/JointTrajectory"':
+            'type = "std_msgs/msg/Float64MultiArray"\ninterface = "effort"\ndriver_compensates_gravity = true'}))
+    with pytest.raises(ValueError, match=r"\[outputs.command\] driver_compensates_gravity: needs the arm's model"):
+        RunLoop(cfg, Recorder(), Transport(NetworkSettings(domain_id=DOMAIN)), obs_names=OBS, vol_names=VOL)

@@ -106,3 +106,17 @@ def test_names_and_times():
     assert m.ros_time(12.25) == m.Time(12, 250_000_000)
     assert m.seconds(m.ros_time(1.5)) == 1.5
     assert m.Quaternion() == m.Quaternion(0, 0, 0, 1)  # ROS 2's identity default
+
+
+def test_the_status_serialised_by_rosbags_is_the_status_message():
+    from mpcshare.runtime.convert import status_cdr, status_message
+
+    values = {"status": "ok", "tick": 3, "alpha": 0.123456789, "mode_proba": np.array([0.25, 0.75]), "reasons": "",
+              "tip_reference": np.array([0.1, np.nan, 3.0]), "leader": "robot"}
+    args = (m.Time(12, 34), "mpcshare: shared controller", "superlimb", 1, "reference_unreachable", values)
+    ours = status_cdr(*args)
+    assert ours == bytes(status_message(*args).serialize())
+    back = m.DiagnosticArray.deserialize(ours).status[0]
+    assert {kv.key: kv.value for kv in back.values} == {"status": "ok", "tick": "3", "alpha": "0.123457",
+                                                        "mode_proba": "0.25,0.75", "reasons": "",
+                                                        "tip_reference": "0.1,nan,3", "leader": "robot"}

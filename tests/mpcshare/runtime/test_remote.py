@@ -276,6 +276,23 @@ def test_every_command_form_gives_back_the_controllers_segment(tmp_path, kind, i
     assert remote._segment(bad, q, v) is None  # not the arm's joints
 
 
+def test_the_stand_in_plays_a_driver_that_adds_gravity(tmp_path):
+    pin = pytest.importorskip("pinocchio")
+    kind = "std_msgs/msg/Float64MultiArray"
+    config = load_run_config(write_config(tmp_path, PANDA, replace={
+        r"^interface = \"position\"": 'interface = "effort"\ndriver_compensates_gravity = true'}))
+    robot = robot_description(config)
+    remote = RemoteController(config, Transport(NetworkSettings(domain_id=DOMAIN)),
+                              obs_names=list(config.names("obs")), vol_names=list(config.names("voluntary")))
+    remote.bind(robot)
+    rng = np.random.default_rng(4)
+    q, v, a = rng.uniform(-1, 1, 7), rng.uniform(-0.5, 0.5, 7), rng.uniform(-3, 3, 7)
+    data = robot.model.createData()
+    sent = pin.rnea(robot.model, data, q, v, a) - pin.computeGeneralizedGravity(robot.model, data, q)
+    msg = command_message(kind, "effort", config.arm.joints, Time(1, 0), T, q, v, a, sent)
+    assert np.allclose(remote._segment(msg, q, v)[2], a, rtol=0, atol=1e-9)  # τ − g(q) + g(q): the same motion
+
+
 def test_the_panda_over_forward_commands_tracks_as_in_one_process(served, tmp_path):
     """The Panda of examples/ros2/panda.toml (a Float64MultiArray position command) against ``sim --robot
     panda``; with the torso's pose as an input, since the simulator sways the arm's base with the torso."""
@@ -304,3 +321,29 @@ def test_stand_in_options_that_cannot_apply_are_one_line(tmp_path, capsys, argv,
     assert main(["sim", "--model", str(tmp_path / "none"), "--out", str(tmp_path / "out"), *argv]) == 1
     err = capsys.readouterr().err.strip()
     assert words in err and len(err.splitlines()) == 1, err
+
+
+def test_an_effort_stop_holds_the_arm_where_it_stopped(served, tmp_path):
+    """The SuperLimb over a Float64MultiArray effort command (total torques, gravity included; the stand-in
+    applies them through ABA), the fork silenced past its stop: the stop's torques brake the arm and hold it
+    against gravity, where zero efforts would let it fall."""
+    cfg = write_config(tmp_path, replace={
+        r"^resume_after_s = 1.0": f"resume_after_s = {RESUME_S}",
+        r'^type = "trajectory_msgs/msg/JointTrajectory"': 'type = "std_msgs/msg/Float64MultiArray"\n'
+                                                         'interface = "effort"'})
+    _pair(served, tmp_path / "across", ["--drop", "fork:0.3:1.2"], 1, 1.4, cfg=cfg)
+    pin = pytest.importorskip("pinocchio")
+    e = _episode(tmp_path / "across")
+    stopped = np.flatnonzero(e["status"] == "protective_stop")
+    assert stopped.size > 30 and 0.8 - 1e-9 <= e["t"][stopped[0]] <= 0.8 + 2 * T + 1e-9  # stop_after_s 0.5 s
+    robot = robot_description(load_run_config(cfg))
+    data = robot.model.createData()
+
+    def tip(q):  # the knife tip in the arm's frame: the arm's own motion, not the wearer's torso under it
+        pin.framesForwardKinematics(robot.model, data, q)
+        return data.oMf[robot.tip_frame_id].translation.copy()
+
+    moved = max(np.linalg.norm(tip(e["q"][k]) - tip(e["q"][stopped[0]])) for k in stopped)
+    assert moved < 0.002, moved  # braked from ~0.1 m/s; zero efforts: the shoulder falls ~1 rad in 0.4 s
+    assert np.linalg.norm(e["tip"][stopped] - e["tip"][stopped[0]], axis=1).max() < 0.005  # plate frame
+    assert int(e["info_limit_violations"]) == 0

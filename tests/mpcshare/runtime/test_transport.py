@@ -48,3 +48,23 @@ def test_a_round_trip_on_loopback(monkeypatch):
 def test_a_users_cyclonedds_uri_is_honoured(monkeypatch):
     monkeypatch.setenv("CYCLONEDDS_URI", "<CycloneDDS/>")
     assert Transport(NetworkSettings(domain_id=DOMAIN)).user_config
+
+
+def test_a_sample_sent_as_its_bytes_arrives_as_the_sample(monkeypatch):
+    monkeypatch.delenv("CYCLONEDDS_URI", raising=False)
+    t = Transport(NetworkSettings(domain_id=DOMAIN))
+    reader = t.reader("/test/write_cdr", JointState, QosSettings("reliable", 10))
+    writer = t.writer("/test/write_cdr", JointState)
+    deadline = time.monotonic() + 5.0
+    while writer.matched == 0 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    sent = JointState(Header(Time(3, 7), "arm"), ["a"], [0.5], [0.25], [])  # 45 bytes: padded to 48 on the wire
+    writer.write_cdr(bytes(sent.serialize()))
+    got: list[JointState] = []
+    while not got and time.monotonic() < deadline:
+        got += reader.take()
+        time.sleep(0.005)
+    assert got == [sent]
+    writer.close()
+    with pytest.raises(RuntimeError, match="the writer of /test/write_cdr is closed"):
+        writer.write_cdr(bytes(sent.serialize()))
