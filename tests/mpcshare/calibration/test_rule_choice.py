@@ -237,3 +237,37 @@ def test_the_choice_runs_on_the_last_held_out_trials_and_leaves_the_rest():
     assert choice_trials([2, 7, 9, 11, 12, 13]) == [12, 13]
     assert choice_trials([5]) == [5]
     assert choice_trials([2, 7, 9], n_trials=1) == [9]
+
+
+def _with_episodes(fake_many, by_trial):
+    """pooled_runs whose rows also carry per-trial sawing (``by_trial``: a strategy or a gate candidate's wearer
+    modes → the ``saws_by_trial`` list)."""
+    def many(bundle, demos, trials, specs, *args, **kwargs):
+        rows = fake_many(bundle, demos, trials, specs, *args, **kwargs)
+        for (strategy, options), (row, _) in zip(specs, rows):
+            row["saws_by_trial"] = by_trial[tuple(options["wearer_modes"]) if strategy == "gate" else strategy]
+        return rows
+    return many
+
+
+def test_a_candidate_must_saw_in_every_cutting_episode_where_the_wearer_saws(monkeypatch):
+    """Pooled, both sets saw; per trial, [1] misses the second trial's cutting, so the choice takes [1, 2] at a
+    worse line. A trial where the wearer alone does not saw does not count against a candidate."""
+    figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
+    by_modes = {(1,): (0.012, 0.04, 0.8), (1, 2): (0.0125, 0.05, 0.9), (): (0.02, 0.02, 0.1)}
+    by_trial = {"voluntary": [True, True, None], "reactive": [False, False, None], (1,): [True, False, None],
+                (1, 2): [True, True, None], (): [False, False, None]}
+    fake = _fake_runs(figures, by_modes, [])
+    monkeypatch.setattr(rule_choice, "pooled_runs", _with_episodes(fake, by_trial))
+    choice = choose_rule(_Bundle(), None, [3, 4, 5], robot_alphas=(1.0,))
+    assert choice["wearer_modes"] == [1, 2] and "every cutting episode" in choice["why"]
+    assert choice["predicted"]["saws"] and choice["predicted"]["line_ratio"] == pytest.approx(
+        choice["candidates"][2]["line_ratio"])
+    by_trial["voluntary"] = [True, False, None]  # the wearer alone misses the second: [1] counts as sawing
+    choice = choose_rule(_Bundle(), None, [3, 4, 5], robot_alphas=(1.0,))
+    assert choice["wearer_modes"] == [1]
+    assert choice["predicted"] == {"line_ratio": pytest.approx(choice["candidates"][0]["line_ratio"]),
+                                   "effort_vs_voluntary": pytest.approx(0.5), "tracking_rmse_m": 0.012,
+                                   "saw_correlation": 0.8, "saws": True}
+    assert rule_choice.saws_where_the_wearer_saws({"saw_correlation": 0.1, "saw_amplitude_ratio": 0.1},
+                                                  {"saws_by_trial": [True]}) is False  # no per-trial: pooled
