@@ -25,17 +25,11 @@ not recorded), so :func:`choose_rule` measures it:
    **line ratio** r = RMS / RMS_line(e), the line running from (effort, RMS) of ``reactive`` to
    that of ``voluntary``, evaluated at the candidate's effort e (below 1: better than mixing).
 
-Criterion (:data:`CRITERION`): among the candidates whose effort is at most ``max_effort`` × the voluntary
-effort (the effort target 0.75), those that saw (:func:`saws`: the task's stroke correlation and amplitude) in
-every cutting episode (one per trial) where the wearer alone saws (:func:`saws_where_the_wearer_saws`), and of
-those the lowest line ratio; where the line is ill-posed (the robot alone costs the wearer at least
-``max_effort`` × the effort of doing it alone), the lowest tracking RMS of those. When none is within the
-effort cap, the same without the cap (sawing first, the lowest line ratio; the lowest RMS where no line ratio
-is defined): the lowest RMS alone would pick the candidate that hands the wearer nearly everything (the early
-timing's, at 1.00x the effort, on the demo's choice trials). The choice, every candidate's figures, the
-per-mode costs, why and what it predicts of the chosen rule (:func:`predicted`: its line ratio, effort and
-stroke correlation on the choice trials, for the evaluation to set beside what it realises) are returned for
-the bundle's rule (and, in words, :mod:`mpcshare.reports.rule_choice`).
+The criterion (:mod:`mpcshare.calibration.choice_criterion`): within the effort cap, of the candidates that saw
+in every cutting episode where the wearer alone saws, the lowest line ratio. The choice, every candidate's
+figures, the per-mode costs, why and what it predicts of the chosen rule (its line ratio, effort and stroke
+correlation on the choice trials, for an evaluation to set beside what it realises) are returned for the
+bundle's rule (and, in words, :mod:`mpcshare.reports.rule_choice`).
 """
 
 from __future__ import annotations
@@ -48,6 +42,15 @@ import numpy as np
 
 from learning.data import Demonstrations
 from mpcshare.bundle.rule import CalibratedRule
+from mpcshare.calibration.choice_criterion import (
+    CRITERION,
+    criterion,
+    predicted,
+    saws,
+    saws_where_the_wearer_saws,
+    second_stage,
+    wearer_saws,
+)
 from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
@@ -58,17 +61,12 @@ from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
 from sim.task.eating import STROKE_MODE
-from sim.task.eating import saws as task_saws
 from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
            "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
            "pooled_run", "pooled_runs", "predicted", "saws", "saws_where_the_wearer_saws", "wearer_saws"]
 
-CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw in every cutting episode "
-             "(trial) where the wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive "
-             "itself costs >= max_effort x voluntary); if none is within the cap, the same without the cap (the "
-             "lowest line ratio of those that saw)")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GateSettings().lead_s,
                      "hold_s": GateSettings().hold_s}
@@ -185,28 +183,6 @@ def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float
     return out, episodes
 
 
-def saws(row: dict[str, Any]) -> bool:
-    """Whether the knife sawed while cutting in ``row``: the task's criterion (:func:`sim.task.eating.saws`)."""
-    return task_saws(row.get("saw_correlation"), row.get("saw_amplitude_ratio"))
-
-
-def wearer_saws(voluntary: dict[str, Any]) -> bool:
-    """Whether the wearer alone saws in at least one cutting episode (``saws_by_trial``; without it, the
-    pooled figures' :func:`saws`)."""
-    alone = voluntary.get("saws_by_trial")
-    return any(bool(a) for a in alone) if alone is not None else saws(voluntary)
-
-
-def saws_where_the_wearer_saws(row: dict[str, Any], voluntary: dict[str, Any]) -> bool:
-    """Whether ``row`` saws (:func:`saws`) in every cutting episode, one per trial (``saws_by_trial``), in which
-    the wearer alone (``voluntary``) saws; an episode where the wearer alone does not saw does not count. Without
-    per-trial figures on both (or of different lengths), :func:`saws` of the pooled figures."""
-    mine, alone = row.get("saws_by_trial"), voluntary.get("saws_by_trial")
-    if mine is None or alone is None or len(mine) != len(alone):
-        return saws(row)
-    return all(bool(m) for m, a in zip(mine, alone) if a)
-
-
 def _n_modes(bundle: Any) -> int:
     """The mode model's number of modes; ValueError when the bundle has none."""
     modes = getattr(bundle, "modes", None)
@@ -228,39 +204,6 @@ def _cutting(bundle_episodes: list[Any], demos: Demonstrations, trials: Sequence
     return cutting_modes(bundle_episodes, labels, list(mode_names).index(STROKE_MODE), n_modes)
 
 
-_SAWED = " of those that saw in every cutting episode where the wearer alone saws"
-
-
-def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
-               max_effort: float) -> tuple[dict[str, Any], str]:
-    """The chosen row and why (module docstring, :data:`CRITERION`)."""
-    within = [r for r in rows if r["effort_vs_voluntary"] <= max_effort]
-    if not within:
-        sawing = [r for r in rows if saws_where_the_wearer_saws(r, vol)]
-        pool, task = (sawing, _SAWED) if wearer_saws(vol) and sawing else (rows, "")
-        ranked = [r for r in pool if r["line_ratio"] is not None]
-        if ranked:
-            best = min(ranked, key=lambda r: r["line_ratio"])
-            return best, (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest line ratio "
-                          f"({best['line_ratio']:.3f}){task}")
-        best = min(pool, key=lambda r: r["tracking_rmse_m"])
-        return best, (f"no candidate has effort <= {max_effort:g}x voluntary and none a line ratio; the lowest "
-                      f"tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm){task}")
-    sawing = [r for r in within if saws_where_the_wearer_saws(r, vol)]
-    pool, task = (sawing, "," + _SAWED) if wearer_saws(vol) and sawing else (within, "")
-    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
-    ranked = [r for r in pool if r["line_ratio"] is not None]
-    if posed and ranked:
-        best = min(ranked, key=lambda r: r["line_ratio"])
-        return best, (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(within)} of {len(rows)} "
-                      f"candidates with effort <= {max_effort:g}x voluntary{task}")
-    best = min(pool, key=lambda r: r["tracking_rmse_m"])
-    cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort, "
-             "so the line is ill-posed" if not posed else "no line ratio is defined")
-    return best, (f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm) among the "
-                  f"{len(within)} of {len(rows)} candidates with effort <= {max_effort:g}x voluntary{task}")
-
-
 def _check_variants(timings: Sequence[str], robot_alphas: Sequence[float]) -> None:
     """ValueError naming an unknown hand-over timing or a robot share outside [0.5, 1]."""
     unknown = sorted(set(timings) - set(HANDOVER_TIMINGS))
@@ -276,19 +219,6 @@ def _log_ran(log: Callable[[str], None] | None, ran: int, planned: int) -> None:
     if log is not None and ran < planned:
         log(f"  {ran} of the {planned} episodes simulated: the others decide as one of them at every step "
             "(the same episode)")
-
-
-def _second_stage(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any], max_effort: float,
-                  top: int) -> list[dict[str, Any]]:
-    """The first stage's ``top`` rows in the criterion's order (:func:`_criterion` applied again to what
-    is left), and the empty set's row (the robot leading every mode) where it is not among them."""
-    left, picked = list(rows), []
-    while left and len(picked) < top:
-        best, _ = _criterion(left, vol, rea, max_effort)
-        picked.append(best)
-        left = [r for r in left if r is not best]
-    picked += [r for r in left if not r["wearer_modes"]][:1]
-    return picked
 
 
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
@@ -354,8 +284,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
         log(f"  gate with wearer modes {r['wearer_modes']}: not simulated (the per-mode costs: {r['why']})")
     evaluate(_variants(sets, list(timings), wearer_alphas, robot_alphas[:1]))
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
-              for r in _second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
-    best, why = _criterion(rows, vol, rea, max_effort)
+              for r in second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
+    best, why = criterion(rows, vol, rea, max_effort)
     _log_ran(log, sum(ran), len(trials) * (2 + len(rows)))
     task_effort = cutting_effort(costs, cutting)
     if task_effort is not None and task_effort > max_effort and not (saws_where_the_wearer_saws(best, vol) and
@@ -370,15 +300,6 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
             "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
             "trials": [int(t) for t in trials], "duration_s": duration_s,
             "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}
-
-
-def predicted(row: dict[str, Any], voluntary: dict[str, Any]) -> dict[str, Any]:
-    """What the choice predicts of its rule from ``row``'s figures on the choice trials: ``line_ratio`` (None where
-    undefined), ``effort_vs_voluntary``, ``tracking_rmse_m`` [m], ``saw_correlation`` (mean over the cutting
-    episodes; None without cutting) and ``saws`` (:func:`saws_where_the_wearer_saws`)."""
-    return {"line_ratio": row["line_ratio"], "effort_vs_voluntary": row["effort_vs_voluntary"],
-            "tracking_rmse_m": row["tracking_rmse_m"], "saw_correlation": row.get("saw_correlation"),
-            "saws": saws_where_the_wearer_saws(row, voluntary)}
 
 
 def choice_trials(heldout: Sequence[int], n_trials: int | None = None) -> list[int]:

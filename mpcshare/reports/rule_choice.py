@@ -17,6 +17,7 @@ def rule_markdown(choice: dict[str, Any]) -> str:
              f"{choice['seconds']:g} s: "
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
+             *_predicted_markdown(choice),
              *_pruned_markdown(choice),
              *_costs_markdown(choice),
              "| run | wearer modes | hand-over | robot share while the wearer leads | robot share while it leads | "
@@ -37,6 +38,18 @@ def rule_markdown(choice: dict[str, Any]) -> str:
 def skipped_markdown(skipped: str) -> str:
     """The section when the choice was skipped: ``skipped`` says why, e.g. "closed-loop choice was skipped: …"."""
     return f"## Hand-over rule\n\nThe {skipped}.\n"
+
+
+def _predicted_markdown(choice: dict[str, Any]) -> list[str]:  # older choices have no prediction: no line
+    p = choice.get("predicted")
+    if not p:
+        return []
+    lr = "n/a" if p["line_ratio"] is None else f"{p['line_ratio']:.3f}"
+    corr = "n/a" if p.get("saw_correlation") is None else f"{p['saw_correlation']:.2f}"
+    return [f"Predicted on these trials (an evaluation sets it beside what it realises): line ratio {lr}, effort "
+            f"{p['effort_vs_voluntary']:.2f}x voluntary, RMS {p['tracking_rmse_m'] * 1e3:.1f} mm, stroke corr. "
+            f"{corr}, {'saws' if p.get('saws') else 'does not saw'} in every cutting episode where the wearer "
+            "alone saws.", ""]
 
 
 def _pruned_markdown(choice: dict[str, Any]) -> list[str]:  # the sets not simulated; none: no line
