@@ -17,7 +17,7 @@ from typing import Any
 
 from sim.task.eating import saws as task_saws
 
-__all__ = ["CRITERION", "criterion", "predicted", "saws", "saws_where_the_wearer_saws", "second_stage",
+__all__ = ["CRITERION", "criterion", "mix_note", "predicted", "saws", "saws_where_the_wearer_saws", "second_stage",
            "wearer_saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw in every cutting episode "
@@ -101,3 +101,18 @@ def predicted(row: dict[str, Any], voluntary: dict[str, Any]) -> dict[str, Any]:
     return {"line_ratio": row["line_ratio"], "effort_vs_voluntary": row["effort_vs_voluntary"],
             "tracking_rmse_m": row["tracking_rmse_m"], "saw_correlation": row.get("saw_correlation"),
             "saws": saws_where_the_wearer_saws(row, voluntary)}
+
+
+def mix_note(best: dict[str, Any], mixes: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
+             max_effort: float) -> str:
+    """"" unless a constant mixture's row (``mixes``, each with its ``strategy``) would win the criterion over the
+    candidates' ``best``; then the words that say so (the gate's rule cannot be a constant mixture: the default
+    strategy would have to become that mixture, without the gate's overrides)."""
+    if not mixes:
+        return ""
+    winner, _ = criterion([best, *mixes], vol, rea, max_effort)
+    if winner is best:
+        return ""
+    lr = "n/a" if winner["line_ratio"] is None else f"{winner['line_ratio']:.3f}"
+    return (f"; the constant mixture {winner['strategy']} would win the criterion (line ratio {lr} at "
+            f"{winner['effort_vs_voluntary']:.2f}x voluntary), but the gate's rule cannot be a constant mixture")

@@ -45,6 +45,7 @@ from mpcshare.bundle.rule import CalibratedRule
 from mpcshare.calibration.choice_criterion import (
     CRITERION,
     criterion,
+    mix_note,
     predicted,
     saws,
     saws_where_the_wearer_saws,
@@ -52,6 +53,7 @@ from mpcshare.calibration.choice_criterion import (
     wearer_saws,
 )
 from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
+from mpcshare.control.strategies import by_role
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
@@ -63,7 +65,7 @@ from mpcshare.training.config import RULE_DURATION_S
 from sim.task.eating import STROKE_MODE
 from sim.wearer import WearerConfig
 
-__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
+__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "MIXES", "ROBOT_ALPHAS",
            "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
            "pooled_run", "pooled_runs", "predicted", "saws", "saws_where_the_wearer_saws", "wearer_saws"]
 
@@ -90,6 +92,9 @@ WEARER_ALPHAS = (0.0,)
 #: family of worlds where the mixture at 0.5 lay below it (family worlds 0 and 3, the robot leading every
 #: mode: line 0.96 and 1.02 at 1, 0.90 and 0.99 at 0.5; docs/design.md, "The robot's share while it leads").
 ROBOT_ALPHAS = (1.0, 0.5)
+#: the constant mixtures (``mix`` strategies) run on the choice trials beside the parties: comparators in the
+#: choice's table and its why, not candidates (the default strategy runs the gate with the bundle's rule)
+MIXES = ("mix25", "mix50", "mix75")
 #: how many of the first stage's candidates (at the first robot share) the other shares are tried on, beside
 #: the empty set (the robot leading every mode)
 SECOND_STAGE_TOP = 2
@@ -214,6 +219,32 @@ def _check_variants(timings: Sequence[str], robot_alphas: Sequence[float]) -> No
         raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
 
 
+def _check_mixes(mixes: Sequence[str]) -> None:
+    """ValueError naming the ``mixes`` that are not registered constant mixtures."""
+    unknown = sorted(set(mixes) - set(by_role("mix")))
+    if unknown:
+        raise ValueError(f"mixes {unknown} are not constant mixtures; valid: {', '.join(by_role('mix'))}")
+
+
+def _mix_rows(names: Sequence[str], figures: Sequence[dict[str, Any]], vol: dict[str, Any],
+              rea: dict[str, Any]) -> list[dict[str, Any]]:
+    """The constant mixtures' rows: their pooled ``figures`` with the strategy's name, line ratio and effort."""
+    return [{"strategy": name, **m, "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
+             "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]} for name, m in zip(names, figures)]
+
+
+def _task_note(task_effort: float | None, cutting: Sequence[int], best: dict[str, Any], vol: dict[str, Any],
+               max_effort: float) -> str:
+    """"" unless leading the ``cutting`` modes costs more than ``max_effort`` (``task_effort``) and the chosen
+    ``best`` does not both saw and stay within it; then the words that say no such rule can."""
+    if task_effort is None or task_effort <= max_effort or (saws_where_the_wearer_saws(best, vol) and
+                                                             best["effort_vs_voluntary"] <= max_effort):
+        return ""
+    return (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
+            f"task alone (the robot leading the rest; from the per-mode costs), so no rule that leaves them to the "
+            f"wearer stays within {max_effort:g}x here")
+
+
 def _log_ran(log: Callable[[str], None] | None, ran: int, planned: int) -> None:
     """Say how many of the choice's episodes were simulated, where some were not (they repeat one)."""
     if log is not None and ran < planned:
@@ -227,7 +258,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
                 timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
                 log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
-                prune: bool = True) -> dict[str, Any]:
+                prune: bool = True, mixes: Sequence[str] = MIXES) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
     ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
@@ -238,8 +269,10 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
     stage's episodes are one batch); ``prune``: leave out the wearer-mode sets the per-mode costs put at no
     less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
-    ``"pruned"``). Returns ``{"settings", "wearer_modes", "why", "criterion", "candidates", "pruned", "voluntary",
-    "reactive", "mode_costs", "price_order", "cutting_modes", "cutting_effort_vs_voluntary"
+    ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; their rows
+    under ``"mixes"``, and the why says so where one would win the criterion: the gate's rule cannot be one).
+    Returns ``{"settings", "wearer_modes", "why", "criterion", "predicted", "candidates", "mixes", "pruned",
+    "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes", "cutting_effort_vs_voluntary"
     (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s", "episodes_run" (simulated: an
     episode that decides as another at every step is that episode), "seconds"}``. Raises
     ValueError when the bundle has no mode model or no trial is given.
@@ -255,7 +288,9 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
         return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran)
 
-    (vol, vol_eps), (rea, rea_eps) = run([("voluntary", None), ("reactive", None)])
+    _check_mixes(mixes)
+    (vol, vol_eps), (rea, rea_eps), *mixed = run([("voluntary", None), ("reactive", None), *((m, None) for m in mixes)])
+    mix_rows = _mix_rows(mixes, [m for m, _ in mixed], vol, rea)
     costs = mode_costs(vol_eps, rea_eps, n_modes)
     order = price_order(costs)
     cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
@@ -286,17 +321,13 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
               for r in second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
     best, why = criterion(rows, vol, rea, max_effort)
-    _log_ran(log, sum(ran), len(trials) * (2 + len(rows)))
+    why += mix_note(best, mix_rows, vol, rea, max_effort)
+    _log_ran(log, sum(ran), len(trials) * (2 + len(mixes) + len(rows)))
     task_effort = cutting_effort(costs, cutting)
-    if task_effort is not None and task_effort > max_effort and not (saws_where_the_wearer_saws(best, vol) and
-                                                                     best["effort_vs_voluntary"] <= max_effort):
-        why += (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
-                f"task alone (the robot leading the rest; from the per-mode costs), so no rule that leaves them to the "
-                f"wearer stays within {max_effort:g}x here")
+    why += _task_note(task_effort, cutting, best, vol, max_effort)
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
-            "predicted": predicted(best, vol),
-            "cutting_effort_vs_voluntary": task_effort,
-            "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
+            "predicted": predicted(best, vol), "cutting_effort_vs_voluntary": task_effort,
+            "max_effort": max_effort, "candidates": rows, "mixes": mix_rows, "voluntary": vol, "reactive": rea,
             "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
             "trials": [int(t) for t in trials], "duration_s": duration_s,
             "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}

@@ -26,6 +26,10 @@ def rule_markdown(choice: dict[str, Any]) -> str:
         m = choice[name]
         lines.append(f"| {name} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
+    for m in choice.get("mixes") or []:  # comparators, not candidates
+        lr = "n/a" if m["line_ratio"] is None else f"{m['line_ratio']:.3f}"
+        lines.append(f"| {m['strategy']} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | {m['effort_vs_voluntary']:.2f} | "
+                     f"{lr} | {_f(m)} |")
     for r in choice["candidates"]:
         lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
         lines.append(f"| gate | {r['wearer_modes']} | {r.get('timing', 'prompt')} | {r.get('wearer_alpha', 0.0):g} | "
