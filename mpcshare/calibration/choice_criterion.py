@@ -8,17 +8,21 @@ ill-posed (the robot alone costs the wearer at least ``max_effort`` × the effor
 tracking RMS of those. When none is within the effort cap, the same without the cap. A row is a dict with
 ``tracking_rmse_m``, ``voluntary_effort``, ``effort_vs_voluntary``, ``line_ratio`` (None where undefined), the
 pooled ``saw_correlation`` / ``saw_amplitude_ratio`` and, where known, ``saws_by_trial`` (per trial: None
-without cutting, else whether it saws). :func:`predicted` is what the choice predicts of the chosen rule.
+without cutting, else whether it saws) and ``by_trial`` (per trial: RMS, effort, control steps).
+:func:`predicted` is what the choice predicts of the chosen rule; :func:`cross_validated` the same predicted
+leave one trial out (the rule chosen on the other trials, scored on the one left out).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+from mpcshare.line_ratio import line_ratio
 from sim.task.eating import saws as task_saws
 
-__all__ = ["CRITERION", "criterion", "mix_note", "predicted", "saws", "saws_where_the_wearer_saws", "second_stage",
-           "wearer_saws"]
+__all__ = ["CRITERION", "criterion", "cross_validated", "mix_note", "predicted", "saws", "saws_where_the_wearer_saws",
+           "second_stage", "wearer_saws"]
 
 CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw in every cutting episode "
              "(trial) where the wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive "
@@ -116,3 +120,51 @@ def mix_note(best: dict[str, Any], mixes: list[dict[str, Any]], vol: dict[str, A
     lr = "n/a" if winner["line_ratio"] is None else f"{winner['line_ratio']:.3f}"
     return (f"; the constant mixture {winner['strategy']} would win the criterion (line ratio {lr} at "
             f"{winner['effort_vs_voluntary']:.2f}x voluntary), but the gate's rule cannot be a constant mixture")
+
+
+def _subset(row: dict[str, Any], keep: list[int]) -> dict[str, Any]:
+    """``row`` re-pooled over the trials ``keep`` (:func:`mpcshare.evaluation.pool_metrics`' weights: RMS as
+    √(Σ n_k·rms_k² / Σ n_k), effort as the n_k-weighted mean); the pooled stroke figures are dropped (the
+    per-trial sawing stays)."""
+    per = [row["by_trial"][k] for k in keep]
+    n = sum(t["steps"] for t in per)
+    out = {k: v for k, v in row.items() if k not in ("saw_correlation", "saw_amplitude_ratio", "by_trial")}
+    out["tracking_rmse_m"] = math.sqrt(sum(t["steps"] * t["tracking_rmse_m"] ** 2 for t in per) / n)
+    out["voluntary_effort"] = sum(t["steps"] * t["voluntary_effort"] for t in per) / n
+    out["by_trial"] = per
+    if row.get("saws_by_trial") is not None:
+        out["saws_by_trial"] = [row["saws_by_trial"][k] for k in keep]
+    return out
+
+
+def _scored(row: dict[str, Any], vol: dict[str, Any], rea: dict[str, Any]) -> dict[str, Any]:
+    """``row`` with its line ratio and effort against ``vol`` and ``rea`` (the same trials)."""
+    return {**row, "line_ratio": line_ratio(row["tracking_rmse_m"], row["voluntary_effort"],
+                                            (vol["voluntary_effort"], vol["tracking_rmse_m"]),
+                                            (rea["voluntary_effort"], rea["tracking_rmse_m"])),
+            "effort_vs_voluntary": row["voluntary_effort"] / vol["voluntary_effort"]}
+
+
+def cross_validated(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
+                    max_effort: float) -> dict[str, Any] | None:
+    """The choice's prediction left one trial out: for each trial k, :func:`criterion` on the other trials
+    chooses a row, whose figures on trial k are kept; the kept figures pooled over k (as :func:`_subset`) give
+    ``line_ratio`` (against the parties pooled over all trials), ``effort_vs_voluntary`` and ``tracking_rmse_m``
+    [m], and ``chosen`` the index into ``rows`` chosen for each trial left out. No simulation. None with fewer
+    than 2 trials or without per-trial figures (``by_trial``)."""
+    n = len(vol.get("by_trial") or [])
+    if n < 2 or any(len(r.get("by_trial") or []) != n for r in [rea, *rows]):
+        return None
+    held: list[dict[str, Any]] = []
+    chosen: list[int] = []
+    for k in range(n):
+        rest = [i for i in range(n) if i != k]
+        v, r = _subset(vol, rest), _subset(rea, rest)
+        fold = [_scored(_subset(row, rest), v, r) for row in rows]
+        best, _ = criterion(fold, v, r, max_effort)
+        i = fold.index(best)
+        chosen.append(i)
+        held.append(rows[i]["by_trial"][k])
+    pooled = _scored(_subset({"by_trial": held}, list(range(n))), vol, rea)
+    return {"line_ratio": pooled["line_ratio"], "effort_vs_voluntary": pooled["effort_vs_voluntary"],
+            "tracking_rmse_m": pooled["tracking_rmse_m"], "chosen": chosen}

@@ -45,6 +45,7 @@ from mpcshare.bundle.rule import CalibratedRule
 from mpcshare.calibration.choice_criterion import (
     CRITERION,
     criterion,
+    cross_validated,
     mix_note,
     predicted,
     saws,
@@ -185,6 +186,9 @@ def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float
         vals = [m[key] for m in ms if m.get(key) is not None]
         out[key] = float(np.mean(vals)) if vals else None
     out["saws_by_trial"] = [None if m.get("saw_correlation") is None else saws(m) for m in ms]
+    out["by_trial"] = [{"tracking_rmse_m": float(m["tracking_rmse_m"]),
+                        "voluntary_effort": float(m["voluntary_effort"]), "steps": int(len(s))}
+                       for m, s in zip(ms, steps)]
     return out, episodes
 
 
@@ -271,10 +275,10 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
     ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; their rows
     under ``"mixes"``, and the why says so where one would win the criterion: the gate's rule cannot be one).
-    Returns ``{"settings", "wearer_modes", "why", "criterion", "predicted", "candidates", "mixes", "pruned",
-    "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes", "cutting_effort_vs_voluntary"
-    (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s", "episodes_run" (simulated: an
-    episode that decides as another at every step is that episode), "seconds"}``. Raises
+    Returns ``{"settings", "wearer_modes", "why", "criterion", "predicted", "cross_validated", "candidates",
+    "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
+    "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
+    "episodes_run" (simulated: an episode that decides as another at every step is that episode), "seconds"}``. Raises
     ValueError when the bundle has no mode model or no trial is given.
     """
     if not len(trials):
@@ -326,7 +330,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     task_effort = cutting_effort(costs, cutting)
     why += _task_note(task_effort, cutting, best, vol, max_effort)
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
-            "predicted": predicted(best, vol), "cutting_effort_vs_voluntary": task_effort,
+            "predicted": predicted(best, vol), "cross_validated": cross_validated(rows, vol, rea, max_effort),
+            "cutting_effort_vs_voluntary": task_effort,
             "max_effort": max_effort, "candidates": rows, "mixes": mix_rows, "voluntary": vol, "reactive": rea,
             "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
             "trials": [int(t) for t in trials], "duration_s": duration_s,

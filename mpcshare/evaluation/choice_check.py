@@ -33,12 +33,14 @@ def rule_run(strategy: str, runs: Sequence[Mapping[str, Any]]) -> str | None:
 
 def choice_check(rule: Any, strategies: Mapping[str, Mapping[str, Any]],
                  runs: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
-    """``{"run", "strategy", "predicted", "realised", "line_ratio_gap", "differs"}`` for the bundle's ``rule``
-    (a :class:`~mpcshare.bundle.rule.CalibratedRule` or None) against the evaluation's pooled ``strategies``
-    (run name → metrics, with ``line_ratio``) and its ``runs``. ``predicted`` and ``realised`` hold
-    ``line_ratio``, ``effort_vs_voluntary``, ``tracking_rmse_m`` and ``saw_correlation`` (None where undefined);
-    ``line_ratio_gap`` = realised − predicted (None where either is undefined); ``differs``: the gap's size
-    exceeds :data:`LINE_RATIO_TOLERANCE`. None without a rule, a recorded prediction or a run of its strategy."""
+    """``{"run", "strategy", "predicted", "realised", "cross_validated_line_ratio", "line_ratio_gap", "differs"}``
+    for the bundle's ``rule`` (a :class:`~mpcshare.bundle.rule.CalibratedRule` or None) against the evaluation's
+    pooled ``strategies`` (run name → metrics, with ``line_ratio``) and its ``runs``. ``predicted`` and
+    ``realised`` hold ``line_ratio``, ``effort_vs_voluntary``, ``tracking_rmse_m`` and ``saw_correlation`` (None
+    where undefined); ``line_ratio_gap`` = realised − predicted (None where either is undefined); ``differs``:
+    the gap's size exceeds :data:`LINE_RATIO_TOLERANCE`; ``cross_validated_line_ratio``: the choice's
+    leave-one-trial-out prediction (``rule.choice["cross_validated"]``; None where it has none). None without a
+    rule, a recorded prediction or a run of its strategy."""
     predicted = None if rule is None else (getattr(rule, "choice", None) or {}).get("predicted")
     name = None if not predicted else rule_run(rule.strategy, runs)
     if name is None or name not in strategies:
@@ -55,5 +57,7 @@ def choice_check(rule: Any, strategies: Mapping[str, Mapping[str, Any]],
     guess = {k: float(predicted[k]) if _finite(predicted.get(k)) else None for k in keys}
     gap = (realised["line_ratio"] - guess["line_ratio"]
            if realised["line_ratio"] is not None and guess["line_ratio"] is not None else None)
+    cv = (rule.choice.get("cross_validated") or {}).get("line_ratio")
     return {"run": name, "strategy": rule.strategy, "predicted": guess, "realised": realised,
+            "cross_validated_line_ratio": float(cv) if _finite(cv) else None,
             "line_ratio_gap": gap, "differs": gap is not None and abs(gap) > LINE_RATIO_TOLERANCE}

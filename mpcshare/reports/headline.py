@@ -263,8 +263,10 @@ def _choice(check: dict[str, Any]) -> Headline:
                f"NO, off by {gap:+.2f}" if check.get("differs") else f"yes, within {LINE_RATIO_TOLERANCE:g}")
     tail = ("" if gap is None else f"; the realised line ratio differs from the predicted one by {gap:+.2f}"
             + (f", more than {LINE_RATIO_TOLERANCE:g}" if check.get("differs") else ""))
+    cv = check.get("cross_validated_line_ratio")
+    loto = "" if cv is None else f" (left one choice trial out: line ratio {cv:.2f})"
     return Headline("The choice", verdict, f"the hand-over rule chosen in training predicted, on its choice trials, "
-                    f"{_figures(check['predicted'])}; `{check['run']}` realised {_figures(check['realised'])} "
+                    f"{_figures(check['predicted'])}{loto}; `{check['run']}` realised {_figures(check['realised'])} "
                     f"here{tail}.")
 
 

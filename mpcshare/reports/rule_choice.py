@@ -53,7 +53,14 @@ def _predicted_markdown(choice: dict[str, Any]) -> list[str]:  # older choices h
     return [f"Predicted on these trials (an evaluation sets it beside what it realises): line ratio {lr}, effort "
             f"{p['effort_vs_voluntary']:.2f}x voluntary, RMS {p['tracking_rmse_m'] * 1e3:.1f} mm, stroke corr. "
             f"{corr}, {'saws' if p.get('saws') else 'does not saw'} in every cutting episode where the wearer "
-            "alone saws.", ""]
+            f"alone saws.{_cv(choice.get('cross_validated'))}", ""]
+
+
+def _cv(cv: dict[str, Any] | None) -> str:  # the leave-one-trial-out prediction; none with one trial
+    if not cv or cv.get("line_ratio") is None:
+        return ""
+    return (f" Left one trial out (the rule chosen on the others, scored on it): line ratio {cv['line_ratio']:.3f}, "
+            f"effort {cv['effort_vs_voluntary']:.2f}x voluntary.")
 
 
 def _pruned_markdown(choice: dict[str, Any]) -> list[str]:  # the sets not simulated; none: no line

@@ -31,6 +31,11 @@ def test_the_check_sets_the_prediction_beside_the_realised_figures_and_flags_a_g
                          _STRATEGIES, _RUNS)
     assert not close["differs"] and "yes, within 0.1" in headline_lines(_STRATEGIES, rule_check=close)[-1]
     assert len(headline_lines(_STRATEGIES)) == len(headline_lines(_STRATEGIES, rule_check=check)) - 1
+    assert check["cross_validated_line_ratio"] is None and "left one" not in line
+    rule = CalibratedRule("gate", {}, {"predicted": _PREDICTED, "cross_validated": {"line_ratio": 0.8}})
+    check = choice_check(rule, _STRATEGIES, _RUNS)
+    assert check["cross_validated_line_ratio"] == 0.8
+    assert "(left one choice trial out: line ratio 0.80)" in headline_lines(_STRATEGIES, rule_check=check)[-1]
 
 
 def test_no_check_without_a_prediction_or_a_run_of_the_rules_strategy():

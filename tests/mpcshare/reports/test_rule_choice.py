@@ -50,4 +50,7 @@ def test_the_prediction_is_stated_when_recorded():
     md = rule_markdown(_choice(predicted=predicted))
     assert ("Predicted on these trials (an evaluation sets it beside what it realises): line ratio 0.663, effort "
             "0.50x voluntary, RMS 12.0 mm, stroke corr. 0.90, saws in every cutting episode") in md
-    assert "Predicted" not in rule_markdown(_choice())
+    assert "Predicted" not in rule_markdown(_choice()) and "Left one trial out" not in md
+    cv = {"line_ratio": 0.81, "effort_vs_voluntary": 0.55, "tracking_rmse_m": 0.013, "chosen": [0, 1]}
+    assert ("Left one trial out (the rule chosen on the others, scored on it): line ratio 0.810, effort 0.55x "
+            "voluntary.") in rule_markdown(_choice(predicted=predicted, cross_validated=cv))
