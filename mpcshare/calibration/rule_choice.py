@@ -11,12 +11,13 @@
 3. the best :data:`SECOND_STAGE_TOP` of those and the empty set with the other shares of :data:`ROBOT_ALPHAS`.
 
 Each candidate's score is its line ratio r = RMS / RMS_line(e) (:func:`line_ratio`; below 1: better than mixing
-the two parties at the same effort e). :data:`CRITERION`: within ``max_effort`` × the voluntary effort, those that
-saw while cutting (:func:`saws`) where the wearer alone saws, and of those the lowest r (the lowest RMS where the
-line is ill-posed); if none is within the cap, the same without it. Returns the choice, every candidate's
-figures, the per-mode costs and why, for the bundle's rule (in words: :mod:`mpcshare.reports.rule_choice`);
-raises ValueError without a mode model or a trial. Why these candidates and this criterion, and what they
-measured: docs/design.md, "Chosen in the closed loop, by what each mode costs".
+the two parties at the same effort e). The criterion (:mod:`mpcshare.calibration.choice_criterion`): within
+``max_effort`` × the voluntary effort, those that saw in every cutting episode where the wearer alone saws, and of
+those the lowest r (the lowest RMS where the line is ill-posed); if none is within the cap, the same without it.
+Returns the choice, every candidate's figures (the constant mixtures :data:`MIXES` as comparators), the per-mode
+costs, why, and what it predicts of the chosen rule, for the bundle's rule (in words:
+:mod:`mpcshare.reports.rule_choice`); raises ValueError without a mode model or a trial. Why these candidates and
+this criterion: docs/design.md, "Chosen in the closed loop, by what each mode costs".
 """
 
 from __future__ import annotations
@@ -29,7 +30,19 @@ import numpy as np
 
 from learning.data import Demonstrations
 from mpcshare.bundle.rule import CalibratedRule
+from mpcshare.calibration.choice_criterion import (
+    CRITERION,
+    criterion,
+    cross_validated,
+    mix_note,
+    predicted,
+    saws,
+    saws_where_the_wearer_saws,
+    second_stage,
+    wearer_saws,
+)
 from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
+from mpcshare.control.strategies import by_role
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
@@ -39,17 +52,12 @@ from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
 from sim.task.eating import STROKE_MODE
-from sim.task.eating import saws as task_saws
 from sim.wearer import WearerConfig
 
-__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "ROBOT_ALPHAS",
+__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "MIXES", "ROBOT_ALPHAS",
            "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
-           "pooled_run", "pooled_runs", "saws"]
+           "pooled_run", "pooled_runs", "predicted", "saws", "saws_where_the_wearer_saws", "wearer_saws"]
 
-CRITERION = ("among the candidates with effort <= max_effort x voluntary, those that saw while cutting where the "
-             "wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
-             "max_effort x voluntary); if none is within the cap, the same without the cap (the lowest line "
-             "ratio of those that saw)")
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GateSettings().lead_s,
                      "hold_s": GateSettings().hold_s}
@@ -66,6 +74,9 @@ WEARER_ALPHAS = (0.0,)
 #: the robot's shares α while it leads (the gate's ``robot_alphas``, the same in every mode): the first with
 #: every candidate, the others in the second stage (why: docs/design.md, "The robot's share while it leads")
 ROBOT_ALPHAS = (1.0, 0.5)
+#: the constant mixtures (``mix`` strategies) run on the choice trials beside the parties: comparators in the
+#: choice's table and its why, not candidates (the default strategy runs the gate with the bundle's rule)
+MIXES = ("mix25", "mix50", "mix75")
 #: how many of the first stage's candidates (at the first robot share) the other shares are tried on, beside
 #: the empty set (the robot leading every mode)
 SECOND_STAGE_TOP = 2
@@ -155,12 +166,11 @@ def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float
     for key in ("saw_correlation", "saw_amplitude_ratio"):
         vals = [m[key] for m in ms if m.get(key) is not None]
         out[key] = float(np.mean(vals)) if vals else None
+    out["saws_by_trial"] = [None if m.get("saw_correlation") is None else saws(m) for m in ms]
+    out["by_trial"] = [{"tracking_rmse_m": float(m["tracking_rmse_m"]),
+                        "voluntary_effort": float(m["voluntary_effort"]), "steps": int(len(s))}
+                       for m, s in zip(ms, steps)]
     return out, episodes
-
-
-def saws(row: dict[str, Any]) -> bool:
-    """Whether the knife sawed while cutting in ``row``: the task's criterion (:func:`sim.task.eating.saws`)."""
-    return task_saws(row.get("saw_correlation"), row.get("saw_amplitude_ratio"))
 
 
 def _n_modes(bundle: Any) -> int:
@@ -184,36 +194,6 @@ def _cutting(bundle_episodes: list[Any], demos: Demonstrations, trials: Sequence
     return cutting_modes(bundle_episodes, labels, list(mode_names).index(STROKE_MODE), n_modes)
 
 
-def _criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
-               max_effort: float) -> tuple[dict[str, Any], str]:
-    """The chosen row and why (module docstring, :data:`CRITERION`)."""
-    within = [r for r in rows if r["effort_vs_voluntary"] <= max_effort]
-    if not within:
-        sawing = [r for r in rows if saws(r)]
-        pool, task = (sawing, " of those that saw while cutting") if saws(vol) and sawing else (rows, "")
-        ranked = [r for r in pool if r["line_ratio"] is not None]
-        if ranked:
-            best = min(ranked, key=lambda r: r["line_ratio"])
-            return best, (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest line ratio "
-                          f"({best['line_ratio']:.3f}){task}")
-        best = min(pool, key=lambda r: r["tracking_rmse_m"])
-        return best, (f"no candidate has effort <= {max_effort:g}x voluntary and none a line ratio; the lowest "
-                      f"tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm){task}")
-    sawing = [r for r in within if saws(r)]
-    pool, task = (sawing, ", of those that saw while cutting") if saws(vol) and sawing else (within, "")
-    posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
-    ranked = [r for r in pool if r["line_ratio"] is not None]
-    if posed and ranked:
-        best = min(ranked, key=lambda r: r["line_ratio"])
-        return best, (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(within)} of {len(rows)} "
-                      f"candidates with effort <= {max_effort:g}x voluntary{task}")
-    best = min(pool, key=lambda r: r["tracking_rmse_m"])
-    cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort, "
-             "so the line is ill-posed" if not posed else "no line ratio is defined")
-    return best, (f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm) among the "
-                  f"{len(within)} of {len(rows)} candidates with effort <= {max_effort:g}x voluntary{task}")
-
-
 def _check_variants(timings: Sequence[str], robot_alphas: Sequence[float]) -> None:
     """ValueError naming an unknown hand-over timing or a robot share outside [0.5, 1]."""
     unknown = sorted(set(timings) - set(HANDOVER_TIMINGS))
@@ -224,24 +204,37 @@ def _check_variants(timings: Sequence[str], robot_alphas: Sequence[float]) -> No
         raise ValueError(f"robot_alphas must be shares in [0.5, 1] (the robot leads from 0.5), got {robot_alphas!r}")
 
 
+def _check_mixes(mixes: Sequence[str]) -> None:
+    """ValueError naming the ``mixes`` that are not registered constant mixtures."""
+    unknown = sorted(set(mixes) - set(by_role("mix")))
+    if unknown:
+        raise ValueError(f"mixes {unknown} are not constant mixtures; valid: {', '.join(by_role('mix'))}")
+
+
+def _mix_rows(names: Sequence[str], figures: Sequence[dict[str, Any]], vol: dict[str, Any],
+              rea: dict[str, Any]) -> list[dict[str, Any]]:
+    """The constant mixtures' rows: their pooled ``figures`` with the strategy's name, line ratio and effort."""
+    return [{"strategy": name, **m, "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
+             "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]} for name, m in zip(names, figures)]
+
+
+def _task_note(task_effort: float | None, cutting: Sequence[int], best: dict[str, Any], vol: dict[str, Any],
+               max_effort: float) -> str:
+    """"" unless leading the ``cutting`` modes costs more than ``max_effort`` (``task_effort``) and the chosen
+    ``best`` does not both saw and stay within it; then the words that say no such rule can."""
+    if task_effort is None or task_effort <= max_effort or (saws_where_the_wearer_saws(best, vol) and
+                                                             best["effort_vs_voluntary"] <= max_effort):
+        return ""
+    return (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
+            f"task alone (the robot leading the rest; from the per-mode costs), so no rule that leaves them to the "
+            f"wearer stays within {max_effort:g}x here")
+
+
 def _log_ran(log: Callable[[str], None] | None, ran: int, planned: int) -> None:
     """Say how many of the choice's episodes were simulated, where some were not (they repeat one)."""
     if log is not None and ran < planned:
         log(f"  {ran} of the {planned} episodes simulated: the others decide as one of them at every step "
             "(the same episode)")
-
-
-def _second_stage(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any], max_effort: float,
-                  top: int) -> list[dict[str, Any]]:
-    """The first stage's ``top`` rows in the criterion's order (:func:`_criterion` applied again to what
-    is left), and the empty set's row (the robot leading every mode) where it is not among them."""
-    left, picked = list(rows), []
-    while left and len(picked) < top:
-        best, _ = _criterion(left, vol, rea, max_effort)
-        picked.append(best)
-        left = [r for r in left if r is not best]
-    picked += [r for r in left if not r["wearer_modes"]][:1]
-    return picked
 
 
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
@@ -250,7 +243,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
                 timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
                 log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
-                prune: bool = True) -> dict[str, Any]:
+                prune: bool = True, mixes: Sequence[str] = MIXES) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
     ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
@@ -261,10 +254,12 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
     stage's episodes are one batch); ``prune``: leave out the wearer-mode sets the per-mode costs put at no
     less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
-    ``"pruned"``). Returns ``{"settings", "wearer_modes", "why", "criterion", "candidates", "pruned", "voluntary",
-    "reactive", "mode_costs", "price_order", "cutting_modes", "cutting_effort_vs_voluntary"
-    (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s", "episodes_run" (simulated: an
-    episode that decides as another at every step is that episode), "seconds"}``. Raises
+    ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; their rows
+    under ``"mixes"``, and the why says so where one would win the criterion: the gate's rule cannot be one).
+    Returns ``{"settings", "wearer_modes", "why", "criterion", "predicted", "cross_validated", "candidates",
+    "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
+    "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
+    "episodes_run" (simulated: an episode that decides as another at every step is that episode), "seconds"}``. Raises
     ValueError when the bundle has no mode model or no trial is given.
     """
     if not len(trials):
@@ -278,7 +273,9 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
         return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran)
 
-    (vol, vol_eps), (rea, rea_eps) = run([("voluntary", None), ("reactive", None)])
+    _check_mixes(mixes)
+    (vol, vol_eps), (rea, rea_eps), *mixed = run([("voluntary", None), ("reactive", None), *((m, None) for m in mixes)])
+    mix_rows = _mix_rows(mixes, [m for m, _ in mixed], vol, rea)
     costs = mode_costs(vol_eps, rea_eps, n_modes)
     order = price_order(costs)
     cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
@@ -307,18 +304,16 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
         log(f"  gate with wearer modes {r['wearer_modes']}: not simulated (the per-mode costs: {r['why']})")
     evaluate(_variants(sets, list(timings), wearer_alphas, robot_alphas[:1]))
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
-              for r in _second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
-    best, why = _criterion(rows, vol, rea, max_effort)
-    _log_ran(log, sum(ran), len(trials) * (2 + len(rows)))
+              for r in second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
+    best, why = criterion(rows, vol, rea, max_effort)
+    why += mix_note(best, mix_rows, vol, rea, max_effort)
+    _log_ran(log, sum(ran), len(trials) * (2 + len(mixes) + len(rows)))
     task_effort = cutting_effort(costs, cutting)
-    if task_effort is not None and task_effort > max_effort and not (saws(best) and
-                                                                     best["effort_vs_voluntary"] <= max_effort):
-        why += (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
-                f"task alone (the robot leading the rest; from the per-mode costs), so no rule that leaves them to the "
-                f"wearer stays within {max_effort:g}x here")
+    why += _task_note(task_effort, cutting, best, vol, max_effort)
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
+            "predicted": predicted(best, vol), "cross_validated": cross_validated(rows, vol, rea, max_effort),
             "cutting_effort_vs_voluntary": task_effort,
-            "max_effort": max_effort, "candidates": rows, "voluntary": vol, "reactive": rea,
+            "max_effort": max_effort, "candidates": rows, "mixes": mix_rows, "voluntary": vol, "reactive": rea,
             "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
             "trials": [int(t) for t in trials], "duration_s": duration_s,
             "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}

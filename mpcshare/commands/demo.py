@@ -306,7 +306,8 @@ def _demo(args: argparse.Namespace) -> int:
 
     print("\nWhat the robot did:")
     heads = headline_lines(comparison["strategies"], markdown=False, rule_choice=rule.get("rule_choice"),
-                           trials=trials_words(comparison["trials"], comparison["duration_s"]))
+                           trials=trials_words(comparison["trials"], comparison["duration_s"]),
+                           rule_check=comparison.get("rule_check"))
     for line in heads or ["the closed loop was not run"]:
         print(f"  {line}")
     print(f"done in {timings['total']:.0f} s; the figures behind these lines: {out / 'report.html'} (or report.md)")

@@ -251,7 +251,7 @@ def _run(args: argparse.Namespace) -> int:
     rule = getattr(bundle, "rule", None)
     choice = None if rule is None else rule.choice
     heads = headline_lines(obj["strategies"], markdown=False, rule_choice=choice,
-                           trials=trials_words(obj["trials"], obj["duration_s"]))
+                           trials=trials_words(obj["trials"], obj["duration_s"]), rule_check=obj.get("rule_check"))
     for line in heads + comparison_findings(obj["strategies"]):
         print(line)
     print(f"done in {time.perf_counter() - t0:.0f} s; open {out / 'comparison.md'}")

@@ -31,6 +31,7 @@ import numpy as np
 from learning.data import Demonstrations
 from mpcshare.channel_map import bundle_wearer
 from mpcshare.control.types import DEFAULT_BETA
+from mpcshare.evaluation.choice_check import choice_check
 from mpcshare.evaluation.episode import _from_bundle, intent_preview, simulate_episode
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool
 from mpcshare.evaluation.frontend_replay import simulate_cached
@@ -79,12 +80,13 @@ class Comparison:
     wearer: dict[str, Any] | None = None  # {"preset": name or None, "settings": WearerConfig.to_dict()}
     scenario: str | None = None  # the conflict scenario (mpcshare.conflicts), None: the trials as they are
     keepout: bool = True  # whether the controllers kept the wearer's body zones out
+    rule_check: dict[str, Any] | None = None  # the rule choice's prediction beside these figures (choice_check)
 
     def to_dict(self) -> dict[str, Any]:
         return {"strategies": self.strategies, "trials": self.trials, "duration_s": self.duration_s,
                 "runs": self.runs, "per_trial": self.per_trial, "run_files": self.run_files, "video": self.video,
                 "wearer": self.wearer, "offline_wearer_share_by_mode": self.offline_wearer_share_by_mode,
-                "scenario": self.scenario, "keepout": self.keepout}
+                "scenario": self.scenario, "keepout": self.keepout, "rule_check": self.rule_check}
 
 
 def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Sequence[int], *,
@@ -146,8 +148,11 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
     add_line_ratios(pooled)
     for tid in (str(t) for t in tids):
         add_line_ratios({name: per_trial[name][tid] for name in per_trial})
+    run_dicts = [asdict(r) for r in runs]
+    options = getattr(extra.get("config"), "strategy_settings", None)  # given settings replace the rule's
     return Comparison(strategies=pooled, per_trial=per_trial, trials=tids,
-                      duration_s=duration_s, runs=[asdict(r) for r in runs], run_files=runner.files,
+                      duration_s=duration_s, runs=run_dicts, run_files=runner.files,
+                      rule_check=None if options else choice_check(getattr(bundle, "rule", None), pooled, run_dicts),
                       wearer=describe_wearer(wearer),
                       offline_wearer_share_by_mode=_offline_share(bundle, mode_names),
                       scenario=getattr(scenario, "name", None),

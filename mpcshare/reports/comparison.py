@@ -177,8 +177,8 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
     span = "whole trials" if comp.duration_s is None else f"the first {comp.duration_s:g} s of each"
     who = (comp.wearer or {}).get("preset") or ("custom settings" if comp.wearer else None)
     wearer = f" Simulated wearer: {who}." if who else ""
-    lines = [*[f"- {h}" for h in headline_lines(comp.strategies, trials=trials_words(comp.trials, comp.duration_s))],
-             ""]
+    lines = [*[f"- {h}" for h in headline_lines(comp.strategies, trials=trials_words(comp.trials, comp.duration_s),
+                                                 rule_check=comp.rule_check)], ""]
     if effort_plot:
         lines += [f"![effort against error, with the line from the wearer alone to the robot alone]({effort_plot})",
                   ""]

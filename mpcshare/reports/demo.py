@@ -101,7 +101,8 @@ def demo_headline(comparison: dict[str, Any] | None, out: Path, rule_choice: dic
     bundle's closed-loop choice of its hand-over rule, for the task line), then the effort–error plot."""
     lines = ["## What the robot did", ""]
     answers = headline_lines(comparison["strategies"], rule_choice=rule_choice,
-                             trials=trials_words(comparison["trials"], comparison.get("duration_s"))) \
+                             trials=trials_words(comparison["trials"], comparison.get("duration_s")),
+                             rule_check=comparison.get("rule_check")) \
         if comparison else []
     if not answers:
         return lines + ["The closed loop was not run, so there is nothing to say yet about the task, sharing, "

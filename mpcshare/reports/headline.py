@@ -1,23 +1,21 @@
-"""The four answers a person wants first, one line each with its figure and a word of verdict.
+"""The answers a person wants first, one line each with its figure and a word of verdict.
 
-1. **The task** — did the knife saw while cutting (the task's one criterion,
-   :data:`sim.task.eating.SAWING_CRITERION`)? Where the bundle's hand-over rule was chosen
-   in the closed loop (``rule_choice``) and the choice's sawing verdict differs from this one,
-   the line says why (the choice's trials and span against the evaluation's).
-2. **Sharing** — did the shared strategy track the wearer's intent better than the wearer
-   alone (``voluntary``), the robot alone (``reactive``) and mixing the two? Mixing is judged
-   against the constant mixtures that were run (``mix25``, ``mix50``, ``mix75``, ...): it beats
-   mixing only when no mixture tracks better at equal or lower effort, and a mixture that does is
-   named. Without mixture runs, the *line ratio* stands in (tracking RMS over the straight
-   ``reactive``–``voluntary`` line at the same effort, below 1 beats it).
+1. **The task** — did the knife saw while cutting (:data:`sim.task.eating.SAWING_CRITERION`)? Where the
+   bundle's rule was chosen in the closed loop (``rule_choice``) and the choice's sawing verdict differs
+   from this one, the line says why (the choice's trials and span against the evaluation's).
+2. **Sharing** — did the shared strategy track the wearer's intent better than the wearer alone
+   (``voluntary``), the robot alone (``reactive``) and mixing the two? Mixing is judged against the constant
+   mixtures run (``mix25``, ...): it beats mixing only when none tracks better at equal or lower effort (one
+   that does is named); without them, the *line ratio* stands in (below 1 beats the straight line).
 3. **Effort** — how much of the wearer's effort did it save (against ``voluntary``)?
 4. **Keep-out** — did the knife stay out of the wearer's body zones?
+5. **The choice** (with ``rule_check``, :func:`mpcshare.evaluation.choice_check.choice_check`) — the rule's
+   predicted line ratio, effort and stroke correlation beside the realised ones; do the line ratios differ
+   by more than :data:`~mpcshare.evaluation.choice_check.LINE_RATIO_TOLERANCE`?
 
-Read from ``comparison.json``'s ``strategies`` (name → metrics). Keys that newer versions add
-are used when present: ``line_ratio`` (else computed here from ``voluntary`` and ``reactive``
-with the same definition), the clearance figures (any key with ``clearance`` in its name, in
-metres, and any with ``driven_in`` or ``intrusion``: control steps the knife was driven into a
-zone); without them the keep-out line says it was not measured.
+Read from ``comparison.json``'s ``strategies`` (name → metrics); newer keys are used when present:
+``line_ratio`` (else computed here, the same definition), the clearance figures (keys with ``clearance``, in
+metres, and ``driven_in`` or ``intrusion``: steps driven into a zone; without them: not measured).
 """
 
 from __future__ import annotations
@@ -222,11 +220,12 @@ def _keepout(s: dict[str, dict[str, Any]]) -> Headline:
 
 
 def headlines(strategies: dict[str, dict[str, Any]], rule_choice: dict[str, Any] | None = None,
-              trials: str = "its trials") -> list[Headline]:
-    """The four answers (module docstring) for the runs present; [] when no shared strategy was run.
+              trials: str = "its trials", rule_check: dict[str, Any] | None = None) -> list[Headline]:
+    """The answers (module docstring) for the runs present; [] when no shared strategy was run.
 
     ``rule_choice``: the bundle's closed-loop choice of its hand-over rule (``bundle.rule.choice``),
-    ``trials``: the evaluation's trials and span in words (both for :func:`choice_note`)."""
+    ``trials``: the evaluation's trials and span in words (both for :func:`choice_note`); ``rule_check``: the
+    comparison's ``rule_check`` (the fifth answer; None: not shown)."""
     name = shared_strategy(strategies)
     if name is None:
         return []
@@ -235,13 +234,40 @@ def headlines(strategies: dict[str, dict[str, Any]], rule_choice: dict[str, Any]
     if effort is not None:
         out.append(effort)
     out.append(_keepout(strategies))
+    if rule_check:
+        out.append(_choice(rule_check))
     return out
 
 
 def headline_lines(strategies: dict[str, dict[str, Any]], markdown: bool = True,
-                   rule_choice: dict[str, Any] | None = None, trials: str = "its trials") -> list[str]:
+                   rule_choice: dict[str, Any] | None = None, trials: str = "its trials",
+                   rule_check: dict[str, Any] | None = None) -> list[str]:
     """:func:`headlines` as Markdown (bold topic and verdict) or plain text lines."""
-    return [h.markdown() if markdown else h.plain() for h in headlines(strategies, rule_choice, trials)]
+    return [h.markdown() if markdown else h.plain() for h in headlines(strategies, rule_choice, trials, rule_check)]
+
+
+def _figures(m: dict[str, Any]) -> str:
+    """"line ratio 0.66, effort 0.55x the wearer alone, stroke corr. 0.89" of a check's side (n/a where None)."""
+    def f(key: str, fmt: str) -> str:
+        return "n/a" if m.get(key) is None else fmt.format(m[key])
+    return (f"line ratio {f('line_ratio', '{:.2f}')}, effort {f('effort_vs_voluntary', '{:.2f}x')} the wearer "
+            f"alone, stroke corr. {f('saw_correlation', '{:.2f}')}")
+
+
+def _choice(check: dict[str, Any]) -> Headline:
+    """The choice's prediction beside the evaluation (:func:`mpcshare.evaluation.choice_check.choice_check`)."""
+    from mpcshare.evaluation.choice_check import LINE_RATIO_TOLERANCE
+
+    gap = check.get("line_ratio_gap")
+    verdict = ("not comparable" if gap is None else
+               f"NO, off by {gap:+.2f}" if check.get("differs") else f"yes, within {LINE_RATIO_TOLERANCE:g}")
+    tail = ("" if gap is None else f"; the realised line ratio differs from the predicted one by {gap:+.2f}"
+            + (f", more than {LINE_RATIO_TOLERANCE:g}" if check.get("differs") else ""))
+    cv = check.get("cross_validated_line_ratio")
+    loto = "" if cv is None else f" (left one choice trial out: line ratio {cv:.2f})"
+    return Headline("The choice", verdict, f"the hand-over rule chosen in training predicted, on its choice trials, "
+                    f"{_figures(check['predicted'])}{loto}; `{check['run']}` realised {_figures(check['realised'])} "
+                    f"here{tail}.")
 
 
 def trials_words(trials: list[int], duration_s: float | None) -> str:

@@ -17,6 +17,7 @@ def rule_markdown(choice: dict[str, Any]) -> str:
              f"{choice['seconds']:g} s: "
              f"the wearer leads modes {choice['wearer_modes']}, settings {choice['settings']}.", "",
              f"Why: {choice['why']}. Criterion: {choice['criterion']}.", "",
+             *_predicted_markdown(choice),
              *_pruned_markdown(choice),
              *_costs_markdown(choice),
              "| run | wearer modes | hand-over | robot share while the wearer leads | robot share while it leads | "
@@ -25,6 +26,10 @@ def rule_markdown(choice: dict[str, Any]) -> str:
         m = choice[name]
         lines.append(f"| {name} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | "
                      f"{m['voluntary_effort'] / choice['voluntary']['voluntary_effort']:.2f} | 1 | {_f(m)} |")
+    for m in choice.get("mixes") or []:  # comparators, not candidates
+        lr = "n/a" if m["line_ratio"] is None else f"{m['line_ratio']:.3f}"
+        lines.append(f"| {m['strategy']} | | | | | {m['tracking_rmse_m'] * 1e3:.1f} | {m['effort_vs_voluntary']:.2f} | "
+                     f"{lr} | {_f(m)} |")
     for r in choice["candidates"]:
         lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
         lines.append(f"| gate | {r['wearer_modes']} | {r.get('timing', 'prompt')} | {r.get('wearer_alpha', 0.0):g} | "
@@ -37,6 +42,25 @@ def rule_markdown(choice: dict[str, Any]) -> str:
 def skipped_markdown(skipped: str) -> str:
     """The section when the choice was skipped: ``skipped`` says why, e.g. "closed-loop choice was skipped: …"."""
     return f"## Hand-over rule\n\nThe {skipped}.\n"
+
+
+def _predicted_markdown(choice: dict[str, Any]) -> list[str]:  # older choices have no prediction: no line
+    p = choice.get("predicted")
+    if not p:
+        return []
+    lr = "n/a" if p["line_ratio"] is None else f"{p['line_ratio']:.3f}"
+    corr = "n/a" if p.get("saw_correlation") is None else f"{p['saw_correlation']:.2f}"
+    return [f"Predicted on these trials (an evaluation sets it beside what it realises): line ratio {lr}, effort "
+            f"{p['effort_vs_voluntary']:.2f}x voluntary, RMS {p['tracking_rmse_m'] * 1e3:.1f} mm, stroke corr. "
+            f"{corr}, {'saws' if p.get('saws') else 'does not saw'} in every cutting episode where the wearer "
+            f"alone saws.{_cv(choice.get('cross_validated'))}", ""]
+
+
+def _cv(cv: dict[str, Any] | None) -> str:  # the leave-one-trial-out prediction; none with one trial
+    if not cv or cv.get("line_ratio") is None:
+        return ""
+    return (f" Left one trial out (the rule chosen on the others, scored on it): line ratio {cv['line_ratio']:.3f}, "
+            f"effort {cv['effort_vs_voluntary']:.2f}x voluntary.")
 
 
 def _pruned_markdown(choice: dict[str, Any]) -> list[str]:  # the sets not simulated; none: no line

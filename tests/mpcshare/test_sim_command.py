@@ -47,6 +47,11 @@ def test_sim_runs_held_out_trials_and_writes_the_comparison(trained, tmp_path):
     assert (out / "comparison.md").read_text().count("|") > 20 and (out / "trial.png").exists()
     assert comp["wearer"]["preset"] == "hemiparetic_mild"  # the default wearer, recorded
     assert comp["wearer"]["settings"]["reaction_delay_s"] == 0.3
+    predicted = json.loads((model / "rule.json").read_text())["rule"]["choice"]["predicted"]  # the choice's record
+    check = comp["rule_check"]  # beside the gate's realised figures (no reactive run: no line ratio to compare)
+    assert check["run"] == "gate" and check["predicted"]["effort_vs_voluntary"] == predicted["effort_vs_voluntary"]
+    assert check["realised"]["effort_vs_voluntary"] is not None and check["line_ratio_gap"] is None
+    assert "**The choice: not comparable.**" in (out / "comparison.md").read_text()
 
 
 def test_sim_wearer_preset_reaches_the_episodes(trained, tmp_path, capsys):

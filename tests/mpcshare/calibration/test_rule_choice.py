@@ -69,6 +69,10 @@ def _fake_runs(figures, by_modes, calls):
                 (modes, timing), by_modes.get((modes, a_w), by_modes[modes])))
             return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
                     "saw_amplitude_ratio": 0.9}, []
+        if strategy.startswith("mix"):  # the constant mixtures: given, else at the wearer's effort and 5x the error
+            rms, eff, saw = figures.get(strategy, (5 * figures["voluntary"][0], figures["voluntary"][1], None))
+            return {"tracking_rmse_m": rms, "voluntary_effort": eff, "limit_violations": 0, "saw_correlation": saw,
+                    "saw_amplitude_ratio": 0.9}, []
         rms, eff, saw = figures[strategy]
         err = {"voluntary": [0.005, 0.005, 0.005], "reactive": [0.006, 0.030, 0.012]}[strategy]
         effort = {"voluntary": [0.05, 0.05, 0.10], "reactive": [0.01, 0.01, 0.01]}[strategy]
@@ -237,3 +241,59 @@ def test_the_choice_runs_on_the_last_held_out_trials_and_leaves_the_rest():
     assert choice_trials([2, 7, 9, 11, 12, 13]) == [12, 13]
     assert choice_trials([5]) == [5]
     assert choice_trials([2, 7, 9], n_trials=1) == [9]
+
+
+def _with_episodes(fake_many, by_trial):
+    """pooled_runs whose rows also carry per-trial sawing (``by_trial``: a strategy or a gate candidate's wearer
+    modes → the ``saws_by_trial`` list)."""
+    def many(bundle, demos, trials, specs, *args, **kwargs):
+        rows = fake_many(bundle, demos, trials, specs, *args, **kwargs)
+        for (strategy, options), (row, _) in zip(specs, rows):
+            key = tuple(options["wearer_modes"]) if strategy == "gate" else strategy
+            row["saws_by_trial"] = by_trial.get(key, [False] * len(trials))
+        return rows
+    return many
+
+
+def test_a_candidate_must_saw_in_every_cutting_episode_where_the_wearer_saws(monkeypatch):
+    """Pooled, both sets saw; per trial, [1] misses the second trial's cutting, so the choice takes [1, 2] at a
+    worse line. A trial where the wearer alone does not saw does not count against a candidate."""
+    figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
+    by_modes = {(1,): (0.012, 0.04, 0.8), (1, 2): (0.0125, 0.05, 0.9), (): (0.02, 0.02, 0.1)}
+    by_trial = {"voluntary": [True, True, None], "reactive": [False, False, None], (1,): [True, False, None],
+                (1, 2): [True, True, None], (): [False, False, None]}
+    fake = _fake_runs(figures, by_modes, [])
+    monkeypatch.setattr(rule_choice, "pooled_runs", _with_episodes(fake, by_trial))
+    choice = choose_rule(_Bundle(), None, [3, 4, 5], robot_alphas=(1.0,))
+    assert choice["wearer_modes"] == [1, 2] and "every cutting episode" in choice["why"]
+    assert choice["predicted"]["saws"] and choice["predicted"]["line_ratio"] == pytest.approx(
+        choice["candidates"][2]["line_ratio"])
+    by_trial["voluntary"] = [True, False, None]  # the wearer alone misses the second: [1] counts as sawing
+    choice = choose_rule(_Bundle(), None, [3, 4, 5], robot_alphas=(1.0,))
+    assert choice["wearer_modes"] == [1]
+    assert choice["predicted"] == {"line_ratio": pytest.approx(choice["candidates"][0]["line_ratio"]),
+                                   "effort_vs_voluntary": pytest.approx(0.5), "tracking_rmse_m": 0.012,
+                                   "saw_correlation": 0.8, "saws": True}
+    assert rule_choice.saws_where_the_wearer_saws({"saw_correlation": 0.1, "saw_amplitude_ratio": 0.1},
+                                                  {"saws_by_trial": [True]}) is False  # no per-trial: pooled
+
+
+def test_constant_mixtures_are_reported_and_the_why_says_when_one_would_win(monkeypatch):
+    """The mixtures run beside the parties; they never become the gate's rule, but the why names one that wins the
+    criterion. ``mixes=()`` runs none."""
+    figures = {"voluntary": (0.010, 0.08, None), "reactive": (0.020, 0.02, None)}
+    by_modes = {(1,): (0.014, 0.04, None), (1, 2): (0.0105, 0.07, None), (): (0.021, 0.075, None)}
+    calls: list = []
+    monkeypatch.setattr(rule_choice, "pooled_runs", _fake_runs(figures, by_modes, calls))
+    choice = choose_rule(_Bundle(), None, [3])
+    assert [m["strategy"] for m in choice["mixes"]] == ["mix25", "mix50", "mix75"]
+    assert "constant mixture" not in choice["why"] and choice["wearer_modes"] == [1]
+    figures["mix75"] = (0.012, 0.03, None)  # line ratio 0.012 / 0.01833 = 0.655 at 0.375x, below [1]'s 0.84
+    choice = choose_rule(_Bundle(), None, [3])
+    assert choice["wearer_modes"] == [1] and choice["settings"]["wearer_modes"] == [1]
+    assert "the constant mixture mix75 would win the criterion (line ratio 0.655 at 0.38x voluntary)" in choice["why"]
+    assert "| mix75 | | | | | 12.0 | 0.38 | 0.655 | n/a |" in rule_markdown(choice)
+    calls.clear()
+    assert choose_rule(_Bundle(), None, [3], mixes=())["mixes"] == [] and not any(c[0].startswith("mix") for c in calls)
+    with pytest.raises(ValueError, match="not constant mixtures"):
+        choose_rule(_Bundle(), None, [3], mixes=("gate",))

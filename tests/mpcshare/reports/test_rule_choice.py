@@ -42,3 +42,15 @@ def test_pruned_sets_and_the_cutting_modes_effort_are_said_when_present():
 def test_a_skipped_choice_is_one_sentence_under_the_same_heading():
     assert skipped_markdown("closed-loop choice was skipped: no knife") == \
         "## Hand-over rule\n\nThe closed-loop choice was skipped: no knife.\n"
+
+
+def test_the_prediction_is_stated_when_recorded():
+    predicted = {"line_ratio": 0.663, "effort_vs_voluntary": 0.5, "tracking_rmse_m": 0.012, "saw_correlation": 0.9,
+                 "saws": True}
+    md = rule_markdown(_choice(predicted=predicted))
+    assert ("Predicted on these trials (an evaluation sets it beside what it realises): line ratio 0.663, effort "
+            "0.50x voluntary, RMS 12.0 mm, stroke corr. 0.90, saws in every cutting episode") in md
+    assert "Predicted" not in rule_markdown(_choice()) and "Left one trial out" not in md
+    cv = {"line_ratio": 0.81, "effort_vs_voluntary": 0.55, "tracking_rmse_m": 0.013, "chosen": [0, 1]}
+    assert ("Left one trial out (the rule chosen on the others, scored on it): line ratio 0.810, effort 0.55x "
+            "voluntary.") in rule_markdown(_choice(predicted=predicted, cross_validated=cv))

@@ -1,0 +1,47 @@
+"""The rule choice's criterion: sawing per cutting episode, and the prediction of the chosen row."""
+
+from __future__ import annotations
+
+import pytest
+
+from mpcshare.calibration.choice_criterion import cross_validated, predicted, saws_where_the_wearer_saws, wearer_saws
+
+
+def test_a_row_must_saw_in_each_episode_where_the_wearer_alone_saws():
+    alone = {"saws_by_trial": [True, False, None]}
+    assert saws_where_the_wearer_saws({"saws_by_trial": [True, False, None]}, alone)  # the 2nd does not count
+    assert not saws_where_the_wearer_saws({"saws_by_trial": [False, True, None]}, alone)
+    pooled = {"saw_correlation": 0.9, "saw_amplitude_ratio": 0.9}  # no per-trial figures: the pooled ones
+    assert saws_where_the_wearer_saws(pooled, alone) and not saws_where_the_wearer_saws({}, alone)
+    assert wearer_saws(alone) and not wearer_saws({"saws_by_trial": [False, None]})
+    assert not wearer_saws({"saw_correlation": None, "saw_amplitude_ratio": None})
+
+
+def test_the_prediction_is_the_chosen_rows_figures():
+    row = {"line_ratio": 0.66, "effort_vs_voluntary": 0.5, "tracking_rmse_m": 0.004, "saw_correlation": 0.9,
+           "saw_amplitude_ratio": 0.9, "saws_by_trial": [True, False]}
+    assert predicted(row, {"saws_by_trial": [True, True]}) == {
+        "line_ratio": 0.66, "effort_vs_voluntary": 0.5, "tracking_rmse_m": 0.004, "saw_correlation": 0.9,
+        "saws": False}
+
+
+def _row(name, per_trial):
+    """A row with per-trial (RMS [m], effort) on 2 trials of 100 steps each, pooled."""
+    by = [{"tracking_rmse_m": r, "voluntary_effort": e, "steps": 100} for r, e in per_trial]
+    rms = ((per_trial[0][0] ** 2 + per_trial[1][0] ** 2) / 2) ** 0.5
+    return {"name": name, "by_trial": by, "tracking_rmse_m": rms,
+            "voluntary_effort": (per_trial[0][1] + per_trial[1][1]) / 2}
+
+
+def test_left_one_trial_out_each_trial_is_scored_by_the_rule_the_other_trial_chose():
+    """A tracks best on trial 0 and B on trial 1: leaving trial 0 out chooses B and scores it there, and the
+    other way round, so the cross-validated RMS is both rows' worse trial, above either in-sample figure."""
+    vol = _row("voluntary", [(0.010, 0.08), (0.010, 0.08)])
+    rea = _row("reactive", [(0.020, 0.02), (0.020, 0.02)])
+    a, b = _row("A", [(0.005, 0.04), (0.015, 0.04)]), _row("B", [(0.015, 0.04), (0.005, 0.04)])
+    rows = [{**r, "line_ratio": None, "effort_vs_voluntary": 0.5} for r in (a, b)]
+    cv = cross_validated(rows, vol, rea, 0.75)
+    assert cv["chosen"] == [1, 0] and cv["tracking_rmse_m"] == pytest.approx(0.015)
+    assert cv["effort_vs_voluntary"] == pytest.approx(0.5)
+    assert cv["line_ratio"] == pytest.approx(0.015 / (0.020 - (0.04 - 0.02) / 0.06 * 0.010))
+    assert cross_validated(rows, {**vol, "by_trial": vol["by_trial"][:1]}, rea, 0.75) is None  # one trial
