@@ -69,3 +69,62 @@ def test_the_live_view_serves_on_loopback_and_records_the_run_channels(tmp_path)
     status = [m["status"] for topic, _, m, _ in got if topic == "/control/status"]
     logs = [m["message"] for topic, _, m, _ in got if topic == "/control/log"]
     assert status == ["ok"] * 3 + ["protective_stop"] and logs == ["status: ok", "status: protective_stop"]
+
+
+@needs_foxglove
+def test_a_foxglove_client_on_loopback_receives_the_channels_live(tmp_path):
+    """A client of Foxglove's WebSocket protocol (what the Foxglove app speaks) is advertised the run channels,
+    subscribes to them and receives each one's messages while the run steps."""
+    import asyncio
+    import json
+    import struct
+    import threading
+    import time
+
+    websockets = pytest.importorskip("websockets")
+    robot = as_description(None)
+    live = LiveView(tmp_path / "live.mcap", robot, ["e", "p", "a"], port=0)
+    q = 0.5 * (robot.limits.q_min + robot.limits.q_max)
+    cmd = SimpleNamespace(tip_reference=np.array([0.1, 0.0, 0.05]), alpha=0.7, beta=0.5,
+                          mode_proba=np.array([0.1, 0.9]), novelty=0.3)
+    fork = {"fork_x": 0.1, "fork_y": 0.0, "fork_z": 0.02, "fork_roll": 0.0, "fork_pitch": 0.0, "fork_yaw": 0.5}
+    stop = threading.Event()
+
+    def run() -> None:
+        k = 0
+        while not stop.is_set():
+            live.step(k * 10_000_000, q=q, v=np.zeros(3), base=np.eye(4), obs=fork,
+                      voluntary=np.array([0.1, 0.2, 0.3]), command=cmd, status="ok", step_time_s=0.001)
+            k += 1
+            time.sleep(0.01)
+
+    async def client() -> tuple[dict, dict]:
+        channels, got = {}, {}
+        async with websockets.connect(f"ws://127.0.0.1:{live.port}",
+                                      subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"]) as ws:
+            end = time.monotonic() + 2.0
+            while time.monotonic() < end:
+                try:
+                    msg = await asyncio.wait_for(ws.recv(), 0.5)
+                except asyncio.TimeoutError:
+                    continue
+                if isinstance(msg, str) and json.loads(msg)["op"] == "advertise":
+                    new = {c["id"]: c["topic"] for c in json.loads(msg)["channels"]}
+                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                        {"id": cid, "channelId": cid} for cid in new]}))
+                    channels.update(new)
+                elif isinstance(msg, bytes) and msg[0] == 1:  # a message: op, subscription id, log time, payload
+                    sub, _ = struct.unpack_from("<IQ", msg, 1)
+                    got.setdefault(channels[sub], []).append(json.loads(msg[13:]))
+        return channels, got
+
+    feeder = threading.Thread(target=run)
+    feeder.start()
+    try:
+        channels, got = asyncio.run(client())
+    finally:
+        stop.set()
+        feeder.join()
+        live.close()
+    assert set(channels.values()) <= set(TOPICS) and {"/knife/tip", "/control/status", "/fork/pose"} <= set(got)
+    assert all(m["status"] == "ok" for m in got["/control/status"]) and len(got["/knife/tip"]) >= 20
