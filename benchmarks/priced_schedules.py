@@ -69,7 +69,7 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
     much less effort. With ``polish_budget`` > 0, :func:`polish` then
     searches around the best schedule replayed."""
     from research.splice_bound import group_sums
-    from research.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, priced_search
+    from research.switch_priced import SWITCH_CLASSES, SwitchPrices, estimate_prices, next_targets, priced_search
 
     idx = [list(ctx["levels"]).index(name) for name in REPLAYABLE]
     e2, ef = ctx["e2"][idx], ctx["ef"][idx]
@@ -96,11 +96,8 @@ def priced(ctx: dict[str, Any], groups: np.ndarray, rounds: int, polish_budget: 
                      switches=found.switches, wearer_share=float(np.mean(per_step == 0)), **figs)
         out.append(entry)
         prices = estimate_prices(samples)
-        saw = figs["replay_saw_correlation"]
-        if saw is not None and saw < MIN_CORRELATION:
-            target = min(1.0, target + (MIN_CORRELATION - saw) + 0.02)
-        if figs["replay_effort_vs_voluntary"] > EFFORT_CAP:
-            cap = max(0.05, cap - (figs["replay_effort_vs_voluntary"] - EFFORT_CAP) - 0.01)
+        target, cap = next_targets(target, cap, figs["replay_saw_correlation"], figs["replay_effort_vs_voluntary"],
+                                   min_correlation=MIN_CORRELATION, effort_cap=EFFORT_CAP)
     done = [e for e in out if e.get("replay_line_ratio") is not None and e["replay_effort_vs_voluntary"] <= 0.75
             and (e["replay_saw_correlation"] or 0.0) >= MIN_CORRELATION]
     result = {"rounds": out, "tables": table_rules(ctx, e2, ef, st, prices, target)}

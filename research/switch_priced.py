@@ -28,7 +28,7 @@ from mpcshare.line_ratio import line_ratio
 from research.splice_bound import group_sums
 
 __all__ = ["SWITCH_CLASSES", "PricedSchedule", "SwitchPrices", "chain_knapsack", "estimate_prices",
-           "priced_search", "switch_class"]
+           "next_targets", "priced_search", "switch_class"]
 
 SWITCH_CLASSES = ("to the wearer", "from the wearer", "between robot levels")
 
@@ -213,3 +213,15 @@ def priced_search(sq_error: np.ndarray, effort: np.ndarray, groups: np.ndarray, 
                     best = PricedSchedule(a[:, i].copy(), float(m[i]), float(e[i]), r, float(rho[i]),
                                           int(sw[:, i].sum()))
     return best
+
+
+def next_targets(target: float, cap: float, saw: float | None, effort: float, *, min_correlation: float = 0.6,
+                 effort_cap: float = 0.75) -> tuple[float, float]:
+    """The next round's stroke-correlation target and effort cap after a replay that sawed at ``saw`` (None: no
+    cutting) with ``effort`` × the voluntary effort: the target raised by the shortfall below ``min_correlation``
+    (+0.02, at most 1), the cap lowered by the excess over ``effort_cap`` (+0.01, at least 0.05)."""
+    if saw is not None and saw < min_correlation:
+        target = min(1.0, target + (min_correlation - saw) + 0.02)
+    if effort > effort_cap:
+        cap = max(0.05, cap - (effort - effort_cap) - 0.01)
+    return target, cap

@@ -155,7 +155,7 @@ def priced_teacher(world: World, ctx: dict[str, Any], rounds: int = 2, log: Call
     too little the next round asks the search for that much more correlation; where it costs too much effort,
     for that much less."""
     from research.splice_bound import group_sums
-    from research.switch_priced import SwitchPrices, estimate_prices, priced_search
+    from research.switch_priced import SwitchPrices, estimate_prices, next_targets, priced_search
 
     alphas = np.array(list(LEVELS.values()))
     e2, ef, groups, first = ctx["e2"], ctx["ef"], ctx["groups"], ctx["first"]
@@ -184,11 +184,8 @@ def priced_teacher(world: World, ctx: dict[str, Any], rounds: int = 2, log: Call
         x_ef = group_sums((rep["ef"] - ef[level, cols])[None], groups)[1][0]
         samples.append((found.assignment, first, x_e2, x_ef))
         prices = estimate_prices(samples)
-        saw = figs["stroke_correlation"]
-        if saw is not None and saw < MIN_CORRELATION:
-            target = min(1.0, target + (MIN_CORRELATION - saw) + 0.02)
-        if figs["effort_vs_voluntary"] > EFFORT_CAP:
-            cap = max(0.05, cap - (figs["effort_vs_voluntary"] - EFFORT_CAP) - 0.01)
+        target, cap = next_targets(target, cap, figs["stroke_correlation"], figs["effort_vs_voluntary"],
+                                   min_correlation=MIN_CORRELATION, effort_cap=EFFORT_CAP)
     return {"rounds": out, "best": best}
 
 

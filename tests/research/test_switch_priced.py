@@ -137,3 +137,11 @@ def test_bad_input_is_named():
         priced_search(e2, effort, labels, np.ones(6, bool), dot, power, y, 1.5, SwitchPrices.zero(), vol, rea)
     with pytest.raises(ValueError, match="levels, steps"):
         priced_search(e2[:, :10], effort, labels, np.ones(6, bool), dot, power, y, 0.5, SwitchPrices.zero(), vol, rea)
+
+
+def test_next_targets_raise_the_target_by_the_shortfall_and_lower_the_cap_by_the_excess():
+    from research.switch_priced import next_targets
+
+    assert next_targets(0.6, 0.75, 0.5, 0.80) == pytest.approx((0.72, 0.69))
+    assert next_targets(0.6, 0.75, None, 0.70) == (0.6, 0.75)  # no cutting, within the cap: unchanged
+    assert next_targets(0.99, 0.06, 0.0, 2.0) == (1.0, 0.05)  # bounded
