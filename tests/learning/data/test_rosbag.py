@@ -11,8 +11,7 @@ from learning.data import DataFormatError
 from learning.data.mapping import load_mapping, parse_field_path, parse_mapping, quaternion_angles
 from learning.data.regrid import TopicSeries, regrid
 from learning.data.rosbag import import_bags
-
-from .bags import MAPPING_TOML, SIGNALS, TOPICS, write_bag
+from tests.learning.bags import MAPPING_TOML, SIGNALS, TOPICS, write_bag
 
 STORAGES = ("mcap", "sqlite3", "ros1")
 
@@ -215,7 +214,7 @@ def test_the_example_mapping_names_the_channels_the_simulator_finds():
 
     from sim.demonstrator import ACT_NAMES, OBS_NAMES, VOL_NAMES
 
-    m = load_mapping(Path(__file__).resolve().parents[2] / "examples" / "superlimb_mapping.toml")
+    m = load_mapping(Path(__file__).resolve().parents[3] / "examples" / "superlimb_mapping.toml")
     assert m.names("obs") == list(OBS_NAMES) and m.names("act") == list(ACT_NAMES)
     assert m.names("voluntary") == list(VOL_NAMES)
     assert m.subject_for("s2_lunch") == 2 and m.time == "header"

@@ -9,7 +9,7 @@ import pytest
 
 from learning.lipschitz import SearchOptions, pair_norms, pair_ratios, pointwise_quotients, pointwise_quotients_multi
 from learning.lipschitz._compiled import credit_multi, update_best_compiled
-from tests.learning.test_lipschitz import assert_exact, brute_force, smooth_windows
+from tests.learning.lipschitz.test_quotients import assert_exact, brute_force, smooth_windows
 
 
 def _labelings(n: int, seed: int, coherent: np.ndarray | None = None) -> np.ndarray:
