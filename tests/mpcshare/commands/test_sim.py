@@ -218,7 +218,7 @@ def test_sim_video_renders_headless_or_says_why_once(trained, tmp_path, capsys, 
     from pathlib import Path
 
     data, model = trained
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "MUJOCO_GL", "PYOPENGL_PLATFORM")}
     env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")])
     out = tmp_path / "video"

@@ -1,4 +1,4 @@
-"""A small trained bundle saved once for the `mpcshare run` tests (real learned parts, ~15 s)."""
+"""A small trained bundle saved once for the tests of `mpcshare run` and its runtime (real learned parts, ~15 s)."""
 
 from __future__ import annotations
 
