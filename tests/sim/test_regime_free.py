@@ -1,9 +1,8 @@
-"""Data families of the calibration study: sim.regime_free and sim.hidden_regime."""
+"""Data without hidden modes (sim.regime_free), the calibration family of the analysis."""
 
 import numpy as np
 import pytest
 
-from sim.hidden_regime import HiddenRegimeConfig, generate_hidden_regime
 from sim.regime_free import RegimeFreeConfig, calibration_family, generate_regime_free
 
 
@@ -32,15 +31,3 @@ def test_calibration_family_spans_the_kinds():
     kinds = {(c.obs_map, c.act_map) for c, _ in fam}
     assert len(kinds) == 4 and {c.latent_dim for c, _ in fam} == {1, 2, 3, 4, 5}
     assert all(6 <= c.n_trials <= 20 and 60 <= c.trial_s <= 120 for c, _ in fam)
-
-
-def test_hidden_regime_labels_and_cue():
-    d = generate_hidden_regime(HiddenRegimeConfig(cue=1.0, noise=0.0, n_trials=2, trial_s=60.0), seed=1)
-    s = np.concatenate([t.mode for t in d.trials])
-    o = np.concatenate([t.obs for t in d.trials])
-    assert set(np.unique(s)) == {0, 1, 2}
-    # without noise the cue channels name the regime exactly; the leader channels do not
-    for r in range(3):
-        assert np.ptp(o[s == r, 3:5], axis=0).max() < 1e-12
-    with pytest.raises(ValueError, match="noise must be >= 0"):
-        HiddenRegimeConfig(noise=-1.0)
