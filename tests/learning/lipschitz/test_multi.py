@@ -1,14 +1,12 @@
-"""learning.lipschitz.pointwise_quotients_multi and the compiled exact kernel: every
-labeling equals its own pointwise_quotients call (same bits, same partner) and a float64
-brute force; the compiled pair quotients follow the conventions of _exact."""
+"""learning.lipschitz.pointwise_quotients_multi: every labeling equals its own
+pointwise_quotients call (same bits, same partner) and a float64 brute force."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from learning.lipschitz import SearchOptions, pair_norms, pair_ratios, pointwise_quotients, pointwise_quotients_multi
-from learning.lipschitz._compiled import credit_multi, update_best_compiled
+from learning.lipschitz import SearchOptions, pointwise_quotients, pointwise_quotients_multi
 from tests.learning.lipschitz.test_quotients import assert_exact, brute_force, smooth_windows
 
 
@@ -92,37 +90,3 @@ def test_labeling_errors_name_the_shape(labs, match):
     X = np.arange(12.0).reshape(6, 2)
     with pytest.raises(ValueError, match=match):
         pointwise_quotients_multi(X, X[:, :1], labs)
-
-
-def test_compiled_pair_ratios_conventions_and_range():
-    rng = np.random.default_rng(0)
-    X = rng.normal(size=(50, 7)) * 10.0 ** rng.integers(-140, 140, size=(50, 1))
-    Y = rng.normal(size=(50, 2)) * 10.0 ** rng.integers(-140, 140, size=(50, 1))
-    X[1], Y[1] = X[0], Y[0]  # identical pair: skipped (NaN)
-    X[2] = X[0]  # identical x, different y: inf
-    X[3] = X[4] + 1e-170  # sum of squares underflows: scaled recomputation
-    Y[5], Y[6] = 1e200, -1e200  # sum of squares overflows: scaled recomputation
-    i, j = np.meshgrid(np.arange(50), np.arange(50), indexing="ij")
-    i, j = i.ravel(), j.ravel()
-    r = pair_ratios(X, Y, i, j)
-    ref = pair_norms(Y, i, j) / np.where(pair_norms(X, i, j) == 0, np.nan, pair_norms(X, i, j))
-    same = (X[i] == X[j]).all(1)
-    assert np.all(np.isnan(r[same & (Y[i] == Y[j]).all(1)]))
-    assert np.all(np.isinf(r[same & ~(Y[i] == Y[j]).all(1)]))
-    ok = ~same
-    assert np.all(np.abs(r[ok] - ref[ok]) <= 1e-13 * ref[ok])
-    assert np.array_equal(r, pair_ratios(X, Y, j, i), equal_nan=True)  # r_ij == r_ji bit for bit
-
-
-def test_compiled_update_and_credit_keep_smallest_partner():
-    q, p = np.zeros(3), np.full(3, -1)
-    update_best_compiled(q, p, np.array([0, 0, 0, 1]), np.array([5, 2, 7, 4]),
-                         np.array([2.0, 2.0, 1.0, np.nan]))
-    assert q.tolist() == [2.0, 0.0, 0.0] and p.tolist() == [2, -1, -1]
-    labels = np.array([[0, 0], [0, 1], [0, 0]])  # (N, L)
-    Q, P, LB = np.zeros((3, 2)), np.full((3, 2), -1), np.zeros((3, 2))
-    tmin, qmin = np.zeros(3), np.zeros(3)
-    credit_multi(Q, P, LB, tmin, qmin, labels, np.array([0, 0]), np.array([1, 2]), np.array([3.0, 3.0]))
-    assert Q.tolist() == [[3.0, 3.0], [3.0, 0.0], [3.0, 3.0]]
-    assert P.tolist() == [[1, 2], [0, -1], [0, 0]]
-    assert tmin.tolist() == [3.0, 0.0, 3.0] and qmin.tolist() == [3.0, 0.0, 3.0]
