@@ -22,9 +22,6 @@ EXEMPT: dict[str, str] = {
     "learning/analysis/reference.py": "exercised by tests/learning/analysis/test_calibration.py",
     "learning/analysis/report.py": "no test yet",
     "learning/analysis/result.py": "no test yet",
-    "learning/data/csv.py": "exercised by tests/learning/data/test_checks.py",
-    "learning/data/model.py": "exercised by tests/learning/data/test_checks.py",
-    "learning/data/npz.py": "exercised by tests/learning/test_data.py",
     "learning/data/splits.py": "exercised by tests/learning/preprocessing/test_preprocess.py",
     "learning/errors.py": "error root: tests/mpcshare/test_errors.py",
     "learning/lipschitz/_bounds.py": "no test yet",
@@ -103,7 +100,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 84
+EXEMPT_CEILING = 81
 
 
 def mirrored_test(module: str) -> str:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -33,3 +36,8 @@ def assert_same(a: Demonstrations, b: Demonstrations) -> None:
     assert sa.keys() == sb.keys()
     for k in sa:
         np.testing.assert_array_equal(sa[k], sb[k], err_msg=k)
+
+
+def leftovers(folder: Path) -> list[str]:
+    """The hidden files (temporary files of an atomic save) left in ``folder``."""
+    return sorted(n for n in os.listdir(folder) if n.startswith("."))
