@@ -19,7 +19,6 @@ PACKAGES = ("learning", "robot", "sim", "mpcshare")
 EXEMPT: dict[str, str] = {
     "learning/analysis/__init__.py": "`__init__` lazy re-exports",
     "learning/analysis/config.py": "exercised by tests/learning/analysis/test_calibration.py",
-    "learning/analysis/reference.py": "exercised by tests/learning/analysis/test_calibration.py",
     "learning/analysis/report.py": "no test yet",
     "learning/analysis/result.py": "no test yet",
     "learning/data/splits.py": "exercised by tests/learning/preprocessing/test_preprocess.py",
@@ -100,7 +99,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 81
+EXEMPT_CEILING = 80
 
 
 def mirrored_test(module: str) -> str:

@@ -9,15 +9,7 @@ import numpy as np
 import pytest
 
 from learning import data
-from learning.data import (
-    DataFormatError,
-    load,
-    load_csv_folder,
-    load_npz,
-    save,
-    save_csv_folder,
-    save_npz,
-)
+from learning.data import DataFormatError, load, load_csv_folder, load_npz, save, save_csv_folder, save_npz
 from tests.learning.data_helpers import assert_same, make_demos
 
 

@@ -8,9 +8,7 @@ import numpy as np
 import pytest
 from hmmlearn.hmm import GaussianHMM
 
-from learning.modes import (
-    RegularizedGaussianHMM,
-)
+from learning.modes import RegularizedGaussianHMM
 
 # hmmlearn's reference computations here use tiny threaded BLAS calls (fixture: conftest.py)
 pytestmark = pytest.mark.usefixtures("_one_blas_thread")

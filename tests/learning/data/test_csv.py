@@ -9,10 +9,7 @@ import numpy as np
 import pytest
 
 import learning.data.csv as csv_format
-from learning.data import (
-    load,
-    save,
-)
+from learning.data import load, save
 from tests.learning.data_helpers import OBS, assert_same, make_demos
 from tests.learning.data_helpers import leftovers as _leftovers
 

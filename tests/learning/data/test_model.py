@@ -5,11 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learning.data import (
-    DataFormatError,
-    Demonstrations,
-    Trial,
-)
+from learning.data import DataFormatError, Demonstrations, Trial
 from tests.learning.data_helpers import ACT, OBS, VOL, assert_same, make_demos
 
 

@@ -7,11 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from learning.data import (
-    load,
-    load_npz,
-    save,
-)
+from learning.data import load, load_npz, save
 from tests.learning.data_helpers import assert_same, make_demos
 from tests.learning.data_helpers import leftovers as _leftovers
 

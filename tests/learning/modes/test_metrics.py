@@ -5,12 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learning.modes import (
-    match_modes,
-    mode_agreement,
-    mode_ari,
-    relabel,
-)
+from learning.modes import match_modes, mode_agreement, mode_ari, relabel
 
 # hmmlearn's reference computations here use tiny threaded BLAS calls (fixture: conftest.py)
 pytestmark = pytest.mark.usefixtures("_one_blas_thread")

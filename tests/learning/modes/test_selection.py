@@ -4,10 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from learning.modes import (
-    ModeSelection,
-    select_n_modes,
-)
+from learning.modes import ModeSelection, select_n_modes
 from tests.learning.hmm_samples import sample_hmm
 
 # hmmlearn's reference computations here use tiny threaded BLAS calls (fixture: conftest.py)

@@ -8,12 +8,7 @@ import numpy as np
 import pytest
 from sklearn.exceptions import NotFittedError
 
-from learning.modes import (
-    TaskModes,
-    check_sequences,
-    mode_agreement,
-    mode_ari,
-)
+from learning.modes import TaskModes, check_sequences, mode_agreement, mode_ari
 from tests.learning.hmm_samples import sample_hmm, vanilla_hmm
 
 # hmmlearn's reference computations here use tiny threaded BLAS calls (fixture: conftest.py)
