@@ -37,11 +37,8 @@ EXEMPT: dict[str, str] = {
     "mpcshare/__main__.py": "`__main__`: `python -m mpcshare`, run by tests/mpcshare/test_cli.py",
     "mpcshare/bundle/files.py": "no test yet",
     "mpcshare/bundle/manifest.py": "exercised by tests/mpcshare/bundle/test_bundle.py",
-    "mpcshare/commands/analysis.py": "no test yet",
-    "mpcshare/commands/data.py": "exercised by tests/sim/task/test_protocol.py",
     "mpcshare/commands/robot_options.py": "no test yet",
     "mpcshare/commands/sim_serve.py": "no test yet",
-    "mpcshare/commands/train.py": "exercised by tests/mpcshare/training/test_modes_from.py",
     "mpcshare/commands/tune.py": "exercised by tests/mpcshare/evaluation/test_tune.py",
     "mpcshare/control/bundle_inputs.py": "no test yet",
     "mpcshare/control/fastpath.py": "no test yet",
@@ -99,7 +96,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 80
+EXEMPT_CEILING = 77
 
 
 def mirrored_test(module: str) -> str:
