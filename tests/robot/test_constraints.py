@@ -168,17 +168,6 @@ def test_limits_return_named_read_only_rows() -> None:
         AccelerationLimit(lim).bounds(s).lo[0] = 0.0
 
 
-def test_limits_validation() -> None:
-    from robot.errors import ControllerConfigError
-
-    with pytest.raises(ControllerConfigError):
-        JointLimits([0.0], [-1.0], [1.0], [1.0], [1.0], [1.0])
-    with pytest.raises(ControllerConfigError):
-        JointLimits([0.0], [1.0], [1.0], [1.0], [2.0], [1.0])  # a_brake > a_max
-    with pytest.raises(ControllerConfigError):
-        JointLimits([0.0, 0.0], [1.0], [1.0], [1.0], [1.0], [1.0])
-
-
 @settings(max_examples=200, deadline=None)
 @given(gap=st.floats(-0.5, 2.0, **finite), v=st.floats(-3.0, 3.0, **finite),
        dt=st.floats(1e-3, 0.02, **finite), a_brake=st.floats(0.5, 50.0, **finite))
