@@ -74,8 +74,6 @@ EXEMPT: dict[str, str] = {
     "mpcshare/training/stages.py": "no test yet",
     "robot/__main__.py": "`__main__`: writes the files tests/robot/superlimb/test_model_files.py checks",
     "robot/errors.py": "error root: tests/mpcshare/test_errors.py",
-    "robot/ik.py": "no test yet",
-    "robot/mjcf.py": "no test yet",
     "robot/mpc/codegen.py": "exercised by tests/robot/mpc/test_tip_mpc.py",
     "robot/mpc/nlp.py": "no test yet",
     "robot/mpc/problem.py": "no test yet",
@@ -93,7 +91,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 74
+EXEMPT_CEILING = 72
 
 
 def mirrored_test(module: str) -> str:
