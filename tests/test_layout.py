@@ -29,9 +29,7 @@ EXEMPT: dict[str, str] = {
     "learning/modes/_hmm.py": "exercised by tests/learning/test_modes.py",
     "learning/modes/_params.py": "no test yet",
     "learning/predictor/__init__.py": "`__init__` lazy re-exports",
-    "learning/predictor/baseline.py": "exercised by tests/learning/predictor/test_lstm.py",
     "learning/predictor/defaults.py": "no test yet",
-    "learning/predictor/metrics.py": "exercised by tests/learning/predictor/test_lstm.py",
     "learning/predictor/stream.py": "exercised by tests/learning/predictor/test_lstm.py",
     "mpcshare/__init__.py": "`__init__` lazy re-exports",
     "mpcshare/__main__.py": "`__main__`: `python -m mpcshare`, run by tests/mpcshare/test_cli.py",
@@ -62,7 +60,6 @@ EXEMPT: dict[str, str] = {
     "mpcshare/reports/demo.py": "exercised by tests/mpcshare/training/test_modes_from.py",
     "mpcshare/reports/mode_sources.py": "exercised by tests/mpcshare/training/test_modes_from.py",
     "mpcshare/reports/style.py": "exercised by tests/mpcshare/reports/test_comparison.py",
-    "mpcshare/reports/training.py": "exercised by tests/mpcshare/training/test_fast.py",
     "mpcshare/run_table.py": "exercised by tests/mpcshare/test_sim_mcap.py",
     "mpcshare/runtime/config_reader.py": "exercised by tests/mpcshare/runtime/test_config.py",
     "mpcshare/runtime/convert.py": "exercised by tests/mpcshare/runtime/test_messages.py",
@@ -91,7 +88,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 72
+EXEMPT_CEILING = 69
 
 
 def mirrored_test(module: str) -> str:

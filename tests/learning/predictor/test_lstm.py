@@ -1,4 +1,4 @@
-"""Tests of learning.predictor: LSTM reactive predictor, NumPy stream, persistence, baseline, RMSE groups."""
+"""learning.predictor's LSTM reactive predictor: learning, its NumPy stream, seeds, masks, persistence, errors."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import torch
 from sklearn.exceptions import NotFittedError
 
 from learning.predictor import PredictorStream, ReactivePredictor, RidgeWindowBaseline
-from learning.predictor.metrics import channel_group, rmse_by_channel, rmse_by_group
 from learning.preprocessing.preprocess import Preprocessor, Standardizer
 from learning.preprocessing.resample import causal_downsample
 from sim.demonstrator import generate_demonstrations
@@ -222,41 +221,3 @@ def test_divergence_is_reported(monkeypatch):
     with pytest.raises(RuntimeError, match="loss is not finite at epoch 1"):
         m.fit(xs, ys, progress=False)
     assert not hasattr(m, "net_")
-
-
-def test_ridge_baseline_respects_masks_and_shapes():
-    rng = np.random.default_rng(7)
-    xs = [rng.standard_normal((60, 3)) for _ in range(3)]
-    ys = [np.column_stack([x[:, 0] + 2 * np.vstack([x[:1], x[:-1]])[:, 1]]) for x in xs]
-    masks = [rng.random(60) < 0.7 for _ in xs]
-    ys_bad = [np.where(m[:, None], y, 99.0) for y, m in zip(ys, masks)]
-    base = RidgeWindowBaseline(lags=2, alpha=1e-8).fit(xs, ys_bad, masks)
-    pred = base.predict(xs[0])
-    assert pred.shape == (60, 1)
-    np.testing.assert_allclose(pred[1:], ys[0][1:], atol=1e-5)  # row 0: repeated first sample
-    with pytest.raises(ValueError, match="lags must be"):
-        RidgeWindowBaseline(lags=0).fit(xs, ys)
-    with pytest.raises(NotFittedError):
-        RidgeWindowBaseline().predict(xs[0])
-
-
-def test_rmse_by_group_units_and_other_names():
-    names = ["knife_x", "knife_y", "knife_z", "knife_roll", "knife_pitch", "knife_yaw",
-             "knife_fx", "knife_fy", "knife_fz", "torque"]
-    rng = np.random.default_rng(8)
-    y = rng.standard_normal((50, 10))
-    p = y + rng.standard_normal((50, 10)) * np.arange(1, 11)
-    r = rmse_by_group(y, p, names)
-    e2 = (p - y) ** 2
-    assert set(r) == {"position_m", "orientation_rad", "force_N", "other"}
-    assert r["position_m"] == pytest.approx(np.sqrt(e2[:, :3].mean()))
-    assert r["orientation_rad"] == pytest.approx(np.sqrt(e2[:, 3:6].mean()))
-    assert r["force_N"] == pytest.approx(np.sqrt(e2[:, 6:9].mean()))
-    assert r["other"] == pytest.approx(np.sqrt(e2[:, 9].mean()))
-    assert channel_group("knife_fx") == "force_N" and channel_group("ch0") == "other"
-    assert rmse_by_group(y[:, :2], p[:, :2], ["a", "b"]) == {"other": pytest.approx(np.sqrt(e2[:, :2].mean()))}
-    assert rmse_by_channel(y, p, names)["torque"] == pytest.approx(np.sqrt(e2[:, 9].mean()))
-    with pytest.raises(ValueError, match="9 channel names for 10 channels"):
-        rmse_by_group(y, p, names[:9])
-    with pytest.raises(ValueError, match="same shape"):
-        rmse_by_group(y, p[:, :3], names)

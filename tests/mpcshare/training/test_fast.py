@@ -1,23 +1,11 @@
-"""Skill scores of the control-rate forecast: checked against a direct computation, and written to training.md."""
+"""Skill scores of the control-rate forecast (mpcshare.training.fast), checked against a direct computation."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from mpcshare.reports.training import skill_lines, training_markdown
-from mpcshare.training.fast import FastRows, preview_skill, skill_table
-
-
-def _rows(n: int = 200, H1: int = 4, seed: int = 0):
-    rng = np.random.default_rng(seed)
-    truth = np.cumsum(rng.normal(size=(n, H1, 3)), axis=1)
-    F = truth + 0.3 * rng.normal(size=truth.shape)
-    prev = np.arange(n) - 2
-    prev[:2] = -1
-    mode = rng.integers(0, 2, n)
-    rows = FastRows(phi=np.zeros((n, 1)), slow=truth + rng.normal(size=truth.shape), truth=truth, mode=mode,
-                    trial=np.zeros(n, int), prev=prev)
-    return F, rows
+from mpcshare.training.fast import preview_skill, skill_table
+from tests.mpcshare.training.fast_rows import fast_rows as _rows
 
 
 def test_skill_equals_a_direct_computation():
@@ -45,16 +33,3 @@ def test_skill_equals_a_direct_computation():
     gate = preview_skill(t, 2)
     assert gate.shape == (2, F.shape[1]) and np.all(gate[:, 0] == 0)
     np.testing.assert_allclose(gate[1, 1:], m1["skill"]["vs_hold"][1:])
-
-
-def test_training_md_has_the_skill_tables():
-    F, rows = _rows()
-    fast = skill_table(F, rows, np.ones(3), 2, 0.1)
-    lines = skill_lines(fast)
-    assert any(line.startswith("| 0.1 |") for line in lines) and any(line.startswith("| 1 |") for line in lines)
-    metrics = {"training": {"K": 2.0, "percentile": 90.0, "reactive_share_train": 0.9, "total_s": 12.0},
-               "heldout_reactive_share": 0.88, "predictor": {"rmse_reactive": 0.1, "rmse_all": 0.2},
-               "gate": {"overall": {"accuracy": 0.9, "f1": 0.9, "brier": 0.1}}, "fast_forecast": fast}
-    md = training_markdown(metrics)
-    assert "skill vs hold" in md and "Skill per mode" in md
-    assert "not trained" in training_markdown({**metrics, "fast_forecast": None})
