@@ -25,7 +25,6 @@ EXEMPT: dict[str, str] = {
     "learning/errors.py": "error root: tests/mpcshare/test_errors.py",
     "learning/lipschitz/_bounds.py": "no test yet",
     "learning/lipschitz/_search.py": "no test yet",
-    "learning/lipschitz/_torch.py": "no test yet",
     "learning/modes/_hmm.py": "exercised by tests/learning/test_modes.py",
     "learning/modes/_params.py": "no test yet",
     "learning/predictor/__init__.py": "`__init__` lazy re-exports",
@@ -88,7 +87,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 69
+EXEMPT_CEILING = 68
 
 
 def mirrored_test(module: str) -> str:

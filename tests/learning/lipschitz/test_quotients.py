@@ -190,17 +190,6 @@ def test_threads_and_blocks_do_not_change_result():
     assert np.array_equal(q1, q2) and np.array_equal(p1, p2)
 
 
-def test_torch_backend_cpu_matches():
-    rng = np.random.default_rng(8)
-    X = rng.normal(size=(900, 30))
-    X = np.concatenate([X, X[:100] + 1e-9])
-    Y = rng.normal(size=(1000, 3))
-    q, p = pointwise_quotients(X, Y, return_partner=True, backend="torch", device="cpu")
-    _, pn = pointwise_quotients(X, Y, return_partner=True, backend="numpy")
-    assert_exact(q, brute_force(X, Y))
-    assert np.array_equal(p, pn)
-
-
 def test_progress_bar_runs_on_a_terminal_only(capsys, monkeypatch):
     import sys
 
