@@ -65,7 +65,6 @@ EXEMPT: dict[str, str] = {
     "mpcshare/runtime/setup.py": "exercised by tests/mpcshare/runtime/test_config.py",
     "mpcshare/runtime/stand_in_command.py": "no test yet",
     "mpcshare/training/__init__.py": "`__init__` lazy re-exports",
-    "mpcshare/training/data.py": "exercised by tests/mpcshare/training/test_train.py",
     "mpcshare/training/evaluation.py": "exercised by tests/mpcshare/training/test_train.py",
     "mpcshare/training/stages.py": "no test yet",
     "robot/__main__.py": "`__main__`: writes the files tests/robot/superlimb/test_model_files.py checks",
@@ -87,7 +86,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 68
+EXEMPT_CEILING = 67
 
 
 def mirrored_test(module: str) -> str:
