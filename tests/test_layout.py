@@ -75,7 +75,6 @@ EXEMPT: dict[str, str] = {
     "robot/mpc/qp.py": "no test yet",
     "robot/qp_types.py": "exercised by tests/robot/test_floor.py",
     "robot/superlimb/description.py": "exercised by tests/robot/test_braking.py",
-    "robot/superlimb/kinematics.py": "exercised by tests/robot/test_kinematics.py",
     "robot/wearer_body.py": "exercised by tests/mpcshare/control/test_keepout.py",
     "sim/__init__.py": "`__init__` chooses offscreen GL: tests/sim/test_offscreen_gl.py",
     "sim/arm_mounts.py": "no test yet",
@@ -86,7 +85,7 @@ EXEMPT: dict[str, str] = {
     "sim/wearer_presets.py": "exercised by tests/sim/test_closed_loop.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 67
+EXEMPT_CEILING = 66
 
 
 def mirrored_test(module: str) -> str:
