@@ -188,19 +188,6 @@ def test_a_leading_wearer_saws_in_the_closed_loop(trial):
     assert corrects_only["saw_correlation"] < 0.5 and corrects_only["saw_amplitude_ratio"] < 0.5
 
 
-def test_a_caption_is_drawn_across_the_top_of_a_frame():
-    from sim.render import Caption
-    from sim.task.eating import MODE_COLOURS
-
-    img = np.full((480, 640, 3), 200, dtype=np.uint8)
-    out = Caption(["t = 1.0 s", "robot leads (alpha 1.00)", "cutting"], MODE_COLOURS["cutting"]).draw(img)
-    assert out.shape == img.shape and (img == 200).all()  # drawn on a copy
-    banner, below = out[:30], out[60:]
-    assert (banner == 20).all(axis=2).mean() > 0.5 and (banner == 255).all(axis=2).any()  # dark, white text
-    assert (np.abs(banner.astype(int) - [0xC4, 0x4E, 0x52]).sum(axis=2) == 0).any()  # the mode's colour
-    assert (below == 200).all()
-
-
 def test_fork_pose_rows_make_a_level_fork_without_angles_and_name_what_is_missing():
     obs = np.arange(12.0).reshape(3, 4)
     np.testing.assert_array_equal(fork_pose_rows(obs, ["f", "fork_x", "fork_y", "fork_z"]),
