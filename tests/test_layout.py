@@ -34,7 +34,6 @@ EXEMPT: dict[str, str] = {
     "mpcshare/bundle/manifest.py": "exercised by tests/mpcshare/bundle/test_bundle.py",
     "mpcshare/commands/robot_options.py": "no test yet",
     "mpcshare/commands/sim_serve.py": "no test yet",
-    "mpcshare/commands/tune.py": "exercised by tests/mpcshare/evaluation/test_tune.py",
     "mpcshare/control/bundle_inputs.py": "no test yet",
     "mpcshare/control/fastpath.py": "in tests/mpcshare/control/test_fast_path.py, the path fastpath.py cites",
     "mpcshare/control/forecast.py": "in tests/mpcshare/control/test_forecast_track.py, the path forecast.py cites",
@@ -51,9 +50,7 @@ EXEMPT: dict[str, str] = {
     "mpcshare/evaluation/episode.py": "exercised by tests/mpcshare/evaluation/test_frontend_replay.py",
     "mpcshare/evaluation/pooling.py": "exercised by tests/mpcshare/commands/test_sim.py",
     "mpcshare/evaluation/runs.py": "exercised by tests/mpcshare/evaluation/test_episode_pool.py",
-    "mpcshare/evaluation/tuning/episodes.py": "exercised by tests/mpcshare/evaluation/test_tune.py",
     "mpcshare/evaluation/tuning/runner.py": "exercised by tests/mpcshare/evaluation/test_tune.py",
-    "mpcshare/evaluation/tuning/stats.py": "exercised by tests/mpcshare/evaluation/test_tune.py",
     "mpcshare/reports/demo.py": "exercised by tests/mpcshare/training/test_modes_from.py",
     "mpcshare/reports/mode_sources.py": "exercised by tests/mpcshare/training/test_modes_from.py",
     "mpcshare/run_table.py": "exercised by tests/mpcshare/test_sim_mcap.py",
@@ -79,7 +76,7 @@ EXEMPT: dict[str, str] = {
     "sim/task/__init__.py": "the task registry: tested in tests/sim/task/test_protocol.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 60
+EXEMPT_CEILING = 57
 
 
 def mirrored_test(module: str) -> str:

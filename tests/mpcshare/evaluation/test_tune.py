@@ -1,21 +1,17 @@
-"""`mpcshare tune`: the closed-loop sweep, its files, its statistics and its backends."""
+"""`mpcshare tune`: the closed-loop sweep, its files, its rows in one or two workers or Ray, its usage errors."""
 
 from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
-from scipy import stats as st
 
 from learning.data import save
 from mpcshare.cli import main
-from mpcshare.evaluation.tuning.episodes import TIMING_KEYS, plan_tasks, random_tasks, task_key
+from mpcshare.evaluation.tuning.episodes import TIMING_KEYS, plan_tasks
 from mpcshare.evaluation.tuning.runner import run_tune
-from mpcshare.evaluation.tuning.stats import gate_vs_random, pareto, recommend, summarise
 from sim.demonstrator import generate_demonstrations
 from sim.task.eating import MODE_NAMES
-from tests.mpcshare.evaluation.tune_rows import tune_row as _row
 
 SWEEP = ["--percentiles", "90", "70", "--betas", "0", "1", "--strategies", "gate", "--trials", "1",
          "--duration", "2", "--seeds", "2", "--draws", "2", "--epochs", "3", "--quiet", "--workers", "1"]
@@ -110,78 +106,6 @@ def test_the_plan_and_its_time_are_said_before_the_episodes_run(data, swept, tmp
     assert len(run["rows"]) == 5
 
 
-def test_gate_against_random_is_a_paired_one_sided_test():
-    rng = np.random.default_rng(1)
-    base = rng.uniform(0.01, 0.03, 8)  # per (trial, seed): a hard trial is hard for both
-    gate_err = base
-    rand_err = base + np.array([2, 1, 3, 0.5, 2, 1.5, -0.2, 1]) * 1e-3
-    rows = []
-    for i, (g, r) in enumerate(zip(gate_err, rand_err)):
-        rows += [_row("gate", i % 2, i // 2, g), _row("random_handover", i % 2, i // 2, r, "gate")]
-    rows = [rows[i] for i in rng.permutation(len(rows))]  # the order of rows must not matter
-    test = gate_vs_random(rows)["gate p90 b0.5"]["vs_random_handover"]
-    expected = st.wilcoxon(rand_err - gate_err, alternative="greater")
-    assert test["p_value"] == pytest.approx(expected.pvalue) and test["n_pairs"] == 8
-    assert test["n_forced"] == 4  # the seed-0 episodes handed over once: their placebo is forced
-    assert test["p_value"] < 0.05 and test["beats_random"]
-    assert test["effect_m"] == pytest.approx(np.mean(rand_err - gate_err))
-    lo, hi = test["effect_ci95_m"]
-    assert lo < test["effect_m"] < hi
-    # unpaired, the spread between trials would hide the effect: the pairing is what is tested
-    assert st.mannwhitneyu(rand_err, gate_err, alternative="greater").pvalue > 0.05
-    worse = [dict(r, tracking_rmse_m=r["tracking_rmse_m"] + (3e-3 if r["strategy"] == "gate" else 0))
-             for r in rows]
-    t2 = gate_vs_random(worse)["gate p90 b0.5"]["vs_random_handover"]
-    assert t2["p_value"] > 0.5 and not t2["beats_random"]
-    rec = recommend(summarise(worse), gate_vs_random(worse))
-    assert rec["setting"] == "gate p90 b0.5" and rec["beats_random"] is False and "criterion" in rec
-
-
-def test_holm_and_the_placebo_as_the_mean_of_its_draws():
-    from mpcshare.evaluation.tuning.stats import holm
-
-    assert holm([0.01, 0.04, 0.03, None]) == pytest.approx([0.03, 0.06, 0.06, None], nan_ok=True)
-    rng = np.random.default_rng(2)
-    gate_err = rng.uniform(0.01, 0.03, 10)
-    rows = []
-    for i, g in enumerate(gate_err):  # two draws per pair: one 1 mm worse than the gate, one 3 mm
-        rows += [_row("gate", i % 2, i // 2, g)]
-        rows += [dict(_row("random_handover", i % 2, i // 2, g + d, "gate"), draw=j)
-                 for j, d in enumerate((1e-3, 3e-3))]
-    rows += [_row("blend", i % 2, i // 2, g + 1e-3) for i, g in enumerate(gate_err)]
-    rows += [_row("random_handover", i % 2, i // 2, g, "blend") for i, g in enumerate(gate_err)]
-    tests = gate_vs_random(rows)
-    t = tests["gate p90 b0.5"]["vs_random_handover"]
-    assert t["effect_m"] == pytest.approx(2e-3) and t["draws_per_pair"] == [1, 2]
-    assert t["p_value"] == pytest.approx(0.5 ** 10) and t["p_holm"] == pytest.approx(2 * 0.5 ** 10)
-    assert t["p_holm"] < 0.01 and t["beats_random"]
-    assert not tests["blend p90 b0.5"]["vs_random_handover"]["beats_random"]
-
-
-def test_pareto_keeps_the_settings_nothing_beats_on_both():
-    rows = [_row("voluntary", 0, 0, 0.030, effort=0.5), _row("reactive", 0, 0, 0.010, effort=0.05),
-            _row("gate", 0, 0, 0.020, effort=0.2), _row("blend", 0, 0, 0.012, effort=0.04)]
-    rows[0]["percentile"] = rows[0]["beta"] = None
-    assert pareto(summarise(rows)) == ["reactive p90 b0.5", "blend p90 b0.5"]
-
-
-def test_plan_pairs_every_setting_with_the_same_trials_and_seeds():
-    bundles = {90.0: "b90", 70.0: "b70"}
-    tasks = plan_tasks([90.0, 70.0], [0.0, 1.0], ["gate", "blend"], [3, 4], [0, 1], bundles, "d.npz", 2.0,
-                       "hemiparetic_mild")
-    assert len({task_key(t) for t in tasks}) == len(tasks) == 2 * 2 * (1 + 2 * (1 + 4))
-    with_bound = plan_tasks([90.0], [0.5], ["gate"], [3], [0], bundles, "d.npz", 2.0, "hemiparetic_mild", oracle=True)
-    assert [t.strategy for t in with_bound] == ["voluntary", "oracle_preview", "reactive", "gate"]
-    settings = [t for t in tasks if t.strategy in ("gate", "blend")]
-    rows = [{"strategy": t.strategy, "matched_to": None, "percentile": t.percentile, "beta": t.beta,
-             "trial": t.trial, "seed": t.seed, "schedule": {"steps": 10}} for t in settings]
-    rand = random_tasks(rows, tasks, 1)
-    assert [(t.matched_to, t.percentile, t.beta, t.trial, t.seed) for t in rand] == \
-        [(t.strategy, t.percentile, t.beta, t.trial, t.seed) for t in settings]
-    five = random_tasks(rows, tasks)  # the default: 5 draws per setting episode, each its own task
-    assert len(five) == 5 * len(settings) and len({task_key(t) for t in five}) == len(five)
-
-
 @pytest.mark.parametrize("args, needle", [
     (["--percentiles", "0"], "above 0 and at most 100"), (["--percentiles", "101"], "above 0 and at most 100"),
     (["--betas", "1.5"], "a number from 0 to 1"), (["--strategies", "wild"], "gate"),
@@ -210,16 +134,6 @@ def test_ray_gives_the_same_rows_as_the_local_pool(data, swept, tmp_path):
     local = json.loads((swept / "tune.json").read_text())["rows"]
     remote = json.loads((tmp_path / "ray" / "tune.json").read_text())["rows"]
     assert _comparable(local) == _comparable(remote)
-
-
-def test_default_sweep_has_at_least_ten_pairs():
-    from mpcshare.commands.tune import default_trials_and_seeds
-
-    for n_heldout in (1, 2, 3, 4, 5, 8):
-        t, s = default_trials_and_seeds(n_heldout, None, None)
-        assert t == min(5, n_heldout) and t * s >= 10 and 0.5 ** (t * s) * 6 < 0.01  # Holm over 6 settings
-    assert default_trials_and_seeds(4, None, None) == (4, 3)  # the default data: 4 held-out trials
-    assert default_trials_and_seeds(4, 2, None) == (2, 5) and default_trials_and_seeds(4, 2, 1) == (2, 1)
 
 
 def test_replaying_the_front_end_gives_the_rows_of_live_episodes(data, swept, monkeypatch):
