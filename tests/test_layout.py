@@ -18,10 +18,8 @@ PACKAGES = ("learning", "robot", "sim", "mpcshare")
 #: module (repository path) → why it has no test at its mirrored path
 EXEMPT: dict[str, str] = {
     "learning/analysis/__init__.py": "`__init__` lazy re-exports",
-    "learning/analysis/config.py": "exercised by tests/learning/analysis/test_calibration.py",
     "learning/analysis/report.py": "no test yet",
     "learning/analysis/result.py": "no test yet",
-    "learning/data/splits.py": "exercised by tests/learning/preprocessing/test_preprocess.py",
     "learning/errors.py": "error root: tests/mpcshare/test_errors.py",
     "learning/lipschitz/_bounds.py": "no test yet",
     "learning/lipschitz/_search.py": "no test yet",
@@ -76,7 +74,7 @@ EXEMPT: dict[str, str] = {
     "sim/task/__init__.py": "the task registry: tested in tests/sim/task/test_protocol.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 57
+EXEMPT_CEILING = 55
 
 
 def mirrored_test(module: str) -> str:
