@@ -50,8 +50,6 @@ EXEMPT: dict[str, str] = {
     "mpcshare/evaluation/runs.py": "exercised by tests/mpcshare/evaluation/test_episode_pool.py",
     "mpcshare/evaluation/tuning/runner.py": "exercised by tests/mpcshare/evaluation/test_tune.py",
     "mpcshare/reports/demo.py": "exercised by tests/mpcshare/training/test_modes_from.py",
-    "mpcshare/reports/mode_sources.py": "exercised by tests/mpcshare/training/test_modes_from.py",
-    "mpcshare/run_table.py": "exercised by tests/mpcshare/test_sim_mcap.py",
     "mpcshare/runtime/config_reader.py": "exercised by tests/mpcshare/runtime/test_config.py",
     "mpcshare/runtime/convert.py": "exercised by tests/mpcshare/runtime/test_messages.py",
     "mpcshare/runtime/setup.py": "exercised by tests/mpcshare/runtime/test_config.py",
@@ -74,7 +72,7 @@ EXEMPT: dict[str, str] = {
     "sim/task/__init__.py": "the task registry: tested in tests/sim/task/test_protocol.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 55
+EXEMPT_CEILING = 53
 
 
 def mirrored_test(module: str) -> str:
