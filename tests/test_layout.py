@@ -63,7 +63,6 @@ EXEMPT: dict[str, str] = {
     "robot/mpc/problem.py": "no test yet",
     "robot/mpc/qp.py": "no test yet",
     "robot/qp_types.py": "exercised by tests/robot/test_floor.py",
-    "robot/superlimb/description.py": "exercised by tests/robot/test_braking.py",
     "robot/wearer_body.py": "exercised by tests/mpcshare/control/test_keepout.py",
     "sim/__init__.py": "`__init__` chooses offscreen GL: tests/sim/test_offscreen_gl.py",
     "sim/arm_mounts.py": "tested in tests/mpcshare/test_arms.py, the path arm_mounts.py cites",
@@ -72,7 +71,7 @@ EXEMPT: dict[str, str] = {
     "sim/task/__init__.py": "the task registry: tested in tests/sim/task/test_protocol.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 53
+EXEMPT_CEILING = 52
 
 
 def mirrored_test(module: str) -> str:
