@@ -105,16 +105,17 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     add_serve_arguments(p)
 
 
-def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str, str] | None = None) -> Demonstrations:
+def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str, str] | None = None,
+                   task: Task = EATING) -> Demonstrations:
     """The data's trials renamed by ``mapping`` (NAME → the data's CHANNEL, :mod:`mpcshare.channel_map`) with
     their obs columns in the bundle's order. Raises CommandError in one line where the map does not fit the
-    data, where the bundle or the data cannot drive the simulator (saying which ``--map`` would), or where the
-    data lacks an obs channel of the bundle."""
+    data, where the bundle or the data cannot drive the simulator (saying which ``--map`` would; the shoulder
+    roles ``task``'s), or where the data lacks an obs channel of the bundle."""
     try:
         demos = apply_map(demos, dict(mapping or {}))
     except ValueError as exc:
         raise CommandError(f"--map {exc}") from None
-    gaps = simulator_gaps(bundle.obs_names, bundle.act_names, bundle.vol_names)
+    gaps = simulator_gaps(bundle.obs_names, bundle.act_names, bundle.vol_names, task=task)
     if gaps:
         raise CommandError("the bundle's channels cannot drive the simulator (train it again with the --map "
                            "named here): " + "; ".join(gaps))
@@ -233,7 +234,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.data is None and not Path(data).exists():
         raise CommandError(f"the bundle's training data {data} is gone; pass --data")
     demos = load_or_fail(str(data))
-    demos = align_channels(demos, bundle, bundle_map(bundle.config.get("channel_map"), demos, given))
+    demos = align_channels(demos, bundle, bundle_map(bundle.config.get("channel_map"), demos, given), task)
     ids = set(demos.trial_ids)
     # the bundle's held-out trials; other data (--data) without them: all of its trials
     trial_ids = [t for t in bundle.heldout_trials if t in ids]

@@ -194,8 +194,9 @@ def _calibrate(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, st
     Skipped with ``--no-rule-choice`` (no reason given) and where the data cannot drive the simulator."""
     if args.no_rule_choice:
         return None, None
+    task = chosen_task(args)
     gaps = simulator_gaps(demos.obs_names, demos.act_names, demos.vol_names if demos.has_voluntary else (),
-                          demos.rate_hz)
+                          demos.rate_hz, task)
     if gaps:
         why = ("closed-loop choice was skipped (the gate keeps its default settings): the data cannot drive the "
                "simulator: " + "; ".join(gaps))
@@ -203,7 +204,6 @@ def _calibrate(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, st
         return None, why
     from mpcshare.calibration.rule_choice import choose_for_bundle
 
-    task = chosen_task(args)
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
                              wearer_name=args.rule_wearer, mode_names=task.mode_names, task=task,
                              log=None if args.quiet else print), None

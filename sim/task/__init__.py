@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+from typing import Any, Mapping
 
 from .eating import TASK as EATING
 from .protocol import Task
 
-__all__ = ["DEFAULT_TASK", "EATING", "Task", "task_named", "task_names"]
+__all__ = ["DEFAULT_TASK", "EATING", "Task", "recorded_task", "task_named", "task_names"]
 
 #: the task the commands run unless told otherwise
 DEFAULT_TASK = "eating"
@@ -47,6 +48,13 @@ def task_named(name: str) -> Task:
     return _module(name).TASK
 
 
+def recorded_task(config: Mapping[str, Any] | None) -> Task:
+    """The task a model bundle's configuration records (``config["task"]``, a name for :func:`task_named`);
+    :data:`DEFAULT_TASK`'s where it records none (a bundle from before tasks were named). Raises ValueError as
+    :func:`task_named` does."""
+    return task_named(str((config or {}).get("task") or DEFAULT_TASK))
+
+
 def _outside(spec: str) -> Task:
     """The task of ``package.module[:ATTR]`` (:func:`task_named`)."""
     module_name, _, attr = spec.partition(":")
@@ -60,6 +68,8 @@ def _outside(spec: str) -> Task:
     task = getattr(module, attr, None)
     if task is None:
         raise ValueError(f"task {spec!r}: module {module_name} has no {attr}")
+    if isinstance(task, type):
+        raise ValueError(f"task {spec!r}: {module_name}.{attr} is a class; name an instance of it (TASK = {attr}())")
     if not isinstance(task, Task):
         raise ValueError(f"task {spec!r}: {module_name}.{attr} is a {type(task).__name__}, not a sim.task.Task "
                          "(its attributes and methods: sim/task/protocol.py)")

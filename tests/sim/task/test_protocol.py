@@ -135,6 +135,7 @@ def test_a_task_outside_the_package_is_found_by_its_module_and_attribute(tmp_pat
     for spec, words in ((f"{m}:NOPE", f"module {m} has no NOPE"),
                         (f"{m}:NOT_A_TASK", f"{m}.NOT_A_TASK is a int, not a sim.task.Task"),
                         ("no_such_package_x.tasks", "cannot import no_such_package_x.tasks (ModuleNotFoundError"),
-                        (f"{m}:1x", "expected package.module or package.module:ATTR")):
+                        (f"{m}:1x", "expected package.module or package.module:ATTR"),
+                        (f"{m}:Pouring", f"{m}.Pouring is a class; name an instance of it (TASK = Pouring())")):
         with pytest.raises(ValueError, match=re.escape(f"task {spec!r}: {words}")):
             task_named(spec)
