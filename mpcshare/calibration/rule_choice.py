@@ -253,21 +253,21 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 prune: bool = True, mixes: Sequence[str] = MIXES, task: Task = EATING) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
-    ``mode_names``: the names of the demonstrations' mode labels (None: no sawing figures); ``task``: whose figures,
-    stroke mode and criterion (:class:`sim.task.Task`); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
-    wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer leads that each
-    wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's shares while it leads, in
-    [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others with the second stage's (module
-    docstring); ``pool``: where the episodes run (default: this process; each stage's episodes are one batch);
-    ``prune``: leave out the wearer-mode sets the per-mode costs put at no less effort and error than the wearer
-    alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under ``"pruned"``); ``mixes``: the constant
-    mixtures run beside the parties as comparators (:data:`MIXES`; their rows under ``"mixes"``, and the why says so
-    where one would win the criterion: the gate's rule cannot be one).
+    ``mode_names``: the names of the demonstrations' mode labels (the one named ``task.stroke_mode`` is
+    the task's stroke; None: no sawing figures); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
+    wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer
+    leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's
+    shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
+    with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
+    stage's episodes are one batch); ``prune``: leave out the wearer-mode sets the per-mode costs put at no
+    less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
+    ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; their rows
+    under ``"mixes"``, and the why says so where one would win the criterion: the gate's rule cannot be one).
     Returns ``{"settings", "wearer_modes", "why", "criterion", "predicted", "cross_validated", "candidates",
     "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
     "episodes_run" (simulated: an episode that decides as another at every step is that episode), "seconds"}``. Raises
-    ValueError when the bundle has no mode model or no trial is given.
+    ValueError when the bundle has no mode model or no trial is given. ``task``: whose figures and criterion.
     """
     if not len(trials):
         raise ValueError("choose_rule needs at least one held-out trial")
