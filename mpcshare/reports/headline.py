@@ -121,7 +121,10 @@ def choice_note(rule_choice: dict[str, Any] | None, sawed: bool, trials: str, ta
     row = chosen_row(rule_choice)
     if row is None or (task.stroke_mode is not None and row.get("saw_correlation") is None):
         return ""
-    chose_sawing = bool(task.done(row))
+    per_trial = row.get("saws_by_trial")  # without strokes: the choice's verdict per trial (its pooled row
+    if task.stroke_mode is None and not per_trial:  # holds none of the task's figures)
+        return ""
+    chose_sawing = bool(task.done(row)) if task.stroke_mode is not None else all(bool(x) for x in per_trial)
     if chose_sawing == sawed:
         return ""
     span = "whole trials" if rule_choice.get("duration_s") is None else f"first {rule_choice['duration_s']:g} s"
