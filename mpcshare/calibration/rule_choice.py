@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import time
 from contextlib import nullcontext
-from functools import partial
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -276,8 +275,9 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
 
     seen: dict[int, np.ndarray] = {}  # what each trial's arbitration sees (the first batch); episodes simulated
     ran: list[int] = []
-    run = partial(pooled_runs, bundle, demos, trials, duration_s=duration_s, wearer=wearer, seed=seed,
-                  mode_names=mode_names, pool=pool, seen=seen, ran=ran, task=task)  # run(specs)
+    def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
+        return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran,
+                           task=task)
 
     _check_mixes(mixes)
     (vol, vol_eps), (rea, rea_eps), *mixed = run([("voluntary", None), ("reactive", None), *((m, None) for m in mixes)])
@@ -319,10 +319,9 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why,
             "criterion": criterion_words(task), "predicted": predicted(best, vol, task),
             "cross_validated": cross_validated(rows, vol, rea, max_effort, task),
-            "cutting_effort_vs_voluntary": task_effort,
-            "max_effort": max_effort, "candidates": rows, "mixes": mix_rows, "voluntary": vol, "reactive": rea,
-            "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
-            "trials": [int(t) for t in trials], "duration_s": duration_s,
+            "cutting_effort_vs_voluntary": task_effort, "max_effort": max_effort, "candidates": rows,
+            "mixes": mix_rows, "voluntary": vol, "reactive": rea, "mode_costs": costs, "price_order": order,
+            "cutting_modes": cutting, "pruned": pruned, "trials": [int(t) for t in trials], "duration_s": duration_s,
             "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}
 
 
