@@ -21,7 +21,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from learning.data import Demonstrations
-from sim.task import EATING
+from sim.task import EATING, Task, recorded_task
 from sim.wearer import WearerConfig
 
 __all__ = ["KNIFE", "FORK_POSITION", "FORK_ANGLES", "apply_map", "bundle_map", "bundle_wearer", "parse_map",
@@ -74,9 +74,10 @@ def _flags(roles: Sequence[str], names: Sequence[str]) -> str:
 
 
 def simulator_gaps(obs_names: Sequence[str], act_names: Sequence[str], vol_names: Sequence[str],
-                   rate_hz: float | None = None) -> list[str]:
+                   rate_hz: float | None = None, task: Task = EATING) -> list[str]:
     """What keeps data (or a bundle) with these channels from driving the simulator and its controller,
-    each with how to fix it; [] when nothing does. ``rate_hz``: the data's rate (None: not checked)."""
+    each with how to fix it; [] when nothing does. ``rate_hz``: the data's rate (None: not checked); ``task``:
+    whose shoulder roles the voluntary channels must play (:meth:`sim.task.Task.shoulder_map`)."""
     obs, act, vol = list(obs_names), list(act_names), list(vol_names)
     gaps = []
     knife = [c for c in KNIFE if c not in act]
@@ -94,9 +95,9 @@ def simulator_gaps(obs_names: Sequence[str], act_names: Sequence[str], vol_names
     elif fork and angles and "CHANNEL" not in _flags(FORK_ANGLES, obs):
         gaps[-1] += f" (and --map {_flags(FORK_ANGLES, obs)} its angles [rad, ZYX])"
     try:
-        EATING.shoulder_map(vol)
+        task.shoulder_map(vol)
     except ValueError as exc:
-        gaps.append(f"{exc}: --map {EATING.shoulder_channels[0]}=CHANNEL ... names them")
+        gaps.append(f"{exc}: --map {task.shoulder_channels[0]}=CHANNEL ... names them")
     if rate_hz is not None:
         from sim.scene import SceneConfig  # imports MuJoCo
 
@@ -108,15 +109,15 @@ def simulator_gaps(obs_names: Sequence[str], act_names: Sequence[str], vol_names
 
 
 def simulator_line(obs_names: Sequence[str], act_names: Sequence[str], vol_names: Sequence[str],
-                   rate_hz: float | None = None) -> str:
+                   rate_hz: float | None = None, task: Task = EATING) -> str:
     """Whether these channels can drive the simulator, in one line: ``yes (what plays each role)`` or
-    ``no: why, and how``."""
-    gaps = simulator_gaps(obs_names, act_names, vol_names, rate_hz)
+    ``no: why, and how`` (the shoulder roles ``task``'s)."""
+    gaps = simulator_gaps(obs_names, act_names, vol_names, rate_hz, task)
     if gaps:
         return "no: " + "; ".join(gaps)
-    m, channels = EATING.shoulder_map(vol_names), EATING.shoulder_channels
+    m, channels = task.shoulder_map(vol_names), task.shoulder_channels
     roles = {j: r for j in range(m.n_channels) for r in range(len(channels))
-             if np.array_equal(m.matrix[:, j], EATING.shoulder_to_plate[:, r])}
+             if np.array_equal(m.matrix[:, j], task.shoulder_to_plate[:, r])}
     used = [n if n == channels[roles[j]] else f"{n} as {channels[roles[j]]}"
             for j, n in enumerate(vol_names) if j in roles]
     shoulder = f"shoulder {', '.join(used)}" if vol_names else "no shoulder channels (a simulated 3-angle shoulder)"
@@ -127,10 +128,12 @@ def simulator_line(obs_names: Sequence[str], act_names: Sequence[str], vol_names
 def bundle_wearer(bundle: Any, wearer: Any) -> Any:
     """The wearer commanding through the bundle's shoulder channels: a :class:`WearerConfig` ``wearer``
     (None: ``WearerConfig()``) with its shoulder map's gain and dead zone on the bundle's ``vol_names``
-    (:meth:`sim.task.eating.Eating.shoulder_map`, the controller's map); ``wearer`` itself for the
-    three angles or a wearer of another kind. Raises ValueError for channels no map reads."""
+    (the map of the task the bundle was trained for, :func:`sim.task.recorded_task`: the controller's map);
+    ``wearer`` itself where that is its map or for a wearer of another kind. Raises ValueError for channels no map
+    reads or a task that cannot be found."""
     wc = WearerConfig() if wearer is None else wearer
     if not isinstance(wc, WearerConfig):
         return wearer
-    m = EATING.shoulder_map(getattr(bundle, "vol_names", ()) or (), wc.shoulder.gain, wc.shoulder.deadband_rad)
+    task = recorded_task(getattr(bundle, "config", None))
+    m = task.shoulder_map(getattr(bundle, "vol_names", ()) or (), wc.shoulder.gain, wc.shoulder.deadband_rad)
     return wearer if np.array_equal(m.matrix, wc.shoulder.matrix) else replace(wc, shoulder=m)

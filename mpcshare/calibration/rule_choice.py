@@ -33,6 +33,7 @@ from mpcshare.bundle.rule import CalibratedRule
 from mpcshare.calibration.choice_criterion import (
     CRITERION,
     criterion,
+    criterion_words,
     cross_validated,
     mix_note,
     predicted,
@@ -51,7 +52,7 @@ from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_wo
 from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.line_ratio import line_ratio as _line_ratio
 from mpcshare.training.config import RULE_DURATION_S
-from sim.task.eating import STROKE_MODE
+from sim.task import EATING, Task
 from sim.wearer import WearerConfig
 
 __all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "MIXES", "ROBOT_ALPHAS",
@@ -117,17 +118,18 @@ def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
                 seed: int, mode_names: Sequence[str] | None = None,
                 pool: EpisodePool | None = None,
                 seen: dict[int, np.ndarray] | None = None,
-                ran: list[int] | None = None) -> list[tuple[dict[str, float], list[Any]]]:
+                ran: list[int] | None = None, task: Task = EATING) -> list[tuple[dict[str, float], list[Any]]]:
     """:func:`pooled_run` of each (strategy, gate options) in ``specs``, every episode in one batch of
     ``pool`` (default: this process), in the order of ``specs``. With ``seen`` (trial → what its arbitration
     sees, :func:`mpcshare.evaluation.frontend_replay.decisions`) the front end is computed once per process and
     trial and replayed; empty, it is filled; filled, the episodes whose arbitration decides the same on it run
     once (:func:`~mpcshare.evaluation.distinct.map_distinct`). The figures are the same either way.
-    ``ran``: the number of episodes simulated is appended to it."""
+    ``ran``: the number of episodes simulated is appended to it. ``task``: whose figures and criterion."""
     jobs = [EpisodeJob(int(tid), StrategyRun(strategy, strategy),
                        {"config": ControllerConfig(strategy_settings=dict(options))} if options else {})
             for strategy, options in specs for tid in trials]
-    settings = {"beta": 0.5, "duration_s": duration_s, "seed": seed, "wearer": wearer, "mode_names": mode_names}
+    settings = {"beta": 0.5, "duration_s": duration_s, "seed": seed, "wearer": wearer, "mode_names": mode_names,
+                "task": task}
     pool = pool or EpisodePool(demos)
     n_run = len(jobs)
     if seen is None:
@@ -143,19 +145,20 @@ def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
     if ran is not None:
         ran.append(n_run)
     n = len(trials)
-    return [_pooled(done[i * n:(i + 1) * n]) for i in range(len(specs))]
+    return [_pooled(done[i * n:(i + 1) * n], task) for i in range(len(specs))]
 
 
 def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
                duration_s: float | None, wearer: WearerConfig | None, seed: int,
                mode_names: Sequence[str] | None = None,
-               pool: EpisodePool | None = None) -> tuple[dict[str, float], list[Any]]:
+               pool: EpisodePool | None = None, task: Task = EATING) -> tuple[dict[str, float], list[Any]]:
     """Pooled figures of ``strategy`` on ``trials`` (RMS, effort, limit violations, mean stroke correlation
     while cutting or None) and the episodes."""
-    return pooled_runs(bundle, demos, trials, [(strategy, options)], duration_s, wearer, seed, mode_names, pool)[0]
+    return pooled_runs(bundle, demos, trials, [(strategy, options)], duration_s, wearer, seed, mode_names, pool,
+                       task=task)[0]
 
 
-def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float], list[Any]]:
+def _pooled(done: Sequence[tuple[Any, dict[str, Any]]], task: Task = EATING) -> tuple[dict[str, float], list[Any]]:
     """The figures of :func:`pooled_run` from (episode, metrics) per trial, and the episodes."""
     ms = [m for _, m in done]
     episodes = [ep for ep, _ in done]
@@ -166,7 +169,9 @@ def _pooled(done: Sequence[tuple[Any, dict[str, Any]]]) -> tuple[dict[str, float
     for key in ("saw_correlation", "saw_amplitude_ratio"):
         vals = [m[key] for m in ms if m.get(key) is not None]
         out[key] = float(np.mean(vals)) if vals else None
-    out["saws_by_trial"] = [None if m.get("saw_correlation") is None else saws(m) for m in ms]
+    # per trial: whether it meets the task's criterion; None for a trial without the stroke mode
+    out["saws_by_trial"] = [None if task.stroke_mode is not None and m.get("saw_correlation") is None
+                            else saws(m, task) for m in ms]
     out["by_trial"] = [{"tracking_rmse_m": float(m["tracking_rmse_m"]),
                         "voluntary_effort": float(m["voluntary_effort"]), "steps": int(len(s))}
                        for m, s in zip(ms, steps)]
@@ -183,15 +188,16 @@ def _n_modes(bundle: Any) -> int:
 
 
 def _cutting(bundle_episodes: list[Any], demos: Demonstrations, trials: Sequence[int],
-             mode_names: Sequence[str] | None, n_modes: int) -> list[int]:
-    """The controller's modes that carry the labelled cutting (none without labels or a ``cutting`` name)."""
-    if not mode_names or STROKE_MODE not in mode_names:
+             mode_names: Sequence[str] | None, n_modes: int, task: Task = EATING) -> list[int]:
+    """The controller's modes that carry the labelled stroke mode of ``task`` (eating's: cutting; none without
+    labels or that name)."""
+    if not mode_names or task.stroke_mode not in mode_names:
         return []
     by_id = {tr.trial_id: tr for tr in demos.trials}
     labels = [by_id[int(t)].mode for t in trials]
     if any(lab is None for lab in labels):
         return []
-    return cutting_modes(bundle_episodes, labels, list(mode_names).index(STROKE_MODE), n_modes)
+    return cutting_modes(bundle_episodes, labels, list(mode_names).index(task.stroke_mode), n_modes)
 
 
 def _check_variants(timings: Sequence[str], robot_alphas: Sequence[float]) -> None:
@@ -219,10 +225,10 @@ def _mix_rows(names: Sequence[str], figures: Sequence[dict[str, Any]], vol: dict
 
 
 def _task_note(task_effort: float | None, cutting: Sequence[int], best: dict[str, Any], vol: dict[str, Any],
-               max_effort: float) -> str:
+               max_effort: float, task: Task = EATING) -> str:
     """"" unless leading the ``cutting`` modes costs more than ``max_effort`` (``task_effort``) and the chosen
     ``best`` does not both saw and stay within it; then the words that say no such rule can."""
-    if task_effort is None or task_effort <= max_effort or (saws_where_the_wearer_saws(best, vol) and
+    if task_effort is None or task_effort <= max_effort or (saws_where_the_wearer_saws(best, vol, task) and
                                                              best["effort_vs_voluntary"] <= max_effort):
         return ""
     return (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
@@ -243,11 +249,11 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
                 timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
                 log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
-                prune: bool = True, mixes: Sequence[str] = MIXES) -> dict[str, Any]:
+                prune: bool = True, mixes: Sequence[str] = MIXES, task: Task = EATING) -> dict[str, Any]:
     """Choose the gate's wearer modes in the closed loop (module docstring).
 
-    ``mode_names``: the names of the demonstrations' mode labels (the one named ``cutting`` is the
-    task's stroke; None: no sawing figures); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
+    ``mode_names``: the names of the demonstrations' mode labels (the one named ``task.stroke_mode`` is
+    the task's stroke; None: no sawing figures); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
     wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer
     leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's
     shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
@@ -260,7 +266,7 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
     "episodes_run" (simulated: an episode that decides as another at every step is that episode), "seconds"}``. Raises
-    ValueError when the bundle has no mode model or no trial is given.
+    ValueError when the bundle has no mode model or no trial is given. ``task``: whose figures and criterion.
     """
     if not len(trials):
         raise ValueError("choose_rule needs at least one held-out trial")
@@ -269,16 +275,16 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
 
     seen: dict[int, np.ndarray] = {}  # what each trial's arbitration sees (the first batch); episodes simulated
     ran: list[int] = []
-
     def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
-        return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran)
+        return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran,
+                           task=task)
 
     _check_mixes(mixes)
     (vol, vol_eps), (rea, rea_eps), *mixed = run([("voluntary", None), ("reactive", None), *((m, None) for m in mixes)])
     mix_rows = _mix_rows(mixes, [m for m, _ in mixed], vol, rea)
     costs = mode_costs(vol_eps, rea_eps, n_modes)
     order = price_order(costs)
-    cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes)
+    cutting = _cutting(vol_eps, demos, trials, mode_names, n_modes, task)
     rows: list[dict[str, Any]] = []
     _check_variants(timings, robot_alphas)
 
@@ -304,18 +310,18 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
         log(f"  gate with wearer modes {r['wearer_modes']}: not simulated (the per-mode costs: {r['why']})")
     evaluate(_variants(sets, list(timings), wearer_alphas, robot_alphas[:1]))
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
-              for r in second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP) for a_r in robot_alphas[1:]])
-    best, why = criterion(rows, vol, rea, max_effort)
-    why += mix_note(best, mix_rows, vol, rea, max_effort)
+              for r in second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP, task) for a_r in robot_alphas[1:]])
+    best, why = criterion(rows, vol, rea, max_effort, task)
+    why += mix_note(best, mix_rows, vol, rea, max_effort, task)
     _log_ran(log, sum(ran), len(trials) * (2 + len(mixes) + len(rows)))
     task_effort = cutting_effort(costs, cutting)
-    why += _task_note(task_effort, cutting, best, vol, max_effort)
-    return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why, "criterion": CRITERION,
-            "predicted": predicted(best, vol), "cross_validated": cross_validated(rows, vol, rea, max_effort),
-            "cutting_effort_vs_voluntary": task_effort,
-            "max_effort": max_effort, "candidates": rows, "mixes": mix_rows, "voluntary": vol, "reactive": rea,
-            "mode_costs": costs, "price_order": order, "cutting_modes": cutting, "pruned": pruned,
-            "trials": [int(t) for t in trials], "duration_s": duration_s,
+    why += _task_note(task_effort, cutting, best, vol, max_effort, task)
+    return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why,
+            "criterion": criterion_words(task), "predicted": predicted(best, vol, task),
+            "cross_validated": cross_validated(rows, vol, rea, max_effort, task),
+            "cutting_effort_vs_voluntary": task_effort, "max_effort": max_effort, "candidates": rows,
+            "mixes": mix_rows, "voluntary": vol, "reactive": rea, "mode_costs": costs, "price_order": order,
+            "cutting_modes": cutting, "pruned": pruned, "trials": [int(t) for t in trials], "duration_s": duration_s,
             "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}
 
 
@@ -331,10 +337,10 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
                       duration_s: float | None = RULE_DURATION_S, wearer_name: str | None = None,
                       mode_names: Sequence[str] | None = None,
                       log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
-                      workers: int | None = None) -> dict[str, Any]:
+                      workers: int | None = None, task: Task = EATING) -> dict[str, Any]:
     """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
     1 to 2) with the wearer preset ``wearer_name`` (default the default preset) and the demonstrations'
-    ``mode_names`` (for the cutting modes), recorded as the bundle's rule (``bundle.rule``, a
+    ``mode_names`` (for ``task``'s stroke modes), recorded as the bundle's rule (``bundle.rule``, a
     :class:`~mpcshare.bundle.rule.CalibratedRule` for ``gate``) so that the saved bundle's ``gate`` uses it;
     returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
     :func:`mpcshare.evaluation.episode_pool.default_workers`) closed afterwards; the choice is the same
@@ -345,7 +351,7 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     trials = choice_trials(bundle.heldout_trials, n_trials)
     with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
         choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
-                             mode_names=mode_names, pool=episodes)
+                             mode_names=mode_names, pool=episodes, task=task)
     choice["wearer"] = name
     bundle.rule = CalibratedRule("gate", choice["settings"], choice)
     return choice

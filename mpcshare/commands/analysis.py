@@ -1,4 +1,7 @@
-"""The ``analyze`` subcommand and the analysis options it shares with ``demo``."""
+"""The ``analyze`` subcommand and the analysis options it shares with ``demo``.
+
+``--task NAME`` (:mod:`mpcshare.commands.task_option`) names the data's mode labels in the report.
+"""
 
 from __future__ import annotations
 
@@ -19,6 +22,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.data import DATA_HELP
+from mpcshare.commands.task_option import add_task_argument, chosen_task
 
 __all__ = ["ANALYZE_COMMAND", "add_analysis_arguments", "analysis_config", "run_analysis", "print_headline"]
 
@@ -113,13 +117,14 @@ def print_headline(report: AnalysisReport) -> None:
 def _analyze_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", help=DATA_HELP)
     p.add_argument("--out", required=True, help="output folder for report.json, report.md and plots")
+    add_task_argument(p)
     add_analysis_arguments(p)
 
 
 def _analyze(args: argparse.Namespace) -> int:
     out = prepare_output_folder(args.out)
     demos = load_or_fail(args.data)
-    report = run_analysis(demos, args, out)
+    report = run_analysis(demos, args, out, mode_names=chosen_task(args).mode_names)
     print_headline(report)
     print(f"report: {out / 'report.md'}")
     return 0

@@ -95,7 +95,7 @@ def _generate_args(p: argparse.ArgumentParser) -> None:
 
 def _generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    names: Sequence[str] = EATING.mode_names
+    names: Sequence[str] = EATING.mode_names  # the project's generator makes eating's demonstrations
     if args.world is not None:
         if args.single_regime:
             raise CommandError("--single-regime is a setting of the project's generator, not of a --world")

@@ -43,6 +43,8 @@ from sim.task import EATING
 __all__ = ["DEMO_COMMAND"]
 
 _STAGES = 6
+#: the task of the demonstrations stage 1 generates (sim.demonstrator's), so the demo's task
+_TASK = EATING
 
 
 def _demo_args(p: argparse.ArgumentParser) -> None:
@@ -85,13 +87,13 @@ def _summarise(demos: Demonstrations, out: Path) -> tuple[dict, str]:
     from mpcshare.reports.analysis import plot_demonstrations
 
     summary = demos.summary()
-    summary["mode_names"] = list(EATING.mode_names)
+    summary["mode_names"] = list(_TASK.mode_names)
     write_json(summary, out / "data_summary.json", non_finite="raise")
-    summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, EATING.mode_names)
+    summary_md = ("# Demonstrations\n\n```\n" + format_summary(demos, _TASK.mode_names)
                   + "\n```\n\n![a trial](data_trial.png)\n")
     with atomic_open(out / "data_summary.md") as f:
         f.write(summary_md)
-    plot_demonstrations(demos, out / "data_trial.png", mode_names=EATING.mode_names)
+    plot_demonstrations(demos, out / "data_trial.png", mode_names=_TASK.mode_names)
     return summary, summary_md
 
 
@@ -115,7 +117,7 @@ def _start_choice(bundle: Any, demos: Demonstrations, wearer_name: str, rule_dur
 
     lines: list[str] = []
     choose = partial(choose_for_bundle, bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,
-                     mode_names=EATING.mode_names, pool=pool)
+                     mode_names=_TASK.mode_names, pool=pool, task=_TASK)
     if pool.workers > 1:
         print(f"choosing the hand-over rule in the closed loop on held-out trials ({pool.workers} workers, "
               "beside the training and the K sweep)", flush=True)
@@ -164,6 +166,7 @@ def _save(bundle: Any, mixture: Any, out: Path) -> tuple[Any, dict | None]:
     from mpcshare.reports.mode_sources import mode_source_comparison, mode_source_sentence
 
     bundle.config["data_path"] = str((out / "demos.npz").resolve())
+    bundle.config["task"] = _TASK.name
     save_bundle(bundle, out / "model")
     bundle = load_bundle(out / "model")
     if mixture is None:
@@ -232,12 +235,12 @@ def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, o
                      seed=args.seed, wearer=wearer)
     clip = render() if pool.workers > 1 and not args.no_video else None
     comp = compare_strategies(bundle, demos, ids, duration_s=args.sim_duration, out=sim_out, seed=args.seed,
-                              mode_names=EATING.mode_names, wearer=wearer, pool=pool)
+                              mode_names=_TASK.mode_names, wearer=wearer, pool=pool, task=_TASK)
     if not args.no_video:
         video, message = (clip or render()).result()
         comp.video = None if video is None else str(Path(video).relative_to(sim_out))
         print(f"video: {video}" if video else f"no video: {message}")
-    return write_comparison(comp, sim_out, cutting=cutting_steps(demos, ids[0]))
+    return write_comparison(comp, sim_out, cutting=cutting_steps(demos, ids[0], _TASK), task=_TASK)
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -264,7 +267,7 @@ def _demo(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     _stage(3, "predictability analysis")
-    analysis = run_analysis(demos, args, prepare_output_folder(out / "analysis"), mode_names=EATING.mode_names)
+    analysis = run_analysis(demos, args, prepare_output_folder(out / "analysis"), mode_names=_TASK.mode_names)
     print_headline(analysis)
     lap("analysis", t0)
 
@@ -299,7 +302,7 @@ def _demo(args: argparse.Namespace) -> int:
                                            "rule_choice": bundle.rule.choice}
     missing = write_demo_report(out, data_summary_md=summary_md, analysis=analysis.to_dict(),
                                 training={**bundle.metrics, **rule}, comparison=comparison, timings_s=timings,
-                                data_summary=summary, sweep=sweep, mode_sources=mode_sources)
+                                data_summary=summary, sweep=sweep, mode_sources=mode_sources, task=_TASK)
     if missing:
         print(f"report.html: could not embed {missing}")
     from mpcshare.reports.headline import headline_lines, trials_words
@@ -307,7 +310,7 @@ def _demo(args: argparse.Namespace) -> int:
     print("\nWhat the robot did:")
     heads = headline_lines(comparison["strategies"], markdown=False, rule_choice=rule.get("rule_choice"),
                            trials=trials_words(comparison["trials"], comparison["duration_s"]),
-                           rule_check=comparison.get("rule_check"))
+                           rule_check=comparison.get("rule_check"), task=_TASK)
     for line in heads or ["the closed loop was not run"]:
         print(f"  {line}")
     print(f"done in {timings['total']:.0f} s; the figures behind these lines: {out / 'report.html'} (or report.md)")

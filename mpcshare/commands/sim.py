@@ -13,6 +13,8 @@ for Foxglove) and, with ``--video``, a video of the gate on the first trial. ``-
 (or ``FILE --tip-frame NAME --mount X Y Z``) simulates another arm (:mod:`mpcshare.commands.robot_options`).
 ``--map NAME=CHANNEL`` renames the data's channels (:mod:`mpcshare.channel_map`; on top of the map the
 bundle was trained with); data or a bundle that cannot drive the simulator is one line, exit status 1.
+``--task NAME`` (:mod:`mpcshare.commands.task_option`): the task the bundle was trained for, by default; another
+is refused in one line.
 """
 
 from __future__ import annotations
@@ -35,10 +37,11 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.robot_options import add_robot_arguments, scene_from_args
 from mpcshare.commands.sim_serve import add_serve_arguments, check_serve_arguments, serve_controller
+from mpcshare.commands.task_option import add_task_argument, task_for_bundle
 from mpcshare.conflicts import SCENARIOS
 from mpcshare.control.types import DEFAULT_BETA
 from mpcshare.run_table import RUN_NAMES
-from sim.task import EATING  # the mode labels of the data format (docs/design.md)
+from sim.task import EATING, Task
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
@@ -96,21 +99,23 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mcap-rate", type=positive_float, default=None, metavar="HZ",
                    help="with --mcap: the arm's joint states at about HZ (default: every physics step, 1000 Hz; "
                         "100 makes them about 3x smaller)")
+    add_task_argument(p, default=None, default_words="the task the bundle was trained for")
     add_sim_arguments(p)
     add_robot_arguments(p)
     add_serve_arguments(p)
 
 
-def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str, str] | None = None) -> Demonstrations:
+def align_channels(demos: Demonstrations, bundle: ModelBundle, mapping: dict[str, str] | None = None,
+                   task: Task = EATING) -> Demonstrations:
     """The data's trials renamed by ``mapping`` (NAME → the data's CHANNEL, :mod:`mpcshare.channel_map`) with
     their obs columns in the bundle's order. Raises CommandError in one line where the map does not fit the
-    data, where the bundle or the data cannot drive the simulator (saying which ``--map`` would), or where the
-    data lacks an obs channel of the bundle."""
+    data, where the bundle or the data cannot drive the simulator (saying which ``--map`` would; the shoulder
+    roles ``task``'s), or where the data lacks an obs channel of the bundle."""
     try:
         demos = apply_map(demos, dict(mapping or {}))
     except ValueError as exc:
         raise CommandError(f"--map {exc}") from None
-    gaps = simulator_gaps(bundle.obs_names, bundle.act_names, bundle.vol_names)
+    gaps = simulator_gaps(bundle.obs_names, bundle.act_names, bundle.vol_names, task=task)
     if gaps:
         raise CommandError("the bundle's channels cannot drive the simulator (train it again with the --map "
                            "named here): " + "; ".join(gaps))
@@ -144,16 +149,20 @@ def announce_output_size(runs: list[Any], demos: Demonstrations, trial_ids: list
     print(f"writing {what} into {out / 'runs'} (fewer with {thin})", flush=True)
 
 
-def cutting_steps(demos: Demonstrations, trial_id: int) -> Any:
-    """Where trial ``trial_id``'s demonstration cuts (bool per sample), or None without mode labels."""
+def cutting_steps(demos: Demonstrations, trial_id: int, task: Task = EATING) -> Any:
+    """Where trial ``trial_id``'s demonstration is in ``task``'s stroke mode (eating's: cuts; bool per sample),
+    or None without mode labels or a stroke mode."""
     trial = next(tr for tr in demos.trials if tr.trial_id == trial_id)
-    return None if trial.mode is None else trial.mode == EATING.mode_names.index(EATING.stroke_mode)
+    if trial.mode is None or task.stroke_mode is None:
+        return None
+    return trial.mode == task.mode_names.index(task.stroke_mode)
 
 
 def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: argparse.Namespace,
-                   trial_ids: list[int], make_controller: Any = None) -> dict[str, Any]:
+                   trial_ids: list[int], make_controller: Any = None, task: Task = EATING) -> dict[str, Any]:
     """Simulate the chosen runs on ``trial_ids`` and write the comparison files; returns comparison.json's object.
-    ``make_controller``: the controllers' factory (default: the bundle's ``SharedController``)."""
+    ``make_controller``: the controllers' factory (default: the bundle's ``SharedController``); ``task``: whose
+    mode names, figures and criterion."""
     from mpcshare.conflicts import Scenario
     from mpcshare.control.keepout import KeepOutSettings
     from mpcshare.control.types import ControllerConfig
@@ -187,7 +196,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
         print(f"scenario: {scenario_name or 'none'}; keep-out {guard}")
     announce_output_size(runs, demos, trial_ids, args, out, scene)
     comp = compare_strategies(bundle, demos, trial_ids, runs=runs, duration_s=args.duration, out=out,
-                              seed=args.sim_seed, beta=args.beta, mode_names=EATING.mode_names,
+                              seed=args.sim_seed, beta=args.beta, mode_names=task.mode_names, task=task,
                               mcap=getattr(args, "mcap", False), wearer=wearer, scene=scene,
                               mcap_rate_hz=getattr(args, "mcap_rate", None), scenario=scenario,
                               controller_options=options, make_controller=make_controller)
@@ -202,7 +211,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
                                      seconds=10.0 if args.duration is None else min(10.0, args.duration))
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")
-    return write_comparison(comp, out, cutting=cutting_steps(demos, trial_ids[0]))
+    return write_comparison(comp, out, cutting=cutting_steps(demos, trial_ids[0], task), task=task)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -218,13 +227,14 @@ def _run(args: argparse.Namespace) -> int:
         bundle = load_bundle(args.model)
     except BundleError as exc:
         raise CommandError(str(exc)) from None
+    task = task_for_bundle(args.task, bundle)
     data = args.data or bundle.config.get("data_path")
     if not data:
         raise CommandError("the bundle does not record its training data; pass --data")
     if args.data is None and not Path(data).exists():
         raise CommandError(f"the bundle's training data {data} is gone; pass --data")
     demos = load_or_fail(str(data))
-    demos = align_channels(demos, bundle, bundle_map(bundle.config.get("channel_map"), demos, given))
+    demos = align_channels(demos, bundle, bundle_map(bundle.config.get("channel_map"), demos, given), task)
     ids = set(demos.trial_ids)
     # the bundle's held-out trials; other data (--data) without them: all of its trials
     trial_ids = [t for t in bundle.heldout_trials if t in ids]
@@ -238,7 +248,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.serve:
         make, remote, args.runs = serve_controller(args, bundle)
     try:
-        obj = run_comparison(bundle, demos, out, args, trial_ids, make)
+        obj = run_comparison(bundle, demos, out, args, trial_ids, make, task)
     finally:
         if remote is not None:
             remote.close()
@@ -251,8 +261,9 @@ def _run(args: argparse.Namespace) -> int:
     rule = getattr(bundle, "rule", None)
     choice = None if rule is None else rule.choice
     heads = headline_lines(obj["strategies"], markdown=False, rule_choice=choice,
-                           trials=trials_words(obj["trials"], obj["duration_s"]), rule_check=obj.get("rule_check"))
-    for line in heads + comparison_findings(obj["strategies"]):
+                           trials=trials_words(obj["trials"], obj["duration_s"]), rule_check=obj.get("rule_check"),
+                           task=task)
+    for line in heads + comparison_findings(obj["strategies"], task):
         print(line)
     print(f"done in {time.perf_counter() - t0:.0f} s; open {out / 'comparison.md'}")
     return 0

@@ -5,10 +5,11 @@
 - ``mpcshare train DATA --sweep --out DIR`` writes ``sweep.json``, ``sweep.md`` and
   ``sweep.png`` (:mod:`mpcshare.training.sweep`, :mod:`mpcshare.reports.sweep`).
 
-``--map NAME=CHANNEL`` renames the data's channels first (:mod:`mpcshare.channel_map`: the knife tip,
-the fork, the shoulder), recorded in the bundle for ``mpcshare sim``. Data that cannot drive the
-simulator still gives a bundle: the closed-loop choice of the hand-over rule is skipped, in one line
-saying why and which ``--map`` enables it.
+``--task NAME`` (:mod:`mpcshare.commands.task_option`): the task the bundle is trained for, recorded in it
+(``config["task"]``); the closed-loop choice judges by its criterion. ``--map NAME=CHANNEL`` renames the data's
+channels first (:mod:`mpcshare.channel_map`: the knife tip, the fork, the shoulder), recorded in the bundle for
+``mpcshare sim``. Data that cannot drive the simulator still gives a bundle: the closed-loop choice of the
+hand-over rule is skipped, in one line saying why and which ``--map`` enables it.
 
 Unusable data (too few or too short trials, no act channels, a rate that cannot be
 downsampled to the model rate) gives one message and exit status 1; bad option values
@@ -33,6 +34,7 @@ from mpcshare.commands.base import (
     prepare_output_folder,
 )
 from mpcshare.commands.data import DATA_HELP
+from mpcshare.commands.task_option import add_task_argument, chosen_task
 from mpcshare.training.config import DEFAULT_PERCENTILES, MODES_FROM, RULE_DURATION_S, TrainConfig
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
@@ -55,6 +57,7 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--map", nargs="+", default=(), metavar="NAME=CHANNEL",
                    help="use the data's CHANNEL as the channel NAME, e.g. knife_x=u4 (roles: docs/design.md, "
                         "'Data format'); recorded in the bundle for `mpcshare sim`")
+    add_task_argument(p)
     p.add_argument("--percentile", type=percentile, default=d.percentile,
                    help=f"K = this percentile of the within-mode quotients (default {d.percentile:g})")
     p.add_argument("--sweep", action="store_true",
@@ -161,6 +164,7 @@ def _run(args: argparse.Namespace) -> int:
         bundle = train_bundle(demos, config, progress=not args.quiet)  # stage 1: training (no simulator)
         bundle.config["data_path"] = str(Path(args.data).resolve())  # `mpcshare sim`'s default --data
         bundle.config["channel_map"] = mapping  # applied again by `mpcshare sim`
+        bundle.config["task"] = args.task  # `mpcshare sim`'s task
     except TrainingError as exc:
         raise CommandError(f"cannot train on {args.data}: {exc}") from None
     choice, skipped = _calibrate(bundle, demos, args)  # stage 2: calibration, in the closed loop
@@ -190,18 +194,18 @@ def _calibrate(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, st
     Skipped with ``--no-rule-choice`` (no reason given) and where the data cannot drive the simulator."""
     if args.no_rule_choice:
         return None, None
+    task = chosen_task(args)
     gaps = simulator_gaps(demos.obs_names, demos.act_names, demos.vol_names if demos.has_voluntary else (),
-                          demos.rate_hz)
+                          demos.rate_hz, task)
     if gaps:
         why = ("closed-loop choice was skipped (the gate keeps its default settings): the data cannot drive the "
                "simulator: " + "; ".join(gaps))
         bundle.metrics["rule_choice_skipped"] = why
         return None, why
     from mpcshare.calibration.rule_choice import choose_for_bundle
-    from sim.task import EATING  # the mode labels of the data format (docs/design.md)
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
-                             wearer_name=args.rule_wearer, mode_names=EATING.mode_names,
+                             wearer_name=args.rule_wearer, mode_names=task.mode_names, task=task,
                              log=None if args.quiet else print), None
 
 

@@ -21,9 +21,9 @@ from mpcshare.commands import base
 from mpcshare.commands.base import Command, CommandError, load_or_fail, prepare_output_folder
 from mpcshare.commands.data import DATA_HELP
 from mpcshare.commands.sim import add_wearer_argument
+from mpcshare.commands.task_option import add_task_argument, chosen_task
 from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, default_workers
 from mpcshare.run_table import RANDOM_DRAWS, TUNABLE
-from sim.task import EATING
 
 __all__ = ["TUNE_COMMAND"]
 
@@ -73,6 +73,7 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("data", help=DATA_HELP)
     p.add_argument("--out", required=True, help="folder for tune.json, tune.md, pareto.png, the bundles and episodes")
+    add_task_argument(p)
     p.add_argument("--percentiles", type=_percentile, nargs="+", default=list(DEFAULT_PERCENTILES),
                    help="K = these percentiles of the within-mode quotients, one bundle each (default "
                         f"{' '.join(f'{v:g}' for v in DEFAULT_PERCENTILES)})")
@@ -138,8 +139,8 @@ def _run(args: argparse.Namespace) -> int:
                        betas=sorted(set(args.betas)), strategies=list(dict.fromkeys(args.strategies)),
                        n_trials=n_trials, seeds=seeds, duration_s=args.duration, wearer=args.wearer,
                        config=config, backend=args.backend, workers=args.workers,
-                       address=args.address, progress=not args.quiet, mode_names=EATING.mode_names, draws=args.draws,
-                       oracle=args.oracle_preview)
+                       address=args.address, progress=not args.quiet, mode_names=chosen_task(args).mode_names,
+                       draws=args.draws, oracle=args.oracle_preview, task=args.task)
     except RayMissing as exc:
         return _usage_error(str(exc))
     except ValueError as exc:

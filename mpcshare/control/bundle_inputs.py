@@ -17,7 +17,7 @@ from learning.preprocessing.resample import decimation_factor
 from mpcshare.control.strategies.base import ModeFigures
 from mpcshare.errors import ControllerSetupError
 from robot.shoulder import ShoulderMap
-from sim.task import EATING
+from sim.task import recorded_task
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -105,8 +105,9 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
 
 def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> ShoulderMap:
     """The shoulder map of the bundle's voluntary channels (``vol_names``): ``shoulder`` when given (its
-    channels must match), else the task's map of the names (:meth:`sim.task.eating.Eating.shoulder_map`;
-    none: the three angles). Raises ControllerSetupError naming the channels."""
+    channels must match), else the map of the names of the task the bundle was trained for
+    (:func:`sim.task.recorded_task`, :meth:`sim.task.Task.shoulder_map`; none: the task's angles). Raises
+    ControllerSetupError naming the channels, or the task that cannot be found."""
     vol = [str(n) for n in (getattr(bundle, "vol_names", ()) or ())]
     if shoulder is not None:
         if vol and shoulder.n_channels != len(vol):
@@ -114,7 +115,11 @@ def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> Sh
                                        f"vol_names {vol} are {len(vol)}")
         return shoulder
     try:
-        return EATING.shoulder_map(vol)
+        task = recorded_task(getattr(bundle, "config", None))
+    except ValueError as exc:
+        raise ControllerSetupError(f"the bundle's task: {exc}") from None
+    try:
+        return task.shoulder_map(vol)
     except ValueError as exc:
         raise ControllerSetupError(f"the bundle's vol_names: {exc}") from None
 

@@ -1,14 +1,17 @@
 """Pooling per-episode metrics over the trials of a closed-loop run (:mod:`mpcshare.evaluation`):
-the tracking and effort figures of :func:`sim.metrics.episode_metrics` (:func:`pool_metrics`), the task
-figures of :mod:`sim.task.eating` (:func:`pool_task_metrics`) and the keep-out figures of
+the tracking and effort figures of :func:`sim.metrics.episode_metrics` (:func:`pool_metrics`), a task's
+figures (:func:`pool_task_metrics`, its ``metric_keys``) and the keep-out figures of
 :mod:`sim.keepout_metrics` (:func:`pool_keepout_metrics`)."""
 
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any, Callable, Sequence
 
 import numpy as np
+
+from sim.task import EATING, Task
 
 __all__ = ["pool_keepout_metrics", "pool_metrics", "pool_task_metrics"]
 
@@ -48,18 +51,30 @@ def pool_metrics(metrics: Sequence[dict[str, float]], step_times: Sequence[np.nd
     }
 
 
-def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np.ndarray]) -> dict[str, Any]:
-    """Pool the task figures: lag and RMS at it weighted by steps; the sawing amplitude and correlation
-    weighted by cutting time; strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n);
-    the wearer's pick-ups (:func:`sim.task.metrics.pickup_error`) counted and timed in sum, their RMS
-    √(Σ s·rms² / Σ s) over their times s, their share of the squared error weighted by each episode's
-    Σ‖e‖² = n·rms²."""
+def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np.ndarray],
+                      task: Task = EATING) -> dict[str, Any]:
+    """Pool the figures of ``task`` (the keys its ``metric_keys``, in that order): lag and RMS at
+    it weighted by steps; the sawing amplitude and correlation weighted by time in the stroke mode
+    (``cutting_s``); strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n); the wearer's
+    pick-ups (:func:`sim.task.metrics.pickup_error`) counted and timed in sum, their RMS √(Σ s·rms² / Σ s) over
+    their times s, their share of the squared error weighted by each episode's Σ‖e‖² = n·rms²; any other key of
+    the task the step-weighted mean of its numbers (None where no episode has one)."""
     n = np.array([len(s) for s in step_times], dtype=float)
+    known = _pool_known(metrics, n)
+    return {k: known[k] if k in known else _weighted(metrics, k, n) for k in task.metric_keys}
 
+
+def _weighted(metrics: Sequence[dict[str, Any]], key: str, w: np.ndarray) -> float | None:
+    """Σ w·x / Σ w over the episodes whose ``key`` is a finite number with weight > 0; None where none is."""
+    vals = np.array([m[key] if isinstance(m.get(key), numbers.Real) else np.nan for m in metrics], dtype=float)
+    ok = np.isfinite(vals) & (w > 0)
+    return float(np.sum(w[ok] * vals[ok]) / np.sum(w[ok])) if ok.any() else None
+
+
+def _pool_known(metrics: Sequence[dict[str, Any]], n: np.ndarray) -> dict[str, Any]:
+    """The figures of :func:`pool_task_metrics` with a rule of their own."""
     def weighted(key: str, w: np.ndarray) -> float | None:
-        vals = np.array([np.nan if m.get(key) is None else m[key] for m in metrics], dtype=float)
-        ok = np.isfinite(vals) & (w > 0)
-        return float(np.sum(w[ok] * vals[ok]) / np.sum(w[ok])) if ok.any() else None
+        return _weighted(metrics, key, w)
 
     cut = np.array([float(m.get("cutting_s") or 0.0) for m in metrics])
     intended = sum(int(m.get("strokes_intended") or 0) for m in metrics)

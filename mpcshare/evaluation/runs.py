@@ -137,13 +137,13 @@ def compare_strategies(bundle: ModelBundle, demos: Demonstrations, trial_ids: Se
             metrics, steps, seconds = metrics + trial_metrics, steps + trial_steps, seconds + trial_seconds
             m = trial_metrics[0] if len(trial_metrics) == 1 else \
                 {**pool_metrics(trial_metrics, trial_steps, trial_seconds),
-                 **pool_task_metrics(trial_metrics, trial_steps), **pool_keepout_metrics(trial_metrics)}
+                 **pool_task_metrics(trial_metrics, trial_steps, task), **pool_keepout_metrics(trial_metrics)}
             per_trial[run.name][str(tid)] = {k: m.get(k) for k in METRIC_KEYS + task.metric_keys + KEEPOUT_KEYS}
             if log is not None:
                 log(f"  {run.name:12s} trial {tid}: tracking RMS {m['tracking_rmse_m'] * 1e3:.1f} mm, "
                     f"effort {m['voluntary_effort']:.3f}, reactive {m['reactive_share']:.0%}, "
                     f"violations {m['limit_violations']} ({wall:.0f} s)")
-        pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps),
+        pooled[run.name] = {**pool_metrics(metrics, steps, seconds), **pool_task_metrics(metrics, steps, task),
                             **pool_keepout_metrics(metrics)}
     add_line_ratios(pooled)
     for tid in (str(t) for t in tids):

@@ -19,7 +19,7 @@ from mpcshare.control.strategies import by_role
 from mpcshare.evaluation import Comparison
 from mpcshare.reports.headline import headline_lines, lag_words, trials_words
 from mpcshare.reports.style import strategy_colour, strategy_ticks
-from sim.task.eating import SAWING_CRITERION, saws
+from sim.task import EATING, Task
 
 __all__ = ["comparison_findings", "comparison_markdown", "line_sentence", "plot_effort_error",
            "write_comparison"]
@@ -35,7 +35,7 @@ _COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
             ("step_p50_ms", "step p50 [ms]", 1.0, "{:.2f}"),
             ("step_p99_ms", "step p99 [ms]", 1.0, "{:.2f}"),
             ("realtime_factor", "× real time", 1.0, "{:.1f}"))
-#: the task's figures (sim.task.eating): on time, and sawing while cutting
+#: the task's figures (sim.task.Task.metric_keys; eating's: on time, and sawing while cutting)
 _TASK_COLUMNS = (("tracking_rmse_m", "tracking RMS [mm]", 1e3, "{:.1f}"),
                  ("line_ratio", "line ratio", 1.0, "{:.2f}"),
                  ("lag_s", "lag [ms]", 1e3, "{:.0f}"),
@@ -58,7 +58,7 @@ def _ratio(a: float, b: float) -> float:
     return float(a / b) if b > 0 else float("inf")
 
 
-def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
+def comparison_findings(strategies: dict[str, dict[str, float]], task: Task = EATING) -> list[str]:
     """Sentences comparing the gate with the baselines (only for the runs present)."""
     s = strategies
     out: list[str] = []
@@ -101,8 +101,8 @@ def comparison_findings(strategies: dict[str, dict[str, float]]) -> list[str]:
                    f"wearer or the robot alone included; uses the future) tracks at "
                    f"{s['oracle_handover']['tracking_rmse_m'] * 1e3:.1f} mm RMS with the robot leading "
                    f"{s['oracle_handover']['reactive_share']:.0%} of the time.")
-    if "gate" in s and s["gate"].get("saw_amplitude_ratio") is not None:
-        out.append(task_sentence("gate", s["gate"]))
+    if "gate" in s and (task.stroke_mode is None or s["gate"].get("saw_amplitude_ratio") is not None):
+        out.append(task_sentence("gate", s["gate"], task))
     bad = [k for k, m in s.items() if m["limit_violations"]]
     out.append("Limits: no violation at the physics rate in any run." if not bad else
                f"Limits: VIOLATED at the physics rate in {', '.join(bad)}.")
@@ -127,18 +127,22 @@ def line_sentence(strategies: dict[str, dict[str, Any]]) -> str | None:
                "NONE is below the straight line between the wearer and the robot.") + alone)
 
 
-def task_sentence(name: str, m: dict[str, Any]) -> str:
-    """Did the knife do the task under ``name``: its lag, and whether it sawed while cutting."""
+def task_sentence(name: str, m: dict[str, Any], task: Task = EATING) -> str:
+    """Did the knife do ``task`` under ``name``: its lag, and whether it met the task's criterion (eating's:
+    whether it sawed while cutting)."""
     amp, corr = m.get("saw_amplitude_ratio"), m.get("saw_correlation")
     lag = m.get("lag_s")
     lag_text = "" if lag is None else f"the knife's timing against the wearer's intent: {lag_words(lag)}; "
+    if task.stroke_mode is None:
+        return (f"Task under `{name}`: {lag_text}the task's criterion ({task.criterion}) is "
+                f"{'met' if task.done(m) else 'NOT met'}.")
     if amp is None or corr is None:
-        return f"Task under `{name}`: {lag_text}no cutting in these trials."
+        return f"Task under `{name}`: {lag_text}no {task.stroke_mode} in these trials."
     share = m.get("stroke_share")
     strokes = "" if share is None else f", {share:.0%} of the intended strokes executed"
-    return (f"Task under `{name}`: {lag_text}while cutting, the stroke's amplitude is {amp:.2f} of the intended "
-            f"and its correlation with it {corr:.2f}{strokes}: the knife "
-            f"{'SAWED' if saws(corr, amp) else 'did NOT saw'} (sawing needs {SAWING_CRITERION}).")
+    return (f"Task under `{name}`: {lag_text}while {task.stroke_mode}, the stroke's amplitude is {amp:.2f} of the "
+            f"intended and its correlation with it {corr:.2f}{strokes}: the knife "
+            f"{'SAWED' if task.done(m) else 'did NOT saw'} (sawing needs {task.criterion}).")
 
 
 def _table(strategies: dict[str, dict[str, Any]], columns: tuple) -> list[str]:
@@ -150,6 +154,22 @@ def _table(strategies: dict[str, dict[str, Any]], columns: tuple) -> list[str]:
                  for key, _, scale, fmt in columns]
         rows.append(f"| {name} | " + " | ".join(cells) + " |")
     return [head, rule, *rows]
+
+
+def _task_table(comp: Comparison, task: Task) -> list[str]:
+    """The task's figures of :data:`_TASK_COLUMNS` that ``task`` has (its ``metric_keys``), with
+    the words of its stroke band; [] without a lag."""
+    if not any(m.get("lag_s") is not None for m in comp.strategies.values()):
+        return []
+    columns = tuple(c for c in _TASK_COLUMNS if c[0] in ("tracking_rmse_m", "line_ratio") or c[0] in task.metric_keys)
+    if task.stroke_mode is None or task.stroke_band_hz is None:
+        words = f"The task ({task.name}; done when {task.criterion}): its figures:"
+    else:
+        low, high = task.stroke_band_hz
+        words = ("The task: the knife's lag behind the wearer's intent (the time shift that minimises the RMS) "
+                 f"and, while {task.stroke_mode}, its motion in the stroke band ({low:g}–{high:g} Hz) against the "
+                 "intended stroke:")
+    return [words, "", *_table(comp.strategies, columns), ""]
 
 
 def _who_leads_table(comp: Comparison) -> list[str]:
@@ -171,23 +191,20 @@ def _who_leads_table(comp: Comparison) -> list[str]:
 
 
 def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.png",
-                        trial_plot: str | None = None, effort_plot: str | None = None) -> str:
-    """The Markdown section: the four headline answers, the effort–error plot, then the tables,
-    findings and plots."""
+                        trial_plot: str | None = None, effort_plot: str | None = None, task: Task = EATING) -> str:
+    """The Markdown section: the four headline answers (``task``'s criterion the first), the effort–error plot,
+    then the tables, findings and plots."""
     span = "whole trials" if comp.duration_s is None else f"the first {comp.duration_s:g} s of each"
     who = (comp.wearer or {}).get("preset") or ("custom settings" if comp.wearer else None)
     wearer = f" Simulated wearer: {who}." if who else ""
     lines = [*[f"- {h}" for h in headline_lines(comp.strategies, trials=trials_words(comp.trials, comp.duration_s),
-                                                 rule_check=comp.rule_check)], ""]
+                                                 rule_check=comp.rule_check, task=task)], ""]
     if effort_plot:
         lines += [f"![effort against error, with the line from the wearer alone to the robot alone]({effort_plot})",
                   ""]
     lines += ["### The figures", "", f"Held-out trials {comp.trials}, {span}; pooled over trials.{wearer}", "",
               *_table(comp.strategies, _COLUMNS), ""]
-    if any(m.get("lag_s") is not None for m in comp.strategies.values()):
-        lines += ["The task: the knife's lag behind the wearer's intent (the time shift that minimises the RMS) "
-                  "and, while cutting, its motion in the stroke band (0.8–3 Hz) against the intended stroke:", "",
-                  *_table(comp.strategies, _TASK_COLUMNS), ""]
+    lines += _task_table(comp, task)
     if any(m.get("keepout_min_clearance_m") is not None for m in comp.strategies.values()):
         what = f"scenario `{comp.scenario}`" if comp.scenario else "normal runs"
         guard = "on" if comp.keepout else "OFF"
@@ -195,7 +212,7 @@ def comparison_markdown(comp: Comparison, plot_name: str | None = "comparison.pn
                   "wearer's hand, forearm, head and torso (the body parts, without the controller's margin):", "",
                   *_table(comp.strategies, _KEEPOUT_COLUMNS), ""]
     lines += _who_leads_table(comp)
-    lines += [*[f"- {s}" for s in comparison_findings(comp.strategies)], ""]
+    lines += [*[f"- {s}" for s in comparison_findings(comp.strategies, task)], ""]
     if plot_name:
         lines += [f"![strategies]({plot_name})", ""]
     if trial_plot:
@@ -254,11 +271,12 @@ def plot_effort_error(strategies: dict[str, dict[str, Any]], path: str | Path) -
     return path
 
 
-def write_comparison(comp: Comparison, out: str | Path, cutting: np.ndarray | None = None) -> dict[str, Any]:
+def write_comparison(comp: Comparison, out: str | Path, cutting: np.ndarray | None = None,
+                     task: Task = EATING) -> dict[str, Any]:
     """Write comparison.json, comparison.md and comparison.png into ``out``; returns the JSON object.
 
-    ``cutting``: bool per sample of the first trial, where the demonstration cuts (the trial
-    plot's sawing close-up is taken there)."""
+    ``cutting``: bool per sample of the first trial, where the demonstration is in ``task``'s stroke mode (the
+    trial plot's close-up of the strokes is taken there); ``task``: whose criterion and figures the text states."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     obj = comp.to_dict()
@@ -274,8 +292,9 @@ def write_comparison(comp: Comparison, out: str | Path, cutting: np.ndarray | No
         episode = Episode.load(out / comp.run_files[shown][0])
         trial_plot = "trial.png"
         plot_episode(episode, out / trial_plot, title=f"{shown}, trial {comp.trials[0]}",
-                     cutting=None if cutting is None else np.asarray(cutting)[:len(episode.t)])
+                     cutting=None if cutting is None else np.asarray(cutting)[:len(episode.t)],
+                     band=task.stroke_band_hz)
     with atomic_open(out / "comparison.md", "w") as f:
         f.write("# Closed-loop comparison of strategies\n\n"
-                + comparison_markdown(comp, trial_plot=trial_plot, effort_plot="effort_error.png"))
+                + comparison_markdown(comp, trial_plot=trial_plot, effort_plot="effort_error.png", task=task))
     return obj

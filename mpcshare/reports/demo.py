@@ -22,6 +22,7 @@ from mpcshare.reports.headline import headline_lines, trials_words
 from mpcshare.reports.html import write_html_report
 from mpcshare.reports.mode_sources import mode_source_sentence
 from mpcshare.reports.training import skill_lines
+from sim.task import EATING, Task
 
 __all__ = ["demo_headline", "demo_summary", "write_demo_report"]
 
@@ -47,9 +48,10 @@ def _section(md: str, folder: str, drop_title: bool = True) -> str:
 
 
 def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison: dict[str, Any] | None,
-                 mode_sources: dict[str, Any] | None = None) -> list[str]:
+                 mode_sources: dict[str, Any] | None = None, task: Task = EATING) -> list[str]:
     """The bullet points at the top of the report, in words (``mode_sources``: the HMM against the
-    mixture for the controller, :func:`mpcshare.reports.mode_sources.mode_source_comparison`)."""
+    mixture for the controller, :func:`mpcshare.reports.mode_sources.mode_source_comparison`; ``task``: whose
+    criterion the findings state)."""
     out: list[str] = []
     q = analysis["quotients"]
     seg = analysis["segmentation_test"]
@@ -92,17 +94,18 @@ def demo_summary(analysis: dict[str, Any], training: dict[str, Any], comparison:
             out.append(f"In the closed loop (MuJoCo, {len(comparison['trials'])} held-out trial(s)) the gate let the "
                        f"robot act {_pct(gs['reactive_share'])} of the time with {gs['handovers']} hand-over(s); the "
                        f"knife tip followed the wearer's intent at {_num(gs['tracking_rmse_m'] * 1e3)} mm RMS.")
-        out += comparison_findings(s)
+        out += comparison_findings(s, task)
     return out
 
 
-def demo_headline(comparison: dict[str, Any] | None, out: Path, rule_choice: dict[str, Any] | None = None) -> list[str]:
+def demo_headline(comparison: dict[str, Any] | None, out: Path, rule_choice: dict[str, Any] | None = None,
+                  task: Task = EATING) -> list[str]:
     """The report's first lines: the four answers (:mod:`mpcshare.reports.headline`; ``rule_choice``: the
     bundle's closed-loop choice of its hand-over rule, for the task line), then the effort–error plot."""
     lines = ["## What the robot did", ""]
     answers = headline_lines(comparison["strategies"], rule_choice=rule_choice,
                              trials=trials_words(comparison["trials"], comparison.get("duration_s")),
-                             rule_check=comparison.get("rule_check")) \
+                             rule_check=comparison.get("rule_check"), task=task) \
         if comparison else []
     if not answers:
         return lines + ["The closed loop was not run, so there is nothing to say yet about the task, sharing, "
@@ -123,12 +126,14 @@ def _effort_unit(units: str) -> tuple[str, str]:
 def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[str, Any], training: dict[str, Any],
                       comparison: dict[str, Any] | None, timings_s: dict[str, float],
                       data_summary: dict[str, Any] | None = None, sweep: dict[str, Any] | None = None,
-                      mode_sources: dict[str, Any] | None = None) -> list[str]:
-    """Write ``report.md``, ``report.html`` and ``report.json`` into ``out``; returns links not inlined in the HTML."""
+                      mode_sources: dict[str, Any] | None = None, task: Task = EATING) -> list[str]:
+    """Write ``report.md``, ``report.html`` and ``report.json`` into ``out`` (``task``: whose criterion the
+    answers state); returns links not inlined in the HTML."""
     out = Path(out)
     parts = ["# mpcshare demo: from demonstrations to a shared controller", "",
-             *demo_headline(comparison, out, training.get("rule_choice")),
-             "## Statistics", "", *[f"- {s}" for s in demo_summary(analysis, training, comparison, mode_sources)], "",
+             *demo_headline(comparison, out, training.get("rule_choice"), task),
+             "## Statistics", "",
+             *[f"- {s}" for s in demo_summary(analysis, training, comparison, mode_sources, task)], "",
              "Stages and their own files: `demos.npz` and `data_summary.*` (data), `analysis/` "
              "(predictability analysis), `model/` (the trained bundle), `sweep/` (the K trade-off), "
              "`sim/` (closed-loop runs, `comparison.json`).", "",

@@ -15,6 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from mpcshare.reports.style import legend_outside
+from sim.task.eating import STROKE_BAND_HZ
 
 __all__ = ["plot_episode"]
 
@@ -50,11 +51,13 @@ def _sawing_window(t: np.ndarray, intent_band: np.ndarray, seconds: float = 4.0,
     return slice(best[1], best[1] + n), best[2]
 
 
-def plot_episode(episode: Any, path: str | Path, title: str = "", cutting: np.ndarray | None = None) -> Path:
+def plot_episode(episode: Any, path: str | Path, title: str = "", cutting: np.ndarray | None = None,
+                 band: tuple[float, float] | None = STROKE_BAND_HZ) -> Path:
     """Panels over time: tip x/y/z with intent and reference [m], α and β, shoulder angles [rad];
-    then the sawing close-up (module docstring), taken inside the ``cutting`` steps (bool per
-    control step) when given, so that a repositioning jump is not mistaken for a stroke."""
-    from sim.task.eating import STROKE_BAND_HZ
+    then the sawing close-up (module docstring) in the stroke ``band`` [Hz] (a task's
+    ``stroke_band_hz``; None: no close-up, the task has no strokes), taken inside the
+    ``cutting`` steps (bool per control step) when given, so that a repositioning jump is not mistaken for a
+    stroke."""
     from sim.task.metrics import bandpass
 
     t = np.asarray(episode.t, dtype=float)
@@ -82,18 +85,19 @@ def plot_episode(episode: Any, path: str | Path, title: str = "", cutting: np.nd
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     ok = np.isfinite(episode.tip).all(axis=1) & np.isfinite(episode.tip_intent).all(axis=1)
     found = None
-    if dt > 0 and ok.all() and t.size > 60:
-        tip_b, intent_b = bandpass(episode.tip, dt, STROKE_BAND_HZ), bandpass(episode.tip_intent, dt, STROKE_BAND_HZ)
+    if band is not None and dt > 0 and ok.all() and t.size > 60:
+        tip_b, intent_b = bandpass(episode.tip, dt, band), bandpass(episode.tip_intent, dt, band)
         found = _sawing_window(t, intent_b, allowed=cutting)
     if found is not None:
         window, axis = found
         saw_ax.plot(t[window], 1e3 * intent_b[window, axis], color="0.3", lw=1.2, label="intended stroke")
         saw_ax.plot(t[window], 1e3 * tip_b[window, axis], color="#4C72B0", lw=1.0, label="knife tip")
-        saw_ax.set_ylabel(f"{'xyz'[axis]}, {STROKE_BAND_HZ[0]:g}–{STROKE_BAND_HZ[1]:g} Hz [mm]")
+        saw_ax.set_ylabel(f"{'xyz'[axis]}, {band[0]:g}–{band[1]:g} Hz [mm]")
         saw_ax.set_title("sawing: the stroke band where the intent saws hardest", fontsize=8)
         legend_outside(saw_ax)
     else:
-        saw_ax.text(0.5, 0.5, "too short for the stroke band", ha="center", va="center", transform=saw_ax.transAxes)
+        why = "no strokes in this task" if band is None else "too short for the stroke band"
+        saw_ax.text(0.5, 0.5, why, ha="center", va="center", transform=saw_ax.transAxes)
     saw_ax.set_xlabel("time [s]")
     if title:
         fig.suptitle(title, fontsize=10)

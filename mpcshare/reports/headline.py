@@ -1,8 +1,9 @@
 """The answers a person wants first, one line each with its figure and a word of verdict.
 
-1. **The task** — did the knife saw while cutting (:data:`sim.task.eating.SAWING_CRITERION`)? Where the
-   bundle's rule was chosen in the closed loop (``rule_choice``) and the choice's sawing verdict differs
-   from this one, the line says why (the choice's trials and span against the evaluation's).
+1. **The task** — did the run meet the task's criterion (its ``criterion``, :meth:`sim.task.Task.done`;
+   eating's: did the knife saw while cutting)? Where the bundle's rule was chosen in the closed loop
+   (``rule_choice``) and the choice's verdict differs from this one, the line says why (the choice's trials and
+   span against the evaluation's).
 2. **Sharing** — did the shared strategy track the wearer's intent better than the wearer alone
    (``voluntary``), the robot alone (``reactive``) and mixing the two? Mixing is judged against the constant
    mixtures run (``mix25``, ...): it beats mixing only when none tracks better at equal or lower effort (one
@@ -26,7 +27,7 @@ from typing import Any
 
 from mpcshare.control.strategies import by_role
 from mpcshare.line_ratio import add_line_ratios
-from sim.task.eating import SAWING_CRITERION, saws
+from sim.task import EATING, Task
 
 __all__ = ["MIX_RUNS", "Headline", "better_mixes", "choice_note",
            "headline_lines", "headlines", "lag_words", "line_ratio", "shared_strategy", "trials_words"]
@@ -85,16 +86,23 @@ def lag_words(lag_s: float) -> str:
     return "on time" if ms == 0 else f"{abs(ms)} ms {'late' if ms > 0 else 'ahead'}"
 
 
-def _task(name: str, m: dict[str, Any], rule_choice: dict[str, Any] | None, trials: str) -> Headline:
+def _task(name: str, m: dict[str, Any], rule_choice: dict[str, Any] | None, trials: str, task: Task) -> Headline:
     amp, corr, lag = m.get("saw_amplitude_ratio"), m.get("saw_correlation"), m.get("lag_s")
     lag_text = f" The knife's timing against the wearer's intent: {lag_words(lag)}." if _finite(lag) else ""
+    if task.stroke_mode is None:  # judged by its criterion alone
+        done = bool(task.done(m))
+        note = choice_note(rule_choice, done, trials, task)
+        return Headline("The task", "yes, done" if done else "NO, not done",
+                        f"under `{name}` the task's criterion is {'met' if done else 'NOT met'} ({task.criterion})."
+                        f"{lag_text}" + (f" {note}" if note else ""))
     if not (_finite(amp) and _finite(corr)):
-        return Headline("The task", "not shown", f"no cutting in these trials, so no sawing to judge.{lag_text}")
-    cut = saws(corr, amp)
-    note = choice_note(rule_choice, cut, trials)
+        return Headline("The task", "not shown",
+                        f"no {task.stroke_mode} in these trials, so no sawing to judge.{lag_text}")
+    cut = bool(task.done(m))
+    note = choice_note(rule_choice, cut, trials, task)
     return Headline("The task", "yes, it sawed" if cut else "NO, it did not saw",
                     f"under `{name}` the stroke correlates {corr:.2f} with the intended one at {amp:.2f} of its "
-                    f"amplitude (sawing needs {SAWING_CRITERION}).{lag_text}"
+                    f"amplitude (sawing needs {task.criterion}).{lag_text}"
                     + (f" {note}" if note else ""))
 
 
@@ -104,19 +112,28 @@ def chosen_row(rule_choice: dict[str, Any]) -> dict[str, Any] | None:
                 None)
 
 
-def choice_note(rule_choice: dict[str, Any] | None, sawed: bool, trials: str) -> str:
-    """Why the hand-over rule's choice and this evaluation disagree on sawing ("" when they agree or
-    the choice is not recorded): the choice's figures on its trials and span against ``trials``
-    (the evaluation's, in words)."""
+def choice_note(rule_choice: dict[str, Any] | None, sawed: bool, trials: str, task: Task = EATING) -> str:
+    """Why the hand-over rule's choice and this evaluation disagree on ``task``'s criterion (eating's: sawing;
+    "" when they agree or the choice is not recorded): the choice's figures on its trials and span against
+    ``trials`` (the evaluation's, in words)."""
     if not rule_choice:
         return ""
     row = chosen_row(rule_choice)
-    if row is None or row.get("saw_correlation") is None:
+    if row is None or (task.stroke_mode is not None and row.get("saw_correlation") is None):
         return ""
-    chose_sawing = saws(row.get("saw_correlation"), row.get("saw_amplitude_ratio"))
+    per_trial = row.get("saws_by_trial")  # without strokes: the choice's verdict per trial (its pooled row
+    if task.stroke_mode is None and not per_trial:  # holds none of the task's figures)
+        return ""
+    chose_sawing = bool(task.done(row)) if task.stroke_mode is not None else all(bool(x) for x in per_trial)
     if chose_sawing == sawed:
         return ""
     span = "whole trials" if rule_choice.get("duration_s") is None else f"first {rule_choice['duration_s']:g} s"
+    if task.stroke_mode is None:
+        there = f"on trial(s) {', '.join(str(t) for t in rule_choice.get('trials', []))} ({span})"
+        return (f"Training chose this hand-over rule as one that meets the task's criterion {there}; this "
+                f"evaluation runs {trials}, and there it did not: the same rule, other stretches of the task."
+                if chose_sawing else f"Training chose this hand-over rule although it did not meet the task's "
+                f"criterion {there}; this evaluation runs {trials}, where it did.")
     there = (f"on trial(s) {', '.join(str(t) for t in rule_choice.get('trials', []))} ({span}) its stroke "
              f"correlated {row['saw_correlation']:.2f} at {row['saw_amplitude_ratio']:.2f} of the amplitude")
     return (f"Training chose this hand-over rule as one that saws because {there}; this evaluation runs {trials}, "
@@ -220,16 +237,18 @@ def _keepout(s: dict[str, dict[str, Any]]) -> Headline:
 
 
 def headlines(strategies: dict[str, dict[str, Any]], rule_choice: dict[str, Any] | None = None,
-              trials: str = "its trials", rule_check: dict[str, Any] | None = None) -> list[Headline]:
+              trials: str = "its trials", rule_check: dict[str, Any] | None = None,
+              task: Task = EATING) -> list[Headline]:
     """The answers (module docstring) for the runs present; [] when no shared strategy was run.
 
     ``rule_choice``: the bundle's closed-loop choice of its hand-over rule (``bundle.rule.choice``),
     ``trials``: the evaluation's trials and span in words (both for :func:`choice_note`); ``rule_check``: the
-    comparison's ``rule_check`` (the fifth answer; None: not shown)."""
+    comparison's ``rule_check`` (the fifth answer; None: not shown); ``task``: whose criterion the first answer
+    judges."""
     name = shared_strategy(strategies)
     if name is None:
         return []
-    out = [_task(name, strategies[name], rule_choice, trials), _sharing(name, strategies)]
+    out = [_task(name, strategies[name], rule_choice, trials, task), _sharing(name, strategies)]
     effort = _effort(name, strategies)
     if effort is not None:
         out.append(effort)
@@ -241,9 +260,10 @@ def headlines(strategies: dict[str, dict[str, Any]], rule_choice: dict[str, Any]
 
 def headline_lines(strategies: dict[str, dict[str, Any]], markdown: bool = True,
                    rule_choice: dict[str, Any] | None = None, trials: str = "its trials",
-                   rule_check: dict[str, Any] | None = None) -> list[str]:
+                   rule_check: dict[str, Any] | None = None, task: Task = EATING) -> list[str]:
     """:func:`headlines` as Markdown (bold topic and verdict) or plain text lines."""
-    return [h.markdown() if markdown else h.plain() for h in headlines(strategies, rule_choice, trials, rule_check)]
+    return [h.markdown() if markdown else h.plain()
+            for h in headlines(strategies, rule_choice, trials, rule_check, task)]
 
 
 def _figures(m: dict[str, Any]) -> str:

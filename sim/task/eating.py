@@ -114,6 +114,7 @@ class Eating:
     mode_names = MODE_NAMES
     mode_colours = MODE_COLOURS
     stroke_mode = STROKE_MODE
+    stroke_band_hz = STROKE_BAND_HZ
     criterion = SAWING_CRITERION
     metric_keys = METRIC_KEYS
     body = BODY

@@ -28,6 +28,7 @@ class Task(Protocol):
         mode_names: the data format's mode labels: label k is ``mode_names[k]``.
         mode_colours: mode name → colour (``#RRGGBB``), one in every plot and the video.
         stroke_mode: the mode whose strokes are judged (:meth:`episode_metrics`); None: none.
+        stroke_band_hz: (low, high) [Hz], the band the strokes are judged in; None without a stroke mode.
         criterion: when the task is done right, in words (every report states it so).
         metric_keys: the keys of :meth:`episode_metrics`.
         body: the wearer's body zones: sizes, anchors [m] and speed caps [m/s].
@@ -39,6 +40,7 @@ class Task(Protocol):
     mode_names: tuple[str, ...]
     mode_colours: Mapping[str, str]
     stroke_mode: str | None
+    stroke_band_hz: tuple[float, float] | None
     criterion: str
     metric_keys: tuple[str, ...]
     body: WearerBody

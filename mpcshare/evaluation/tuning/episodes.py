@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass
 from typing import Any, Sequence
 
 from mpcshare.run_table import RANDOM_DRAWS, TUNABLE, strategy_code
+from sim.task import DEFAULT_TASK, task_named
 
 __all__ = ["BASELINES", "SETTING_STRATEGIES", "TIMING_KEYS", "EpisodeTask", "load_inputs", "plan_tasks", "random_tasks",
            "run_task", "task_key"]
@@ -56,6 +57,7 @@ class EpisodeTask:
     matched_to: str | None = None
     schedule: tuple[tuple[str, Any], ...] | None = None  # the matched setting's schedule record (items)
     draw: int = 0  # the placebo's draw
+    task: str = DEFAULT_TASK  # the task's name (sim.task.task_named), whose figures the row holds
 
 
 def task_key(row_or_task: Any) -> str:
@@ -68,11 +70,12 @@ def task_key(row_or_task: Any) -> str:
 def plan_tasks(percentiles: Sequence[float], betas: Sequence[float], strategies: Sequence[str],
                trials: Sequence[int], seeds: Sequence[int], bundles: dict[float, str], data_path: str,
                duration_s: float | None, wearer: str,
-               mode_names: Sequence[str] | None = None, oracle: bool = False) -> list[EpisodeTask]:
-    """Phase 1 of the sweep (module docstring), in a fixed order."""
+               mode_names: Sequence[str] | None = None, oracle: bool = False,
+               task: str = DEFAULT_TASK) -> list[EpisodeTask]:
+    """Phase 1 of the sweep (module docstring), in a fixed order; ``task``: the task's name."""
     first = bundles[percentiles[0]]
     common = dict(data_path=data_path, duration_s=duration_s, wearer=wearer,
-                  mode_names=tuple(mode_names) if mode_names else None)
+                  mode_names=tuple(mode_names) if mode_names else None, task=task)
     tasks = []
     for seed in seeds:
         for trial in trials:
@@ -98,7 +101,8 @@ def random_tasks(setting_rows: Sequence[dict[str, Any]], tasks: Sequence[Episode
         t = by_key[task_key(row)]
         out += [EpisodeTask("random_handover", t.percentile, t.beta, t.trial, t.seed, t.bundle_dir, t.data_path,
                             t.duration_s, t.wearer, t.mode_names, matched_to=t.strategy,
-                            schedule=tuple(sorted(row["schedule"].items())), draw=j) for j in range(draws)]
+                            schedule=tuple(sorted(row["schedule"].items())), draw=j, task=t.task)
+                for j in range(draws)]
     return out
 
 
@@ -149,7 +153,8 @@ def run_task(task: EpisodeTask) -> dict[str, Any]:
         beta = 0.5 if task.beta is None else task.beta
         episode, metrics, _ = simulate_cached(_bundle(task.bundle_dir), demos, trial, run, options, beta=beta,
                                               duration_s=task.duration_s, seed=task.seed,
-                                              wearer=wearer_preset(task.wearer), mode_names=task.mode_names)
+                                              wearer=wearer_preset(task.wearer), mode_names=task.mode_names,
+                                              task=task_named(task.task))
     finally:
         torch.set_num_threads(threads)
     row = {k: v for k, v in asdict(task).items()

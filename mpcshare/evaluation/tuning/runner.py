@@ -34,6 +34,7 @@ from mpcshare.evaluation.tuning.episodes import (
     task_key,
 )
 from mpcshare.run_table import RANDOM_DRAWS
+from sim.task import DEFAULT_TASK
 
 __all__ = ["BACKENDS", "RayMissing", "estimate_line", "open_backend", "run_tune"]
 
@@ -150,9 +151,10 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
              wearer: str, config: Any = None, backend: str = "local", workers: int = 1,
              address: str | None = None, progress: bool = True, mode_names: Sequence[str] | None = None,
              log: Callable[[str], None] | None = print, draws: int = RANDOM_DRAWS,
-             oracle: bool = False) -> dict[str, Any]:
+             oracle: bool = False, task: str = DEFAULT_TASK) -> dict[str, Any]:
     """Run the sweep (module docstring; ``draws`` placebo episodes per setting episode; ``oracle``: with the
-    ``oracle_preview`` upper bound); returns ``{"rows": [...], "trials": [...], "bundles": {...}}``. Before
+    ``oracle_preview`` upper bound; ``task``: the name of the task whose figures the rows hold,
+    :func:`sim.task.task_named`); returns ``{"rows": [...], "trials": [...], "bundles": {...}}``. Before
     the bundles are trained it logs how many episodes it plans, and after a first episode run here and timed,
     about how long the rest will take (:func:`estimate_line`).
 
@@ -167,7 +169,7 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     signature = {"data": str(Path(data_path).resolve()), "percentiles": list(percentiles), "betas": list(betas),
                  "strategies": list(strategies), "trials": n_trials, "seeds": list(seeds),
                  "duration_s": duration_s, "wearer": wearer, "config": config.to_dict(), "draws": draws,
-                 "oracle": oracle}
+                 "oracle": oracle, **({"task": task} if task != DEFAULT_TASK else {})}  # eating's resume as before
     demos = load(data_path)
     _, held = split_by_trial(demos, config.heldout_fraction, seed=config.seed)  # the split training makes
     heldout = [int(t) for t in held.trial_ids]
@@ -178,7 +180,7 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     store = _Store(out, signature)
     paths = {p: str(out / "bundles" / f"p{p:g}") for p in percentiles}
     tasks = plan_tasks(percentiles, betas, strategies, trials, seeds, paths, str(Path(data_path).resolve()),
-                       duration_s, wearer, mode_names, oracle=oracle)
+                       duration_s, wearer, mode_names, oracle=oracle, task=task)
     n_placebo = draws * sum(t.strategy in strategies for t in tasks)  # phase 2: draws per setting episode
     n_total = len(tasks) + n_placebo
     where = f"{workers} local worker(s)" if backend == "local" else "a Ray cluster"

@@ -4,7 +4,17 @@ from __future__ import annotations
 
 import pytest
 
-from mpcshare.calibration.choice_criterion import cross_validated, predicted, saws_where_the_wearer_saws, wearer_saws
+from mpcshare.calibration.choice_criterion import (
+    CRITERION,
+    criterion,
+    criterion_words,
+    cross_validated,
+    predicted,
+    saws_where_the_wearer_saws,
+    wearer_saws,
+)
+from sim.task import EATING
+from tests.sim.task.test_protocol import Pouring
 
 
 def test_a_row_must_saw_in_each_episode_where_the_wearer_alone_saws():
@@ -45,3 +55,21 @@ def test_left_one_trial_out_each_trial_is_scored_by_the_rule_the_other_trial_cho
     assert cv["effort_vs_voluntary"] == pytest.approx(0.5)
     assert cv["line_ratio"] == pytest.approx(0.015 / (0.020 - (0.04 - 0.02) / 0.06 * 0.010))
     assert cross_validated(rows, {**vol, "by_trial": vol["by_trial"][:1]}, rea, 0.75) is None  # one trial
+
+
+def test_the_criterion_is_the_tasks_own():
+    """Under a task judged by its lag (``Pouring``: within 0.2 s), the candidate with the lower line ratio that is
+    late loses to the one on time where the wearer alone is on time; under eating, neither saws: the lower ratio."""
+    vol = {"saws_by_trial": [True], "voluntary_effort": 0.1, "tracking_rmse_m": 0.01, "lag_s": 0.1}
+    rea = {"voluntary_effort": 0.02, "tracking_rmse_m": 0.02}
+    late = {"name": "late", "effort_vs_voluntary": 0.5, "line_ratio": 0.7, "tracking_rmse_m": 0.006,
+            "saws_by_trial": [False], "lag_s": 0.5}
+    on_time = {**late, "name": "on time", "line_ratio": 0.9, "saws_by_trial": [True], "lag_s": 0.05}
+    best, why = criterion([late, on_time], vol, rea, 0.75, Pouring())
+    assert best["name"] == "on time" and why.endswith(
+        "of those that meet the task's criterion in every episode where the wearer alone meets it")
+    no_per_trial = [{k: v for k, v in r.items() if k != "saws_by_trial"} for r in (late, on_time)]
+    assert criterion(no_per_trial, vol, rea, 0.75, Pouring())[0]["name"] == "on time"  # pooled: task.done
+    assert criterion(no_per_trial, vol, rea, 0.75, EATING)[0]["name"] == "late"  # no sawing figures: the ratio
+    assert criterion_words(EATING) == CRITERION and "every cutting episode (trial)" in CRITERION
+    assert "every episode (trial) where the wearer alone meets it" in criterion_words(Pouring())

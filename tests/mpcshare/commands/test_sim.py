@@ -242,3 +242,81 @@ def test_sim_video_renders_headless_or_says_why_once(trained, tmp_path, capsys, 
     said = [line for line in (captured.out + captured.err).splitlines() if "no video" in line]
     assert len(said) == 1 and said[0].startswith("no video: offscreen OpenGL is not available") \
         and "no video: no video" not in said[0] and "MUJOCO_GL" in said[0]
+
+
+#: a task of the user's own, outside the package: eating's four mode labels under other names, no strokes,
+#: judged by its lag alone
+_TIDYING = '''
+import numpy as np
+
+from robot.shoulder import ShoulderMap
+from sim.task import EATING
+from sim.task.metrics import rms_by_mode, time_lag, wearer_share_by_mode
+
+
+class Tidying:
+    name = "tidying"
+    mode_names = ("sweep", "carry", "gather", "drop")
+    mode_colours = {"sweep": "#111111", "carry": "#222222", "gather": "#333333", "drop": "#444444"}
+    stroke_mode = None
+    stroke_band_hz = None
+    criterion = "the tip within 0.2 s of the intent"
+    metric_keys = ("lag_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps")
+    body = EATING.body
+    shoulder_channels = EATING.shoulder_channels
+    shoulder_to_plate = EATING.shoulder_to_plate
+
+    def episode_metrics(self, tip, intent, dt, true_mode, mode_names=None, alpha=None):
+        lag, _ = time_lag(tip, intent, dt)
+        out = {"lag_s": None if not np.isfinite(lag) else lag, "rms_by_mode_m": {}, "wearer_share_by_mode": {},
+               "mode_steps": {}}
+        if true_mode is not None:
+            out["rms_by_mode_m"] = rms_by_mode(tip, intent, true_mode, tuple(mode_names or ()))
+            if alpha is not None:
+                out["wearer_share_by_mode"], out["mode_steps"] = wearer_share_by_mode(alpha, true_mode,
+                                                                                      tuple(mode_names or ()))
+        return out
+
+    def done(self, metrics):
+        return metrics.get("lag_s") is not None and abs(metrics["lag_s"]) <= 0.2
+
+    def shoulder_map(self, names=(), gain=0.5, deadband_rad=0.01):
+        return ShoulderMap.for_channels(names, self.shoulder_channels, self.shoulder_to_plate, gain, deadband_rad)
+
+
+TASK = Tidying()
+'''
+
+
+def test_sim_runs_the_task_the_bundle_was_trained_for_and_refuses_another(trained, tmp_path, monkeypatch, capsys):
+    from mpcshare.bundle import load_bundle, save_bundle
+
+    data, model = trained
+    assert json.loads((model / "bundle.json").read_text())["config"]["task"] == "eating"  # recorded by train
+    (tmp_path / "tidying_for_test.py").write_text(_TIDYING)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = "tidying_for_test:TASK"
+    assert main(["sim", "--model", str(model), "--out", str(tmp_path / "a"), "--task", spec]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == (f"mpcshare sim: --task {spec}: the bundle was trained for task 'eating' (modes cutting, "
+                   f"repositioning, collecting, removing); leave --task out, or train it again with --task {spec}")
+    with pytest.raises(SystemExit) as exc:
+        main(["sim", "--model", str(model), "--out", str(tmp_path / "b"), "--task", "tidying"])
+    assert exc.value.code == 2 and "unknown task 'tidying'; valid choices: eating" in capsys.readouterr().err
+    bundle = load_bundle(model)
+    bundle.config["task"] = spec  # as `mpcshare train --task tidying_for_test:TASK` records it
+    save_bundle(bundle, tmp_path / "tidying_model")
+    out = tmp_path / "tidying"
+    assert main(["sim", "--model", str(tmp_path / "tidying_model"), "--out", str(out), "--trials", "1",
+                 "--duration", "1", "--runs", "voluntary", "gate"]) == 0
+    printed = capsys.readouterr().out
+    comp = json.loads((out / "comparison.json").read_text())
+    gate = comp["strategies"]["gate"]
+    assert "saw_correlation" not in gate and set(gate["wearer_share_by_mode"]) <= {"sweep", "carry", "gather", "drop"}
+    assert gate["wearer_share_by_mode"] and set(gate["rms_by_mode_m"]) == set(gate["wearer_share_by_mode"])
+    md = (out / "comparison.md").read_text()
+    verdict = "yes, done" if abs(gate["lag_s"]) <= 0.2 else "NO, not done"
+    assert f"**The task: {verdict}.**" in md and "(the tip within 0.2 s of the intent)" in md  # its criterion
+    assert any(f"| {mode} |" in md for mode in gate["wearer_share_by_mode"])  # its mode names
+    assert "cutting" not in md and "saw" not in md.lower()
+    assert f"The task: {verdict}." in printed

@@ -130,7 +130,8 @@ def _live(monkeypatch) -> None:
         return (*simulate_episode(bundle, demos, trial, run, options, **settings), None)
     monkeypatch.setattr(runs, "simulate_cached", live)
     pooled = rule_choice.pooled_runs
-    monkeypatch.setattr(rule_choice, "pooled_runs", lambda *a, seen=None, ran=None: pooled(*a, seen=None, ran=ran))
+    monkeypatch.setattr(rule_choice, "pooled_runs",
+                        lambda *a, seen=None, ran=None, **kw: pooled(*a, seen=None, ran=ran, **kw))
 
 
 def test_the_comparison_and_the_rule_choice_are_the_same_replayed_and_deduplicated(trained, tmp_path, monkeypatch):

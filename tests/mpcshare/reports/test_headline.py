@@ -129,3 +129,18 @@ def test_the_task_line_says_why_training_and_the_evaluation_disagree_on_sawing()
     assert "trial(s) 2 (first 10 s)" in not_here.text
     agree = headlines(_runs(5.0), rule_choice=_choice(0.91, 0.8))[0]
     assert "Training" not in agree.text  # both saw: nothing to explain
+
+
+def test_a_task_without_strokes_is_judged_by_its_own_criterion():
+    from tests.sim.task.test_protocol import Pouring
+
+    task = Pouring()  # done: the tip within 0.2 s of the intent
+    late = headlines(_runs(5.0, lag_s=0.5), task=task)[0]
+    assert late.verdict == "NO, not done" and "the task's criterion is NOT met (the tip within 0.2 s" in late.text
+    assert "saw" not in late.text and "cutting" not in late.text
+    choice = {"settings": {"wearer_modes": [0]}, "trials": [3], "duration_s": 20.0,
+              "candidates": [{"settings": {"wearer_modes": [0]}, "saws_by_trial": [True]}]}
+    noted = headlines(_runs(5.0, lag_s=0.5), rule_choice=choice, trials="trial(s) 2 (first 10 s)", task=task)[0]
+    assert "Training chose this hand-over rule as one that meets the task's criterion on trial(s) 3" in noted.text
+    on_time = headlines(_runs(5.0, lag_s=0.1), rule_choice=choice, task=task)[0]
+    assert on_time.verdict == "yes, done" and "Training" not in on_time.text  # both met it

@@ -5,6 +5,7 @@ found by name."""
 from __future__ import annotations
 
 import importlib
+import re
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -29,6 +30,7 @@ class Pouring:
     mode_names = ("approach", "pour")
     mode_colours = {"approach": "#112233", "pour": "#445566"}
     stroke_mode = None
+    stroke_band_hz = None
     criterion = "the tip within 0.2 s of the intent"
     metric_keys = ("lag_s", "rms_by_mode_m")
     body = replace(EATING.body, head_speed_cap=0.03)
@@ -113,3 +115,27 @@ def test_a_task_module_beside_eating_is_found_by_name():
         sys.modules.pop("sim.task.pouring_for_test", None)
         importlib.invalidate_caches()
     assert task_names() == ["eating"]
+
+
+def test_a_task_outside_the_package_is_found_by_its_module_and_attribute(tmp_path, monkeypatch):
+    (tmp_path / "my_tasks_for_test").mkdir()
+    (tmp_path / "my_tasks_for_test" / "__init__.py").write_text("")
+    (tmp_path / "my_tasks_for_test" / "pouring.py").write_text(
+        f"from {__name__} import Pouring\n\nTASK = Pouring()\nOTHER = Pouring()\nNOT_A_TASK = 3\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for name in ("my_tasks_for_test", "my_tasks_for_test.pouring"):
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    assert task_named("my_tasks_for_test.pouring").mode_names == ("approach", "pour")  # its TASK
+    assert isinstance(task_named("my_tasks_for_test.pouring:OTHER"), Pouring)
+    assert task_named("my_tasks_for_test.pouring:TASK") is task_named("my_tasks_for_test.pouring")
+    assert task_names() == ["eating"]  # lists the package's tasks only
+    with pytest.raises(ValueError, match="unknown task 'my_tasks_for_test'; valid choices: eating"):
+        task_named("my_tasks_for_test")  # a bare name is a module of sim.task
+    m = "my_tasks_for_test.pouring"
+    for spec, words in ((f"{m}:NOPE", f"module {m} has no NOPE"),
+                        (f"{m}:NOT_A_TASK", f"{m}.NOT_A_TASK is a int, not a sim.task.Task"),
+                        ("no_such_package_x.tasks", "cannot import no_such_package_x.tasks (ModuleNotFoundError"),
+                        (f"{m}:1x", "expected package.module or package.module:ATTR"),
+                        (f"{m}:Pouring", f"{m}.Pouring is a class; name an instance of it (TASK = Pouring())")):
+        with pytest.raises(ValueError, match=re.escape(f"task {spec!r}: {words}")):
+            task_named(spec)
