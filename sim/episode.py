@@ -22,18 +22,19 @@ CONTROL_KEYS = ("t", "alpha", "beta", "mode", "tip", "tip_reference", "tip_inten
 #: control-rate arrays of the keep-out, absent from older run files
 OPTIONAL_KEYS = ("fork_pose", "knife_heel")
 
-#: the run file's size [bytes], measured on the project's runs (savez_compressed barely compresses float64
-#: trajectories): per physics step, the time and per joint its q, v and τ; per control step, every
-#: control-rate array (fork pose and knife heel included); per file, the archive's headers and ``info``
-_NPZ_BYTES_PER_PHYSICS_STEP = 4.3
-_NPZ_BYTES_PER_JOINT_STEP = 22.5
-_NPZ_BYTES_PER_CONTROL_STEP = 209.0
-_NPZ_BYTES_PER_FILE = 4500.0
+#: the run file's size [bytes]: the arrays are stored uncompressed (float64 trajectories barely compress, and
+#: compressing cost 25x the CPU of writing): per physics step the time and per joint its q, v and τ (8 bytes
+#: each); per control step every control-rate array (fork pose and knife heel included, the status as 8 characters
+#: of 4 bytes); per file the archive's headers (about 260 bytes an array) and ``info``
+_NPZ_BYTES_PER_PHYSICS_STEP = 8.0
+_NPZ_BYTES_PER_JOINT_STEP = 24.0
+_NPZ_BYTES_PER_CONTROL_STEP = 376.0
+_NPZ_BYTES_PER_FILE = 10_500.0
 
 
 def run_file_bytes_estimate(seconds: float, physics_hz: float, control_hz: float, n_joints: int = 3) -> float:
     """About how many bytes :meth:`Episode.save` writes for ``seconds`` of a run of an arm with ``n_joints``
-    joints (within 10 % on the project's runs of 2 s and more)."""
+    joints (within 10 % on the project's runs of 2 s and more; the status's width moves it by a few %)."""
     physics = physics_hz * (_NPZ_BYTES_PER_PHYSICS_STEP + n_joints * _NPZ_BYTES_PER_JOINT_STEP)
     return _NPZ_BYTES_PER_FILE + seconds * (physics + control_hz * _NPZ_BYTES_PER_CONTROL_STEP)
 
@@ -94,7 +95,7 @@ class Episode:
         return names
 
     def save(self, path: str | Path) -> Path:
-        """Write the run file (NPZ, atomic): every array above plus ``info_<name>`` scalars."""
+        """Write the run file (NPZ, uncompressed, atomic): every array above plus ``info_<name>`` scalars."""
         path = Path(path)
         if path.suffix != ".npz":
             raise ValueError(f"run file must end in .npz, got {path.name!r}")
@@ -104,7 +105,7 @@ class Episode:
         for k, v in self.info.items():
             arrays[f"info_{k}"] = np.asarray("" if v is None else v)
         with atomic_open(path, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
+            np.savez(fh, **arrays)
         return path
 
     @classmethod

@@ -72,7 +72,8 @@ class VideoRecorder:
             return
         # Shadows, reflections and the skybox cost ~70 % of a frame under software OpenGL
         # (Mesa llvmpipe: 360 → 110 ms per 320×240 frame of the eating scene); the video
-        # shows the motion, which needs none of them.
+        # shows the motion, which needs none of them (nor multisampling: the scene's offsamples="0",
+        # 38 → 12 ms of CPU per 640×480 frame).
         for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION,
                      mujoco.mjtRndFlag.mjRND_SKYBOX):
             self._renderer.scene.flags[flag] = False
@@ -107,7 +108,10 @@ class VideoRecorder:
         else:
             from PIL import Image
 
-            self._frames.append(Image.fromarray(np.ascontiguousarray(img)).quantize(colors=128))
+            # the fast octree: about 100x cheaper than the default median cut on 640x480 frames, with no visible loss on
+            # rendered scenes (few smooth colours)
+            self._frames.append(Image.fromarray(np.ascontiguousarray(img)).quantize(
+                colors=128, method=Image.Quantize.FASTOCTREE))
 
     def close(self) -> tuple[Path | None, str | None]:
         """Finish the file; returns (path or None, message or None)."""

@@ -154,7 +154,7 @@ def build_scene_xml(config: SceneConfig | None = None) -> str:
   <option timestep="{c.timestep!r}" gravity="0 0 {-robot.gravity!r}" integrator="Euler">
     <flag contact="disable"/>
   </option>
-  <visual><global offwidth="640" offheight="480"/></visual>
+  <visual><global offwidth="640" offheight="480"/><quality offsamples="0"/></visual>
   <worldbody>
     <light pos="0.4 0 1.5" dir="0 0 -1" directional="true"/>
     <camera name="side" pos="{px + 0.35} {py - 0.75} {pz + 0.45}" xyaxes="0.9 0.44 0 -0.2 0.4 0.9"/>

@@ -32,7 +32,6 @@ EXEMPT: dict[str, str] = {
     "mpcshare/bundle/manifest.py": "exercised by tests/mpcshare/bundle/test_bundle.py",
     "mpcshare/commands/robot_options.py": "no test yet",
     "mpcshare/commands/sim_serve.py": "no test yet",
-    "mpcshare/control/bundle_inputs.py": "no test yet",
     "mpcshare/control/fastpath.py": "in tests/mpcshare/control/test_fast_path.py, the path fastpath.py cites",
     "mpcshare/control/forecast.py": "in tests/mpcshare/control/test_forecast_track.py, the path forecast.py cites",
     "mpcshare/control/mpc_follow.py": "no test yet",
@@ -71,7 +70,7 @@ EXEMPT: dict[str, str] = {
     "sim/task/__init__.py": "the task registry: tested in tests/sim/task/test_protocol.py",
 }
 #: len(EXEMPT) may only fall: lower this with each entry removed, never raise it
-EXEMPT_CEILING = 52
+EXEMPT_CEILING = 51
 
 
 def mirrored_test(module: str) -> str:

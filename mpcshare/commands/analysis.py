@@ -70,9 +70,10 @@ def analysis_config(args: argparse.Namespace) -> AnalysisConfig:
         select_modes=args.select_modes, seed=args.seed)
 
 
-def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
-                 mode_names: Sequence[str] | None = None) -> AnalysisReport:
-    """Run the analysis with progress output and write report.json, report.md and plots.
+def run_analysis(demos: Demonstrations, config: AnalysisConfig, out: Path,
+                 mode_names: Sequence[str] | None = None, progress: bool = True) -> AnalysisReport:
+    """Run the analysis with ``config`` (:func:`analysis_config` of the command line; progress output unless
+    ``progress`` is False) and write report.json, report.md and plots into ``out``.
 
     Raises :class:`CommandError` when the data cannot be analysed with these
     settings (``learning.analysis.AnalysisError``: rate, trials shorter than the window).
@@ -81,7 +82,7 @@ def run_analysis(demos: Demonstrations, args: argparse.Namespace, out: Path,
     from mpcshare.reports.analysis import write_analysis_report
 
     try:
-        result = analyze(demos, analysis_config(args), progress=True)
+        result = analyze(demos, config, progress=progress)
     except AnalysisError as exc:
         raise CommandError(f"cannot analyse the data: {exc}") from exc
     write_analysis_report(result, out, mode_names=mode_names,
@@ -124,7 +125,7 @@ def _analyze_args(p: argparse.ArgumentParser) -> None:
 def _analyze(args: argparse.Namespace) -> int:
     out = prepare_output_folder(args.out)
     demos = load_or_fail(args.data)
-    report = run_analysis(demos, args, out, mode_names=chosen_task(args).mode_names)
+    report = run_analysis(demos, analysis_config(args), out, mode_names=chosen_task(args).mode_names)
     print_headline(report)
     print(f"report: {out / 'report.md'}")
     return 0

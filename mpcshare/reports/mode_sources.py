@@ -31,12 +31,20 @@ def filter_step_us(modes: Any, n_steps: int = 2000, seed: int = 0) -> float:
     return float(1e6 * np.median(times))
 
 
-def mode_source_comparison(bundles: dict[str, Any]) -> dict[str, dict[str, float]]:
-    """{source ("hmm", "mixture"): {voluntary_share, gate_accuracy, filter_step_us}} of trained bundles."""
-    return {source: {"voluntary_share": float(b.metrics["voluntary_share"]),
-                     "gate_accuracy": float(b.metrics["gate"]["overall"]["accuracy"]),
-                     "filter_step_us": round(filter_step_us(b.modes), 2)}
-            for source, b in bundles.items()}
+def mode_source_comparison(sources: dict[str, Any]) -> dict[str, dict[str, float]]:
+    """{source ("hmm", "mixture"): {voluntary_share, gate_accuracy, filter_step_us}}: each source a trained bundle
+    (its held-out metrics) or a :class:`mpcshare.training.GateFit` (the same figures, without a predictor)."""
+    def figures(b: Any) -> tuple[float, float]:
+        if hasattr(b, "metrics"):
+            return float(b.metrics["voluntary_share"]), float(b.metrics["gate"]["overall"]["accuracy"])
+        return float(b.voluntary_share), float(b.gate_accuracy)
+
+    out = {}
+    for source, b in sources.items():
+        share, accuracy = figures(b)
+        out[source] = {"voluntary_share": share, "gate_accuracy": accuracy,
+                       "filter_step_us": round(filter_step_us(b.modes), 2)}
+    return out
 
 
 def mode_source_sentence(cmp: dict[str, dict[str, float]]) -> str:

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -47,8 +48,8 @@ if TYPE_CHECKING:  # annotations only (imported where they are used: torch loads
     from learning.predictor import ReactivePredictor
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["TrainingError", "SplitData", "TrainingData", "prepare_training_data",
-           "reactive_labels", "fit_gates", "fit_predictor", "train_bundle", "train_bundles", "Stages"]
+__all__ = ["GateFit", "TrainingError", "SplitData", "TrainingData", "prepare_training_data",
+           "reactive_labels", "fit_gates", "fit_predictor", "train_bundle", "train_bundles", "train_gates", "Stages"]
 
 
 def fit_gates(data: TrainingData, labels: np.ndarray) -> ModeGates:
@@ -117,6 +118,37 @@ def train_bundles(demos: Demonstrations, config: TrainConfig | None = None,
     finally:
         stages.close()
     return out
+
+
+@dataclass(frozen=True)
+class GateFit:
+    """The mode model and gates of :func:`train_gates` at ``K``, and the gates' held-out figures: the share of
+    held-out windows handed to the wearer and the accuracy against the quotient labels (as
+    :func:`mpcshare.training.evaluation.evaluate` gives them: ``voluntary_share``, ``gate.overall.accuracy``)."""
+
+    modes: Any
+    gates: ModeGates
+    K: float
+    voluntary_share: float
+    gate_accuracy: float
+
+
+def train_gates(demos: Demonstrations, config: TrainConfig | None = None) -> GateFit:
+    """Steps 1–5 of the module docstring without the predictor: the data preparation, the gates at
+    ``config.percentile`` and their held-out figures, exactly as :func:`train_bundle` computes them (the same
+    split, modes, K and gates). What compares two mode sources needs no predictor. Raises :class:`TrainingError`
+    as :func:`train_bundle`."""
+    from learning.gates.metrics import gate_metrics
+
+    config = config or TrainConfig()
+    data = prepare_training_data(demos, config)
+    K = threshold_from_percentile(data.train.q, config.percentile)
+    gates = fit_gates(data, reactive_labels(data.train.q, K))
+    side = data.heldout
+    proba = gates.predict_proba(side.windows.X, side.window_modes)
+    share = float(np.mean(1 - (proba >= 0.5).astype(int)))
+    accuracy = gate_metrics(gates, side.windows.X, side.window_modes, reactive_labels(side.q, K))["overall"]["accuracy"]
+    return GateFit(data.modes, gates, float(K), share, float(accuracy))
 
 
 def _fit_fast(data: TrainingData, predictor, config: TrainConfig):

@@ -82,7 +82,7 @@ def test_the_size_is_announced_before_writing_and_near_what_is_written(demos, tm
     assert " of run files (NPZ) and " in said and " of MCAP" in said and "--mcap-rate HZ" in said
     npz, mcap = output_size(DEFAULT_RUNS[:1], demos, [0], 3.0, True, 200.0)
     written = {p.suffix: p.stat().st_size for p in (out / "runs").iterdir()}
-    assert 0.6 < written[".npz"] / npz < 1.6 and 0.5 < written[".mcap"] / mcap < 2.0
+    assert 0.9 < written[".npz"] / npz < 1.1 and 0.5 < written[".mcap"] / mcap < 2.0, (written, npz, mcap)
 
 
 def test_sim_command_mcap_option(demos, tmp_path, monkeypatch):

@@ -3,6 +3,8 @@ the demo's summary."""
 
 from dataclasses import replace
 
+import numpy as np
+
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
 
@@ -20,6 +22,17 @@ def test_the_demo_compares_hmm_and_mixture_modes_for_the_controller():
         assert cmp[src]["voluntary_share"] == b.metrics["voluntary_share"]
         assert cmp[src]["gate_accuracy"] == b.metrics["gate"]["overall"]["accuracy"]
         assert 0 < cmp[src]["filter_step_us"] < 1e5
+    # the gates alone (mpcshare.training.train_gates) give the same figures: the demo compares without training a
+    # second predictor
+    from mpcshare.training import train_gates
+    for src, b in bundles.items():
+        fit = train_gates(demos, replace(small, modes_from=src))
+        assert (fit.voluntary_share, fit.gate_accuracy, fit.K) == (
+            b.metrics["voluntary_share"], b.metrics["gate"]["overall"]["accuracy"], b.K)
+        assert np.array_equal(fit.modes.transmat_, b.modes.transmat_)
+        gates_only = mode_source_comparison({src: fit})[src]
+        assert (gates_only["voluntary_share"], gates_only["gate_accuracy"]) == (
+            cmp[src]["voluntary_share"], cmp[src]["gate_accuracy"])
     s = mode_source_sentence(cmp)
     assert f"{100 * cmp['mixture']['voluntary_share']:.1f} % of the held-out time" in s
     assert f"(HMM {100 * cmp['hmm']['gate_accuracy']:.1f} %)" in s
