@@ -59,7 +59,8 @@ class QPController:
     tool frame), ``limits`` (default: from the model's URDF limits with
     a_max = 10 rad/s², see :meth:`JointLimits.from_model`), ``config``;
     ``tasks``, ``box_constraints`` (priority order) and ``constraints``
-    override the defaults built from ``config`` and ``limits``; custom ``tasks``
+    override the defaults built from ``config`` and ``limits``; ``tip_task`` replaces the default
+    tip task in the default task list (e.g. a :class:`~robot.tasks.BlendedTipTrackingTask`); custom ``tasks``
     must hold exactly one :class:`TipTrackingTask` (``step``'s ``p_ref`` drives it,
     ``QPResult.tip_error`` reports it), else :class:`ControllerConfigError`.
     :meth:`evaluate` gives the kinematic and dynamic state the controller sees.
@@ -70,7 +71,7 @@ class QPController:
     def __init__(self, model, frame: str | int, limits: JointLimits | None = None,
                  config: QPConfig | None = None, tasks: Sequence[Task] | None = None,
                  box_constraints: Sequence[BoxConstraint] | None = None,
-                 constraints: Sequence[Limit] | None = None) -> None:
+                 constraints: Sequence[Limit] | None = None, tip_task: TipTrackingTask | None = None) -> None:
         self.config = cfg = config or QPConfig()
         if model.nq != model.nv:
             raise UnsupportedModelError(
@@ -96,7 +97,11 @@ class QPController:
         q_post = np.asarray(q_post, dtype=float)
         if q_post.shape != (n,):
             raise ControllerConfigError(f"q_posture must have shape ({n},), got {q_post.shape}")
-        self.tip_task = TipTrackingTask(cfg.tip_weight, cfg.tip_kp, cfg.tip_kd, cfg.tip_max_error)
+        if tip_task is not None and not isinstance(tip_task, TipTrackingTask):
+            raise ControllerConfigError(f"tip_task must be a TipTrackingTask, got {type(tip_task).__name__}")
+        if tip_task is not None and tasks is not None:
+            raise ControllerConfigError("give the tip task inside tasks or as tip_task, not both")
+        self.tip_task = tip_task or TipTrackingTask(cfg.tip_weight, cfg.tip_kp, cfg.tip_kd, cfg.tip_max_error)
         if tasks is None:
             tasks = [self.tip_task, PostureTask(q_post, cfg.posture_weight, cfg.posture_kp, cfg.posture_kd),
                      AccelerationRegularization(cfg.regularization)]

@@ -101,6 +101,58 @@ class TipTrackingTask:
         return Objective(Jt @ state.J, -(Jt @ b))
 
 
+
+class BlendedTipTrackingTask(TipTrackingTask):
+    """Two parties' tip references in one cost (authority inside the optimisation):
+
+        α·w·‖J·a + J̇·v − ẍ_r‖² + (1 − α)·w·‖J·a + J̇·v − ẍ_v‖²,
+
+    ẍ_r, ẍ_v the PD law of :class:`TipTrackingTask` toward each party's reference (each with its own clipped
+    error). ``set_reference`` gives the first party's reference (the QP's ``p_ref``), :meth:`set_second` the
+    second's and its weight 1 − α ∈ [0, 1]; without a second (:meth:`clear_second`) the task is
+    :class:`TipTrackingTask`. Being least squares in the same J·a, the cost equals
+    w·‖J·a + J̇·v − (α·ẍ_r + (1 − α)·ẍ_v)‖² plus a constant in a: its minimiser under any constraints is that of
+    tracking the blended acceleration, whether a constraint binds or not.
+    """
+
+    name = "tip"
+
+    def __init__(self, weight: float = 1.0, kp: float = 400.0, kd: float = 40.0,
+                 max_error: float | None = None) -> None:
+        super().__init__(weight, kp, kd, max_error)
+        self._second = TipTrackingTask(1.0, kp, kd, max_error)
+        self.second_weight = 0.0
+
+    def set_second(self, weight: float, p_ref: np.ndarray, v_ref: np.ndarray | None = None,
+                   a_ref: np.ndarray | None = None) -> None:
+        """The second party's reference [m, m/s, m/s²] and weight 1 − α; ControllerConfigError outside [0, 1]."""
+        w = float(weight)
+        if not 0.0 <= w <= 1.0:
+            raise ControllerConfigError(f"the second party's weight must be in [0, 1], got {weight!r}")
+        self._second.set_reference(p_ref, v_ref, a_ref)
+        self.second_weight = w
+
+    def clear_second(self) -> None:
+        """Back to one reference (weight 1 on ``set_reference``'s)."""
+        self._second.clear_reference()
+        self.second_weight = 0.0
+
+    def compute_qp_objective(self, state: ControlState) -> Objective:
+        w2 = self.second_weight
+        if self._second.p_ref is None or w2 == 0.0:
+            return super().compute_qp_objective(state)
+        n = state.v.size
+        Jt = state.J.T * (2.0 * self.weight)
+        H = np.zeros((n, n))
+        c = np.zeros(n)
+        for share, task in ((1.0 - w2, self), (w2, self._second)):
+            if share > 0.0 and task.p_ref is not None:
+                b = TipTrackingTask.desired_acceleration(task, state) - state.drift
+                H = H + share * (Jt @ state.J)
+                c = c - share * (Jt @ b)
+        return Objective(H, c)
+
+
 class PostureTask:
     """Joint-space PD toward a posture: residual a − (kp·(q_ref − q) − kd·v).
 

@@ -20,6 +20,7 @@ from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
 from mpcshare.control.keepout import KeepOut, KeepOutSettings
 from mpcshare.control.mpc_follow import MPCFollower
+from mpcshare.control.strategies import REGISTRY
 from mpcshare.control.types import ControllerConfig
 from mpcshare.errors import ControllerSetupError, ControllerTypeError
 from robot.constraints import TorqueLimit
@@ -30,6 +31,7 @@ from robot.keepout import KeepOutLimit
 from robot.kinematics import TipKinematics
 from robot.qp import QPConfig, QPController
 from robot.shoulder import ShoulderMap
+from robot.tasks import BlendedTipTrackingTask
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -79,25 +81,28 @@ def _qp_config(robot: RobotDescription, config: QPConfig, dt: float) -> QPConfig
     return config
 
 
-def build_qp(robot: RobotDescription, config: ControllerConfig, dt: float
+def build_qp(robot: RobotDescription, config: ControllerConfig, dt: float, *, blended: bool = False
              ) -> tuple[QPController, KeepOut | None, FloorLimit | None]:
     """The joint QP on ``robot``'s tip frame at period ``dt`` [s] with its whole constraint list: with the keep-out
     (``config.keepout``) or the floor (``config.floor_z``), the torque limit, the floor rows and the keep-out rows
-    (sharing the blade's kinematics where the heel is the same); else the QP's default rows. Returns the QP, the
+    (sharing the blade's kinematics where the heel is the same); else the QP's default rows. ``blended``: its tip
+    task weighs two parties' references (``robot.tasks.BlendedTipTrackingTask``). Returns the QP, the
     keep-out (None: off) and the floor (None: off; its plane is set per step from the base pose)."""
     settings = config.keepout
     heel = settings.heel_offset if settings is not None else KeepOutSettings().heel_offset
     floor = None if config.floor_z is None else FloorLimit(robot.model, robot.tip_frame, heel, config.floor)
     qp_config = _qp_config(robot, config.qp, dt)
+    tip_task = BlendedTipTrackingTask(qp_config.tip_weight, qp_config.tip_kp, qp_config.tip_kd,
+                                      qp_config.tip_max_error) if blended else None
     if settings is None and floor is None:
-        return QPController(robot.model, robot.tip_frame_id, robot.limits, qp_config), None, None
+        return QPController(robot.model, robot.tip_frame_id, robot.limits, qp_config, tip_task=tip_task), None, None
     shared = floor.blade if floor is not None and settings is not None and \
         np.array_equal(floor.blade.heel_offset, np.asarray(settings.heel_offset, dtype=float)) else None
     limit = None if settings is None else KeepOutLimit(robot.model, robot.tip_frame, settings.heel_offset,
                                                          settings.limit, blade=shared)
     rows: list = [TorqueLimit(robot.limits)] + ([floor] if floor is not None else []) + \
         ([limit] if limit is not None else [])
-    qp = QPController(robot.model, robot.tip_frame, robot.limits, qp_config, constraints=rows)
+    qp = QPController(robot.model, robot.tip_frame, robot.limits, qp_config, constraints=rows, tip_task=tip_task)
     return qp, None if limit is None else KeepOut(settings, limit), floor
 
 
@@ -139,7 +144,11 @@ def build_parts(bundle: ModelBundle, *, robot: RobotDescription | None = None, s
     shoulder = shoulder_map(bundle, shoulder)
     arm = as_description(robot)  # TypeError naming the choices for anything else
     dt = 1.0 / float(bundle.rate_hz)
-    qp, keepout, floor = build_qp(arm, cfg, dt)
+    in_qp = REGISTRY[strategy].fusion == "qp"
+    if in_qp and (use_mpc or mpc is not None):
+        raise ControllerSetupError(f"strategy {strategy!r} fuses the parties in the QP, which tracks each party's own "
+                                   "reference: it runs without the MPC (use_mpc=False)")
+    qp, keepout, floor = build_qp(arm, cfg, dt, blended=in_qp)
     if keepout is not None:
         keepout.bind(bundle.obs_names)
     zoned = cfg.keepout is not None and cfg.keepout.mpc_zones

@@ -14,6 +14,7 @@ import numpy as np
 
 from learning.preprocessing.preprocess import window_lags
 from learning.preprocessing.resample import decimation_factor
+from mpcshare.control.strategies import REGISTRY
 from mpcshare.control.strategies.base import ModeFigures
 from mpcshare.errors import ControllerSetupError
 from robot.shoulder import ShoulderMap
@@ -140,9 +141,12 @@ def mode_figures(bundle: ModelBundle) -> ModeFigures:
 
 def rule_settings(bundle: ModelBundle, strategy: str, given: Any = None) -> Any:
     """The settings the strategy runs with: ``given`` (the controller's ``strategy_settings``) when not None,
-    else the bundle's calibrated rule's (``bundle.rule``) when it is for ``strategy``, else None (the
-    strategy's defaults). The Arbiter turns them into the strategy's typed settings."""
+    else the bundle's calibrated rule's (``bundle.rule``) when it is for ``strategy`` (or the strategy its spec's
+    ``rule_of`` names), else None (the strategy's defaults). The Arbiter turns them into the strategy's typed
+    settings."""
     if given is not None:
         return given
     rule = getattr(bundle, "rule", None)
-    return rule.settings if rule is not None and rule.strategy == strategy else None
+    spec = REGISTRY.get(strategy)
+    reads = spec.rule_of if spec is not None and spec.rule_of is not None else strategy
+    return rule.settings if rule is not None and rule.strategy == reads else None

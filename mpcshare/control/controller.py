@@ -34,6 +34,7 @@ from mpcshare.control.arbitration import check_beta, check_strategy, fuse, react
 from mpcshare.control.builder import ControllerParts, build_parts
 from mpcshare.control.forecast import TipTrajectory
 from mpcshare.control.holding import brake, fallback_joint_state, rest_command
+from mpcshare.control.party_fusion import PartyState, advance, smooth
 from mpcshare.control.preview import PreviewPlan, mpc_preview
 from mpcshare.control.records import Arbitration, Sensed, TickState, Tracking
 from mpcshare.control.sensing import fast_step, models_tick, sense
@@ -75,6 +76,7 @@ class EpisodeState:
     p_pred: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     fork_velocity: np.ndarray = field(default_factory=lambda: np.zeros(0))
     last: ControlCommand | None = None
+    parties: PartyState | None = None  # the parties' own reference chains where the QP fuses them
 
 
 class SharedController:
@@ -167,7 +169,8 @@ class SharedController:
             smoother=ReferenceSmoother(3, p.dt, cfg.max_velocity, cfg.max_acceleration, cfg.max_jerk),
             stream=p.bundle.predictor.make_stream(), pose=None if self.base_pose is None else self.base_pose.copy(),
             tick=TickState(np.full(K, 1.0 / K), float("nan"), False, None),
-            fork_velocity=np.zeros(p.layout.d_o))
+            fork_velocity=np.zeros(p.layout.d_o),
+            parties=PartyState.new(p.dt, cfg) if p.arbiter.spec.fusion == "qp" else None)
         self._set_floor(self.state.pose)
 
     # ------------------------------------------------------------------ frames
@@ -262,7 +265,8 @@ class SharedController:
 
     def _arbitrate(self, sensed: Sensed, voluntary, faults: list[tuple[str, str]]) -> Arbitration:
         """α, β and the new tip reference: û = α·û_r + β·û_v integrated over the step, kept in the workspace box
-        and the arm's reach (the reference is the episode's: read and written back here)."""
+        and the arm's reach (the reference is the episode's: read and written back here); with a strategy whose
+        fusion is ``qp``, each party's own chain and their blend (:mod:`mpcshare.control.party_fusion`)."""
         p, s, cfg = self.parts, self.state, self.parts.config
         pose = sensed.pose
         if s.p_ref is None:
@@ -293,13 +297,26 @@ class SharedController:
             faults.append(("invalid_shoulder", f"shoulder signal NaN, missing or not ({n_th},): reference held"))
             u, acc_ff = np.zeros(3), np.zeros(3)
         plan = PreviewPlan(alpha if pred_ok else 0.0, beta, u_v, sensed.t_aim)
-        p_new, u, acc_ff, fault = bound_reference(p_ref + u * sensed.dt, u, acc_ff, p.box,
-                                                  self._to_plate(p.reach.pivot), p.reach.r_min, p.reach.r_max)
-        if fault is not None:
-            faults.append(("reference_unreachable", fault))
+        pivot = self._to_plate(p.reach.pivot)
+        parties = None
+        if s.parties is None:
+            p_new, u, acc_ff, fault = bound_reference(p_ref + u * sensed.dt, u, acc_ff, p.box, pivot, p.reach.r_min,
+                                                      p.reach.r_max)
+            if fault is not None:
+                faults.append(("reference_unreachable", fault))
+        else:  # fusion in the QP: each party's chain, the blend as the step's reference (mpcshare.control.party_fusion)
+            parties, bound_faults = advance(
+                s.parties, alpha, p_ref, sensed.p_hat, sensed.v_hat, sensed.a_hat, pred_ok and shoulder_ok,
+                u_v if shoulder_ok else np.zeros(3), sensed.dt, cfg,
+                lambda x, vel, acc: bound_reference(x, vel, acc, p.box, pivot, p.reach.r_min, p.reach.r_max),
+                p.arbiter.settings.wearer_offset_m)
+            faults += [("reference_unreachable", f) for f in bound_faults]
+            beta = 1.0 - alpha
+            p_new = alpha * parties.p_r + beta * parties.p_v
+            u, acc_ff = alpha * parties.u_r + beta * parties.u_v, alpha * parties.acc_r
         s.p_ref = p_new
         p_model = pose[:3, :3].T @ (p_new - pose[:3, 3])
-        return Arbitration(alpha, beta, u, p_new, p_model, acc_ff, plan)
+        return Arbitration(alpha, beta, u, p_new, p_model, acc_ff, plan, parties)
 
     def _track(self, sensed: Sensed, arb: Arbitration, faults: list[tuple[str, str]],
                timings: dict[str, float]) -> Tracking:
@@ -314,6 +331,9 @@ class SharedController:
             sm = smoother.update(arb.p_model + cfg.smoother_lead_s * u_model)
         else:
             sm = smoother.update(arb.p_model, u_model, R.T @ arb.acc_ff)
+        # fusion in the QP: each party's own smoothed reference, (robot, wearer) in the model frame
+        both = None if arb.parties is None else smooth(self.state.parties, arb.parties, sensed.pose, p.tip.position(q),
+                                                       cfg)
         timings["smoothing"] = time.perf_counter() - ta
         p_qp, v_qp, a_qp = sm.position, sm.velocity, sm.acceleration
         if p.mpc_follower is not None:
@@ -325,7 +345,17 @@ class SharedController:
                 p_qp, v_qp, a_qp = refs
             timings["mpc"] = time.perf_counter() - ta
         ta = time.perf_counter()
-        res = p.qp.step(q, v, p_qp, v_qp, a_qp)
+        if both is None:
+            res = p.qp.step(q, v, p_qp, v_qp, a_qp)
+        else:  # both parties' smoothed references in the QP's tip cost, weighted α and 1 − α
+            robot, wearer = both
+            a = arb.parties.alpha
+            p.qp.tip_task.set_second(1.0 - a, wearer.position, wearer.velocity, wearer.acceleration)
+            try:
+                res = p.qp.step(q, v, robot.position, robot.velocity, robot.acceleration)
+            finally:
+                p.qp.tip_task.clear_second()
+            p_qp = a * robot.position + (1.0 - a) * wearer.position
         if p.keepout is not None:
             res = p.keepout.check(p.qp, q, v, res, faults)
         timings["qp"] = time.perf_counter() - ta

@@ -11,6 +11,7 @@ from typing import NamedTuple
 import numpy as np
 
 from mpcshare.control.frontend import FrontEndOutput
+from mpcshare.control.party_fusion import PartyReferences
 from mpcshare.control.preview import PreviewPlan
 from robot.qp import QPResult
 
@@ -45,7 +46,8 @@ class Sensed(NamedTuple):
 
 
 class Arbitration(NamedTuple):
-    """Who leads and the tip reference this step made."""
+    """Who leads and the tip reference this step made (with fusion in the QP: the blend α·p_r + (1 − α)·p_v of
+    the parties' references, which the QP's cost tracks in effect)."""
 
     alpha: float  # the robot's share
     beta: float  # the wearer's share
@@ -54,6 +56,7 @@ class Arbitration(NamedTuple):
     p_model: np.ndarray  # (3,) the same, model frame
     acc_ff: np.ndarray  # (3,) α·p̈̂, plate: the smoother's target acceleration (0 without feed-forward)
     plan: PreviewPlan  # what the MPC's preview is made from
+    parties: PartyReferences | None = None  # each party's reference where the QP fuses them (None: fused here)
 
 
 class Tracking(NamedTuple):

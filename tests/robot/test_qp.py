@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robot.constraints import viable_velocity_bound
+from robot.constraints import intersect_by_priority, viable_velocity_bound
 from robot.errors import ControllerConfigError, FrameNotFoundError, UnsupportedModelError
 from robot.limits import JointLimits
 from robot.model_files import build_pinocchio_model
@@ -283,3 +283,115 @@ def test_commanded_torque_produces_the_commanded_acceleration_in_mujoco() -> Non
         mujoco.mj_forward(m, d)
         np.testing.assert_allclose(d.qacc, r.a, atol=1e-6 * (1 + np.abs(r.a).max()))
         q, v = r.q_next, r.v_next
+
+
+# ---------------------------------------------------------------- both parties' references in the cost
+def _blended_and_fused(solver: str, alpha: float, offsets: tuple[np.ndarray, np.ndarray]):
+    """The QP with both references weighed α, 1 − α, and the plain QP given their blend, from the same state."""
+    from robot.tasks import BlendedTipTrackingTask
+
+    model = build_pinocchio_model(PARAMS).model
+    cfg = QPConfig(solver=solver, tip_max_error=None)
+    blended = QPController(model, "knife_tip", LIM, cfg,
+                           tip_task=BlendedTipTrackingTask(cfg.tip_weight, cfg.tip_kp, cfg.tip_kd, None))
+    fused = QPController(model, "knife_tip", LIM, cfg)
+    q, v = 0.5 * (LIM.q_min + LIM.q_max) + 0.1, np.array([0.05, -0.1, 0.02])
+    tip = fused.tip_position(q)
+    (p_r, v_r), (p_v, v_v) = [(tip + d, 10.0 * d) for d in offsets]
+    blended.tip_task.set_second(1.0 - alpha, p_v, v_v, np.zeros(3))
+    res_b = blended.step(q, v, p_r, v_r, np.zeros(3))
+    res_f = fused.step(q, v, alpha * p_r + (1 - alpha) * p_v, alpha * v_r + (1 - alpha) * v_v, np.zeros(3))
+    return blended, res_b, res_f, q, v, (p_r, v_r), (p_v, v_v)
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_both_references_in_the_cost_unconstrained_is_the_stacked_least_squares(solver):
+    """No limit binds: the answer is the float64 least-squares solution of every task's rows stacked."""
+    alpha = 0.35
+    qp, res, res_f, q, v, (p_r, v_r), (p_v, v_v) = _blended_and_fused(
+        solver, alpha, (np.array([0.002, -0.001, 0.001]), np.array([-0.001, 0.002, 0.0])))
+    s = qp.evaluate(q, v)
+    cfg = qp.config
+    rows, rhs = [], []
+    for w, p, vel in ((alpha, p_r, v_r), (1 - alpha, p_v, v_v)):
+        x = cfg.tip_kd * (vel - s.p_dot) + cfg.tip_kp * (p - s.p)
+        rows.append(np.sqrt(w * cfg.tip_weight) * s.J)
+        rhs.append(np.sqrt(w * cfg.tip_weight) * (x - s.drift))
+    post = next(t for t in qp.tasks if t.name == "posture")
+    rows.append(np.sqrt(post.weight) * np.eye(3))
+    rhs.append(np.sqrt(post.weight) * (post.kp * (post.q_ref - q) - post.kd * v))
+    for t in qp.tasks:
+        if t.name == "damping":
+            rows.append(np.sqrt(t.weight) * np.eye(3))
+            rhs.append(-np.sqrt(t.weight) * t.kd * v)
+        if t.name == "regularization":
+            rows.append(np.sqrt(t.weight) * np.eye(3))
+            rhs.append(np.zeros(3))
+    a_ls = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
+    lo, hi, _ = intersect_by_priority([c.bounds(s) for c in qp.box_constraints])
+    assert res.status is QPStatus.OK and np.all(a_ls > lo + 1e-3) and np.all(a_ls < hi - 1e-3)  # nothing binds
+    np.testing.assert_allclose(res.a, a_ls, rtol=1e-6, atol=1e-6 * (1 + np.abs(a_ls).max()))
+    np.testing.assert_allclose(res.a, res_f.a, rtol=1e-7, atol=1e-7)
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_both_references_in_the_cost_equal_the_blend_where_the_limits_bind(solver):
+    """References far away (unclipped) ask for more than the acceleration box and the torque limits: both bind, and
+    the answer is still exactly that of tracking the blended reference (the weighted cost is the blend's plus a
+    constant)."""
+    qp, res, res_f, q, v, *_ = _blended_and_fused(
+        solver, 0.6, (np.array([0.6, -0.3, 0.2]), np.array([-0.5, 0.8, -0.4])))
+    lo, hi, _ = intersect_by_priority([c.bounds(qp.evaluate(q, v)) for c in qp.box_constraints])
+    assert (np.isclose(res.a, lo, atol=1e-6) | np.isclose(res.a, hi, atol=1e-6)).any()
+    assert np.isclose(np.abs(res.tau), LIM.tau_max, atol=1e-6).any()
+    np.testing.assert_allclose(res.a, res_f.a, rtol=1e-7, atol=1e-7)
+
+
+def test_both_references_under_a_hand_built_box_and_half_space_match_an_independent_solve():
+    """A hand-built QP: the blended tip cost and the regularisation, a box and one half-space row G·a ≤ h that bind;
+    the project's solver, an exact float64 active-set enumeration on the weighted residuals, and the fused-target
+    cost agree."""
+    from itertools import combinations
+
+    from robot.solvers import make_backend
+    from robot.state import ControlState
+    from robot.tasks import AccelerationRegularization, BlendedTipTrackingTask, TipTrackingTask
+
+    rng = np.random.default_rng(3)
+    s = ControlState(q=np.zeros(3), v=np.zeros(3), dt=0.01, M=np.eye(3), h=np.zeros(3), p=np.zeros(3),
+                     p_dot=np.zeros(3), J=rng.normal(size=(3, 3)), drift=rng.normal(size=3))
+    alpha, p_r, p_v = 0.7, np.array([0.05, 0.0, 0.02]), np.array([-0.02, 0.04, 0.0])
+    task = BlendedTipTrackingTask(1.0, 400.0, 40.0)
+    task.set_reference(p_r)
+    task.set_second(1.0 - alpha, p_v)
+    reg = AccelerationRegularization(1e-6)
+    H, c = (x + y for x, y in zip(task.compute_qp_objective(s), reg.compute_qp_objective(s)))
+    fused = TipTrackingTask(1.0, 400.0, 40.0)
+    fused.set_reference(alpha * p_r + (1 - alpha) * p_v)
+    H_f, c_f = (x + y for x, y in zip(fused.compute_qp_objective(s), reg.compute_qp_objective(s)))
+    a_free = np.linalg.solve(H, -c)
+    lo, hi = -np.full(3, 5.0), np.full(3, 5.0)
+    a_box = np.clip(a_free, lo, hi)
+    G, h = np.array([[1.0, -1.0, 0.0]]), np.array([float(a_box[0] - a_box[1]) - 1.0])  # cuts the box's corner
+    # independent: the weighted residuals stacked, minimised over every active set of C·a ≤ d (exact KKT solves)
+    A = np.vstack([np.sqrt(alpha) * s.J, np.sqrt(1 - alpha) * s.J, np.sqrt(1e-6) * np.eye(3)])
+    b = np.concatenate([np.sqrt(alpha) * (400.0 * p_r - s.drift), np.sqrt(1 - alpha) * (400.0 * p_v - s.drift),
+                        np.zeros(3)])
+    C, d = np.vstack([np.eye(3), -np.eye(3), G]), np.concatenate([hi, -lo, h])
+    best, best_cost = None, np.inf
+    for k in range(4):
+        for S in combinations(range(len(d)), k):
+            K = np.block([[A.T @ A, C[list(S)].T], [C[list(S)], np.zeros((k, k))]])
+            try:
+                a = np.linalg.solve(K, np.concatenate([A.T @ b, d[list(S)]]))[:3]
+            except np.linalg.LinAlgError:
+                continue
+            r = A @ a - b
+            if np.all(C @ a <= d + 1e-9) and r @ r < best_cost:
+                best, best_cost = a, r @ r
+    ours = make_backend("auto", 3, 1).solve(H, c, lo, hi, G, h).x
+    ours_f = make_backend("auto", 3, 1).solve(H_f, c_f, lo, hi, G, h).x
+    assert abs((G @ ours)[0] - h[0]) < 1e-6 or np.any(np.isclose(ours, lo) | np.isclose(ours, hi))  # binds
+    assert np.linalg.norm(ours - a_free) > 0.1
+    np.testing.assert_allclose(ours, best, atol=1e-6 * (1 + np.abs(best).max()))
+    np.testing.assert_allclose(ours, ours_f, atol=1e-8)

@@ -7,7 +7,15 @@ import pytest
 
 from robot.errors import ControllerConfigError
 from robot.state import ControlState
-from robot.tasks import AccelerationRegularization, DampingTask, Objective, PostureTask, Task, TipTrackingTask
+from robot.tasks import (
+    AccelerationRegularization,
+    BlendedTipTrackingTask,
+    DampingTask,
+    Objective,
+    PostureTask,
+    Task,
+    TipTrackingTask,
+)
 
 N = 3
 
@@ -114,3 +122,37 @@ def test_bad_gains_raise(make) -> None:
 def test_posture_of_the_wrong_size_names_the_shapes() -> None:
     with pytest.raises(ControllerConfigError, match=r"shape \(3,\), got \(2,\)"):
         PostureTask(np.zeros(2)).compute_qp_objective(_state(0))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_blended_tip_objective_is_the_weighted_sum_and_the_blend(seed: int) -> None:
+    """α·w·‖r_r‖² + (1 − α)·w·‖r_v‖² and w·‖J·a + J̇v − (α·ẍ_r + (1 − α)·ẍ_v)‖² differ from it by constants."""
+    s = _state(seed)
+    rng = np.random.default_rng(seed + 10)
+    refs = [(s.p + 0.01 * rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)) for _ in range(2)]
+    alpha, w = 0.3, 0.7
+    task = BlendedTipTrackingTask(weight=w, kp=30.0, kd=5.0)
+    task.set_reference(*refs[0])
+    task.set_second(1.0 - alpha, *refs[1])
+    x_r, x_v = (a + 5.0 * (v - s.p_dot) + 30.0 * (p - s.p) for p, v, a in refs)
+    obj = task.compute_qp_objective(s)
+
+    def weighted(a):
+        r_r, r_v = s.J @ a + s.drift - x_r, s.J @ a + s.drift - x_v
+        return np.concatenate([np.sqrt(alpha) * r_r, np.sqrt(1.0 - alpha) * r_v])
+
+    _assert_same_up_to_constant(obj, weighted, w, seed)
+    _assert_same_up_to_constant(obj, lambda a: s.J @ a + s.drift - (alpha * x_r + (1 - alpha) * x_v), w, seed)
+
+
+def test_blended_tip_task_without_a_second_is_the_tip_task_and_checks_its_weight() -> None:
+    s = _state(5)
+    plain, blended = TipTrackingTask(0.5, 30.0, 5.0), BlendedTipTrackingTask(0.5, 30.0, 5.0)
+    for t in (plain, blended):
+        t.set_reference(s.p + 0.01, np.ones(3), np.zeros(3))
+    blended.set_second(0.4, s.p - 0.01)
+    blended.clear_second()
+    for a, b in zip(plain.compute_qp_objective(s), blended.compute_qp_objective(s)):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(ControllerConfigError, match="weight must be in"):
+        blended.set_second(1.5, s.p)

@@ -21,12 +21,17 @@ from typing import Any, Callable, Mapping, Protocol
 
 import numpy as np
 
-__all__ = ["ROLES", "ArbiterView", "ModeFigures", "Policy", "StepInputs", "StrategyContext", "StrategySpec", "Target",
-           "make_settings", "override_reason"]
+__all__ = ["FUSIONS", "ROLES", "ArbiterView", "ModeFigures", "Policy", "StepInputs", "StrategyContext", "StrategySpec",
+           "Target", "make_settings", "override_reason"]
 
 #: What a strategy is in the comparison: ``shared`` (decides who leads; the reports' *sharing*),
 #: ``baseline`` (one party alone), ``mix`` (a constant mixture of the two), ``replay`` (a given schedule).
 ROLES = ("shared", "baseline", "mix", "replay")
+
+#: Where the two parties meet: ``velocity``, û = α·û_r + β·û_v before the QP, one tip reference (the
+#: controller's module docstring); ``qp``, each party's own reference chain, weighted α and 1 − α in the QP's
+#: tip cost (:mod:`mpcshare.control.party_fusion`).
+FUSIONS = ("velocity", "qp")
 
 
 @dataclass(frozen=True)
@@ -120,7 +125,8 @@ class StrategySpec:
     tools, e.g. ``schedule``); order: position in the registry (ascending; among the ``shared`` ones,
     the reports name the first present); role: one of :data:`ROLES`; settings: the frozen dataclass of the
     strategy's settings (None: it has none), every field with a default, validated in its
-    ``__post_init__`` (ValueError naming the field). Raises ValueError for another role.
+    ``__post_init__`` (ValueError naming the field); fusion: one of :data:`FUSIONS`; rule_of: the strategy whose
+    calibrated rule in a bundle this one reads (None: its own). Raises ValueError for another role or fusion.
     """
 
     name: str
@@ -132,10 +138,14 @@ class StrategySpec:
     order: float = 100.0
     role: str = field(kw_only=True)
     settings: type | None = field(default=None, kw_only=True)
+    fusion: str = field(default="velocity", kw_only=True)
+    rule_of: str | None = field(default=None, kw_only=True)
 
     def __post_init__(self) -> None:
         if self.role not in ROLES:
             raise ValueError(f"strategy {self.name!r}: role {self.role!r} is not one of {', '.join(ROLES)}")
+        if self.fusion not in FUSIONS:
+            raise ValueError(f"strategy {self.name!r}: fusion {self.fusion!r} is not one of {', '.join(FUSIONS)}")
         if self.settings is not None and not dataclasses.is_dataclass(self.settings):
             raise TypeError(f"strategy {self.name!r}: settings must be a dataclass, got {self.settings!r}")
 

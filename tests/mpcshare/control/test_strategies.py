@@ -11,7 +11,7 @@ from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, ROLES, Strat
 
 def test_the_registry_holds_the_named_strategies_in_order():
     assert list(REGISTRY) == ["voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "paper_gate", "blend",
-                              "schedule"]
+                              "qp_blend", "schedule"]
     assert DEFAULT_STRATEGY == "gate" and STRATEGIES == user_strategies() == tuple(list(REGISTRY)[:-1])
     assert {n for n, s in REGISTRY.items() if s.tunable} == {"gate", "paper_gate", "blend"}
     for name, spec in REGISTRY.items():
@@ -24,7 +24,7 @@ def test_the_registry_holds_the_named_strategies_in_order():
 
 
 def test_each_strategy_declares_its_role_and_the_shared_ones_come_in_todays_order():
-    assert by_role("shared") == ("gate", "paper_gate", "blend")  # the headline names the first present
+    assert by_role("shared") == ("gate", "paper_gate", "blend", "qp_blend")  # the headline names the first present
     assert by_role("baseline") == ("voluntary", "reactive")
     assert by_role("mix") == ("mix25", "mix50", "mix75") and by_role("replay") == ("schedule",)
     assert sorted(n for r in ROLES for n in by_role(r)) == sorted(REGISTRY)
@@ -32,6 +32,9 @@ def test_each_strategy_declares_its_role_and_the_shared_ones_come_in_todays_orde
         by_role("helper")
     with pytest.raises(ValueError, match="strategy 'x': role 'helper'"):
         StrategySpec("x", "X.", tunable=False, color="k", factory=REGISTRY["gate"].factory, role="helper")
+    with pytest.raises(ValueError, match="strategy 'x': fusion 'after' is not one of velocity, qp"):
+        StrategySpec("x", "X.", tunable=False, color="k", factory=REGISTRY["gate"].factory, role="shared",
+                     fusion="after")
 
 
 def test_check_strategy_names_the_registry():
