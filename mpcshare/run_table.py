@@ -6,7 +6,8 @@ swept strategies (``tunable``), the Pareto set, the plots' colours and the bench
 
 * one :class:`StrategyRun` per strategy a user may choose (``voluntary``, ``reactive``, the
   constant mixtures ``mix25`` … ``mix75``, ``gate``, ``paper_gate``, ``blend``, …), in the
-  registry's order;
+  registry's order (:data:`ALL_RUNS`; :data:`DEFAULT_RUNS` leaves out the registered candidates whose spec says
+  ``default_run=False``, e.g. ``qp_blend``: they run when named);
 * :data:`EXTRA_RUNS`: ``gate_mpc`` (the default strategy with the MPC), ``oracle_preview`` (the
   robot given the true intent as its preview), ``random_handover`` (the placebo, the mean over
   :data:`RANDOM_DRAWS` draws) and ``oracle_handover`` (the upper bound), see
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 
 from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, user_strategies
 
-__all__ = ["DEFAULT_RUNS", "EXTRA_RUNS", "RANDOM_DRAWS", "REALISABLE", "RUN_COLORS", "RUN_NAMES",
+__all__ = ["ALL_RUNS", "DEFAULT_RUNS", "EXTRA_RUNS", "RANDOM_DRAWS", "REALISABLE", "RUN_COLORS", "RUN_NAMES",
            "TUNABLE", "StrategyRun", "strategy_code"]
 
 #: Draws of the placebo per trial (and per pair in ``tune``): its figure is their mean.
@@ -49,8 +50,12 @@ EXTRA_RUNS: tuple[StrategyRun, ...] = (
     StrategyRun("random_handover", "schedule", schedule="random", draws=RANDOM_DRAWS),
     StrategyRun("oracle_handover", "schedule", schedule="oracle"),
 )
-DEFAULT_RUNS: tuple[StrategyRun, ...] = tuple(StrategyRun(n, n) for n in user_strategies()) + EXTRA_RUNS
-RUN_NAMES: tuple[str, ...] = tuple(r.name for r in DEFAULT_RUNS)
+#: every run a user may name (``mpcshare sim --runs``)
+ALL_RUNS: tuple[StrategyRun, ...] = tuple(StrategyRun(n, n) for n in user_strategies()) + EXTRA_RUNS
+#: the runs ``sim`` and ``demo`` make unless told otherwise
+DEFAULT_RUNS: tuple[StrategyRun, ...] = tuple(r for r in ALL_RUNS if r.name not in REGISTRY
+                                              or REGISTRY[r.name].default_run)
+RUN_NAMES: tuple[str, ...] = tuple(r.name for r in ALL_RUNS)
 #: The strategies ``tune`` sweeps over K and β (each gets a matched ``random_handover``).
 TUNABLE: tuple[str, ...] = tuple(n for n, s in REGISTRY.items() if s.tunable and s.user)
 #: The realisable strategies (a user's choices): the Pareto set is drawn from them.

@@ -40,7 +40,7 @@ from mpcshare.commands.sim_serve import add_serve_arguments, check_serve_argumen
 from mpcshare.commands.task_option import add_task_argument, task_for_bundle
 from mpcshare.conflicts import SCENARIOS
 from mpcshare.control.types import DEFAULT_BETA
-from mpcshare.run_table import RUN_NAMES
+from mpcshare.run_table import ALL_RUNS, DEFAULT_RUNS, RUN_NAMES
 from sim.task import EATING, Task
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
@@ -65,8 +65,11 @@ def add_sim_arguments(p: argparse.ArgumentParser) -> None:
                    help="simulate at most this many held-out trials (default: all)")
     p.add_argument("--duration", type=positive_float, default=None,
                    help="simulate only the first DURATION seconds of each trial (default: whole trials)")
-    p.add_argument("--runs", nargs="+", choices=RUN_NAMES, default=list(RUN_NAMES), metavar="RUN",
-                   help=f"strategies to simulate (default: all {len(RUN_NAMES)}: {', '.join(RUN_NAMES)}; the "
+    default_names = [r.name for r in DEFAULT_RUNS]
+    others = [n for n in RUN_NAMES if n not in default_names]
+    p.add_argument("--runs", nargs="+", choices=RUN_NAMES, default=default_names, metavar="RUN",
+                   help=f"strategies to simulate (default: {len(default_names)}: {', '.join(default_names)}"
+                        f"{'; also ' + ', '.join(others) if others else ''}; the "
                         "strategies of the registry, gate_mpc, oracle_preview, random_handover: the gate's share and "
                         "hand-overs at random times, 5 draws, oracle_handover: the best replay of error-minimising "
                         "schedules, an upper bound)")
@@ -166,13 +169,13 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
     from mpcshare.conflicts import Scenario
     from mpcshare.control.keepout import KeepOutSettings
     from mpcshare.control.types import ControllerConfig
-    from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies, render_clip
+    from mpcshare.evaluation import compare_strategies, render_clip
     from mpcshare.reports.comparison import write_comparison
     from sim.wearer_presets import wearer_preset
 
     if abs(demos.rate_hz - bundle.rate_hz) > 1e-9 * bundle.rate_hz:
         raise CommandError(f"the data is at {demos.rate_hz:g} Hz, the bundle was trained at {bundle.rate_hz:g} Hz")
-    runs = [r for r in DEFAULT_RUNS if r.name in args.runs]
+    runs = [r for r in ALL_RUNS if r.name in args.runs]
     wearer_name = getattr(args, "wearer", DEFAULT_WEARER_PRESET)
     wearer = wearer_preset(wearer_name)
     scene = scene_from_args(args)

@@ -76,7 +76,7 @@ def serve_controller(args: argparse.Namespace, bundle: Any) -> tuple[Callable[..
         from mpcshare.runtime.transport import Transport
     except ImportError as exc:
         raise CommandError(f"--serve needs the cyclonedds package (pip install 'mpcshare[ros]'): {exc}") from None
-    from mpcshare.run_table import DEFAULT_RUNS
+    from mpcshare.run_table import ALL_RUNS
     from mpcshare.runtime.config import RunConfigError, load_run_config
     from mpcshare.runtime.remote import RemoteController, parse_outage
 
@@ -89,7 +89,7 @@ def serve_controller(args: argparse.Namespace, bundle: Any) -> tuple[Callable[..
     except ValueError as exc:
         raise CommandError(f"--drop/--restart {exc}") from None
     c = config.controller
-    run = next((r for r in DEFAULT_RUNS if r.strategy == c.strategy and r.use_mpc == c.mpc and not r.oracle
+    run = next((r for r in ALL_RUNS if r.strategy == c.strategy and r.use_mpc == c.mpc and not r.oracle
                 and r.schedule is None), None)
     if run is None:
         raise CommandError(f"{path}, [controller]: no simulated run has strategy {c.strategy!r} with mpc = {c.mpc}")

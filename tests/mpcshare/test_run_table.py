@@ -7,6 +7,7 @@ import zlib
 
 from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, user_strategies
 from mpcshare.run_table import (
+    ALL_RUNS,
     DEFAULT_RUNS,
     EXTRA_RUNS,
     RANDOM_DRAWS,
@@ -21,10 +22,13 @@ from mpcshare.run_table import (
 def test_the_runs_are_the_user_strategies_in_registry_order_then_the_extra_runs():
     users = user_strategies()
     assert users == tuple(n for n, s in REGISTRY.items() if s.user)
-    assert [(r.name, r.strategy, r.use_mpc, r.oracle) for r in DEFAULT_RUNS[:len(users)]] == \
+    assert [(r.name, r.strategy, r.use_mpc, r.oracle) for r in ALL_RUNS[:len(users)]] == \
         [(n, n, False, False) for n in users]
-    assert DEFAULT_RUNS[len(users):] == EXTRA_RUNS
-    assert RUN_NAMES == tuple(r.name for r in DEFAULT_RUNS) and len(set(RUN_NAMES)) == len(RUN_NAMES)
+    assert ALL_RUNS[len(users):] == EXTRA_RUNS
+    assert RUN_NAMES == tuple(r.name for r in ALL_RUNS) and len(set(RUN_NAMES)) == len(RUN_NAMES)
+    # the default runs: all but the registered candidates whose spec keeps them out (they run when named)
+    left_out = {n for n, s in REGISTRY.items() if s.user and not s.default_run}
+    assert "qp_blend" in left_out and DEFAULT_RUNS == tuple(r for r in ALL_RUNS if r.name not in left_out)
     assert f"{DEFAULT_STRATEGY}_mpc" in RUN_NAMES and DEFAULT_STRATEGY in users
 
 

@@ -126,7 +126,9 @@ class StrategySpec:
     the reports name the first present); role: one of :data:`ROLES`; settings: the frozen dataclass of the
     strategy's settings (None: it has none), every field with a default, validated in its
     ``__post_init__`` (ValueError naming the field); fusion: one of :data:`FUSIONS`; rule_of: the strategy whose
-    calibrated rule in a bundle this one reads (None: its own). Raises ValueError for another role or fusion.
+    calibrated rule in a bundle this one reads (None: its own); default_run: among the runs ``sim`` and ``demo`` make
+    by default (False: a registered candidate, run when named, e.g. ``--runs``). Raises ValueError for another role
+    or fusion.
     """
 
     name: str
@@ -140,6 +142,7 @@ class StrategySpec:
     settings: type | None = field(default=None, kw_only=True)
     fusion: str = field(default="velocity", kw_only=True)
     rule_of: str | None = field(default=None, kw_only=True)
+    default_run: bool = field(default=True, kw_only=True)
 
     def __post_init__(self) -> None:
         if self.role not in ROLES:

@@ -72,4 +72,5 @@ def make(ctx: StrategyContext) -> QPBlend:
 
 SPECS = (StrategySpec("qp_blend", "A candidate: the gate's authority applied inside the QP, which weighs each "
                       "party's own tip reference by alpha and 1 - alpha.", tunable=False, color="#6b8e23",
-                      factory=make, order=7, role="shared", settings=QPBlendSettings, fusion="qp", rule_of="gate"),)
+                      factory=make, order=7, role="shared", settings=QPBlendSettings, fusion="qp", rule_of="gate",
+                      default_run=False),)
