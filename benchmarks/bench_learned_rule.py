@@ -63,7 +63,9 @@ def _bundle_and_choice(world: str, root: Path, demos: Any, mode_names: Any) -> t
         choice = {k: full[k] for k in ("settings", "trials", "wearer_modes")}
         world_dir(world, root).mkdir(parents=True, exist_ok=True)
         (world_dir(world, root) / "choice.json").write_text(json.dumps(choice, default=float))
-    bundle.metrics["rule_settings"] = choice["settings"]
+    from mpcshare.bundle.rule import CalibratedRule
+
+    bundle.rule = CalibratedRule("gate", choice["settings"], choice)  # what the controller reads (not the metrics)
     return bundle, choice
 
 
