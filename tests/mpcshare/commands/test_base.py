@@ -71,8 +71,9 @@ def test_sim_help_names_the_runs_it_runs_by_default():
     sim.add_arguments(p)
     text = " ".join(p.format_help().split())
     names = [r.name for r in DEFAULT_RUNS]
-    assert f"default: all {len(names)}: {', '.join(names)}" in text
+    assert f"default: {len(names)}: {', '.join(names)}; also qp_blend" in text  # a candidate runs when named
     assert p.parse_args(["--model", "m", "--out", "o"]).runs == names
+    assert p.parse_args(["--model", "m", "--out", "o", "--runs", "qp_blend"]).runs == ["qp_blend"]
 
 
 @pytest.mark.parametrize("argv", [
