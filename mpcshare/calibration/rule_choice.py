@@ -337,11 +337,13 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
                       duration_s: float | None = RULE_DURATION_S, wearer_name: str | None = None,
                       mode_names: Sequence[str] | None = None,
                       log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
-                      workers: int | None = None, task: Task = EATING) -> dict[str, Any]:
+                      workers: int | None = None, task: Task = EATING,
+                      mixes: Sequence[str] = MIXES) -> dict[str, Any]:
     """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
-    1 to 2) with the wearer preset ``wearer_name`` (default the default preset) and the demonstrations'
-    ``mode_names`` (for ``task``'s stroke modes), recorded as the bundle's rule (``bundle.rule``, a
-    :class:`~mpcshare.bundle.rule.CalibratedRule` for ``gate``) so that the saved bundle's ``gate`` uses it;
+    1 to 2) with the wearer preset ``wearer_name`` (default the default preset), the demonstrations'
+    ``mode_names`` (for ``task``'s stroke modes) and the comparators ``mixes`` (:func:`choose_rule`), recorded as
+    the bundle's rule (``bundle.rule``, a :class:`~mpcshare.bundle.rule.CalibratedRule` for ``gate``) so that the
+    saved bundle's ``gate`` uses it;
     returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
     :func:`mpcshare.evaluation.episode_pool.default_workers`) closed afterwards; the choice is the same
     whatever the number. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
@@ -351,7 +353,7 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     trials = choice_trials(bundle.heldout_trials, n_trials)
     with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
         choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
-                             mode_names=mode_names, pool=episodes, task=task)
+                             mode_names=mode_names, pool=episodes, task=task, mixes=mixes)
     choice["wearer"] = name
     bundle.rule = CalibratedRule("gate", choice["settings"], choice)
     return choice

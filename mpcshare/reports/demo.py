@@ -167,10 +167,15 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
         parts += ["## 4. Closed loop in MuJoCo", "", _section((out / "sim" / "comparison.md").read_text(), "sim")]
     parts += ["## Time per stage", "", "| stage | time [s] |", "|---|---|",
               *[f"| {k} | {v:.0f} |" for k, v in timings_s.items()], ""]
-    pruned = (training.get("rule_choice") or {}).get("pruned") or []
+    choice = training.get("rule_choice") or {}
+    pruned = choice.get("pruned") or []
     if pruned:  # what was not simulated, and why
         parts += ["The hand-over rule's choice did not simulate: " + "; ".join(
             f"the wearer leading modes {r['wearer_modes']} (the per-mode costs: {r['why']})" for r in pruned) + ".", ""]
+    if choice and not choice.get("mixes"):  # the demo leaves its comparators out (commands/demo.py)
+        parts += ["The demo's rule choice ran without the constant mixtures beside its candidates, to fit three "
+                  "minutes: `mpcshare train` runs them on its choice trials, and the closed loop above runs them on "
+                  "the evaluation trials.", ""]
     md = "\n".join(parts) + "\n"
     with atomic_open(out / "report.md", "w") as f:
         f.write(md)

@@ -35,11 +35,14 @@ def test_demo_runs_every_stage_into_one_report(tmp_path, capsys):
     closing = said.split("What the robot did:")[1]
     assert [ln.strip().split(":")[0] for ln in closing.splitlines()[1:5]] == ["The task", "Sharing", "Effort",
                                                                              "Keep-out"]
-    from mpcshare.run_table import RUN_NAMES
+    from mpcshare.run_table import DEFAULT_RUNS
 
-    assert set(comparison["strategies"]) == set(RUN_NAMES) >= {"voluntary", "reactive", "mix25", "mix50", "mix75",
-                                                                "gate", "paper_gate", "random_handover",
-                                                                "oracle_handover"}
+    assert set(comparison["strategies"]) == {r.name for r in DEFAULT_RUNS} >= {
+        "voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "paper_gate", "random_handover", "oracle_handover"}
+    # the demo's choice leaves its mixture comparators to the closed loop, and says so in its log and report
+    choice = json.loads((out / "model" / "rule.json").read_text())["rule"]["choice"]
+    assert choice["mixes"] == [] and "leaves out the constant mixtures" in said
+    assert "ran without the constant mixtures beside its candidates" in (out / "report.md").read_text()
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
     assert comparison["wearer"]["preset"] == "unimpaired"  # --wearer reaches the closed loop
     gate = comparison["strategies"]["gate"]  # the task figures: lag, sawing while cutting, RMS per mode
