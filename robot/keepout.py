@@ -84,7 +84,11 @@ def closest_segment_points(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: n
 
     Plain floats: for 3-vectors they are several times faster than numpy calls (it runs per
     zone and step)."""
-    P0, P1, Q0, Q1 = p0.tolist(), p1.tolist(), q0.tolist(), q1.tolist()
+    return _closest(p0.tolist(), p1.tolist(), q0.tolist(), q1.tolist())
+
+
+def _closest(P0: list[float], P1: list[float], Q0: list[float], Q1: list[float]) -> tuple[float, float]:
+    """:func:`closest_segment_points` on plain lists."""
     d1 = (P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2])
     d2 = (Q1[0] - Q0[0], Q1[1] - Q0[1], Q1[2] - Q0[2])
     r = (P0[0] - Q0[0], P0[1] - Q0[1], P0[2] - Q0[2])
@@ -110,19 +114,20 @@ def closest_segment_points(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: n
 
 def segment_zone_clearance(tip: np.ndarray, heel: np.ndarray, zone: Zone) -> ZoneClearance:
     """Clearance of the blade segment tip–heel to ``zone`` (surface distance, no margin)."""
-    s, t = closest_segment_points(tip, heel, zone.a, zone.b)
-    pb = tip + s * (heel - tip)
-    pz = zone.a + t * (zone.b - zone.a)
-    diff = pb - pz
-    dist = math.sqrt(_dot(diff.tolist(), diff.tolist()))
+    T, H, A, B = tip.tolist(), heel.tolist(), zone.a.tolist(), zone.b.tolist()
+    s, t = _closest(T, H, A, B)
+    pb = [x + s * (y - x) for x, y in zip(T, H)]  # elementwise as numpy's: the same floats
+    pz = [x + t * (y - x) for x, y in zip(A, B)]
+    diff = [x - y for x, y in zip(pb, pz)]
+    dist = math.sqrt(_dot(diff, diff))
     if dist > 1e-12:
-        normal = diff / dist
+        normal = np.array([x / dist for x in diff])
     else:  # on the axis: push along the blade's perpendicular nearest to world up
         axis = heel - tip
         normal = np.cross(axis, np.cross(np.array([0.0, 0.0, 1.0]), axis))
         nn = float(np.linalg.norm(normal))
         normal = normal / nn if nn > 1e-12 else np.array([0.0, 0.0, 1.0])
-    return ZoneClearance(dist - zone.radius, s, normal, pb, pz)
+    return ZoneClearance(dist - zone.radius, s, normal, np.array(pb), np.array(pz))
 
 
 def segment_zone_clearances(tip: np.ndarray, heel: np.ndarray, a: np.ndarray, b: np.ndarray,
@@ -292,15 +297,16 @@ class KeepOutLimit:
             c = segment_zone_clearance(tip.p, heel.p, z)
             s, n = c.s, c.normal
             vb = (1.0 - s) * tip.v + s * heel.v
+            nvb = float(n @ vb)
             self.clearances.append(c)
-            self.approach.append(-float(n @ vb))
+            self.approach.append(-nvb)
             d = c.distance - cfg.margin
             if d - z.uncertainty > cfg.active_distance_m:
                 continue
             Jb = (1.0 - s) * tip.J + s * heel.J
             ab = (1.0 - s) * tip.drift + s * heel.drift
             nJ = -dt * (n @ Jb)
-            own = float(n @ vb) + dt * float(n @ ab)  # −(the knife's own approach speed after a = 0)
+            own = nvb + dt * float(n @ ab)  # −(the knife's own approach speed after a = 0)
             nz = float(n @ z.velocity)
             s_rel = -float(n @ (vb - z.velocity))
             u_barrier = _viable_bound_scalar(d, s_rel, dt, cfg.brake_acceleration)
