@@ -114,7 +114,12 @@ def _closest(P0: list[float], P1: list[float], Q0: list[float], Q1: list[float])
 
 def segment_zone_clearance(tip: np.ndarray, heel: np.ndarray, zone: Zone) -> ZoneClearance:
     """Clearance of the blade segment tip–heel to ``zone`` (surface distance, no margin)."""
-    T, H, A, B = tip.tolist(), heel.tolist(), zone.a.tolist(), zone.b.tolist()
+    return _clearance(tip, heel, tip.tolist(), heel.tolist(), zone)
+
+
+def _clearance(tip: np.ndarray, heel: np.ndarray, T: list[float], H: list[float], zone: Zone) -> ZoneClearance:
+    """:func:`segment_zone_clearance` with the blade also as lists ``T``, ``H``."""
+    A, B = zone.a.tolist(), zone.b.tolist()
     s, t = _closest(T, H, A, B)
     pb = [x + s * (y - x) for x, y in zip(T, H)]  # elementwise as numpy's: the same floats
     pz = [x + t * (y - x) for x, y in zip(A, B)]
@@ -292,9 +297,10 @@ class KeepOutLimit:
         rows = 2 * cfg.max_zones
         G, h = np.zeros((rows, state.q.size)), np.full(rows, _FREE)
         tip, heel = self.knife(state.q, state.v)
+        T, H = tip.p.tolist(), heel.p.tolist()
         self.clearances, self.approach = [], []
         for i, z in enumerate(self.zones):
-            c = segment_zone_clearance(tip.p, heel.p, z)
+            c = _clearance(tip.p, heel.p, T, H, z)
             s, n = c.s, c.normal
             vb = (1.0 - s) * tip.v + s * heel.v
             nvb = float(n @ vb)

@@ -23,6 +23,7 @@ the steps where it would not).
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 
 import mujoco
@@ -149,7 +150,7 @@ class JointServo:
         a[:] = a_l
         mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
         tau += d.qfrc_bias
-        fits = all(abs(t) <= m for t, m in zip(tau.tolist(), self._tau_max_l))
+        fits = all(map(operator.le, map(abs, tau.tolist()), self._tau_max_l))  # |τ_i| ≤ τ_max,i
         if active or not fits:
             self._check_brake(v)
         if fits:
