@@ -295,7 +295,7 @@ class KeepOutLimit:
     def compute_qp_inequalities(self, state: ControlState) -> Constraint:
         cfg, dt = self.config, state.dt
         rows = 2 * cfg.max_zones
-        G, h = np.zeros((rows, state.q.size)), np.full(rows, _FREE)
+        G, h = np.zeros((rows, state.q.size)), [_FREE] * rows
         tip, heel = self.knife(state.q, state.v)
         T, H = tip.p.tolist(), heel.p.tolist()
         self.clearances, self.approach = [], []
@@ -316,7 +316,8 @@ class KeepOutLimit:
             nz = float(n @ z.velocity)
             s_rel = -float(n @ (vb - z.velocity))
             u_barrier = _viable_bound_scalar(d, s_rel, dt, cfg.brake_acceleration)
-            G[2 * i], h[2 * i] = nJ, u_barrier + own - nz
+            G[2 * i:2 * i + 2] = nJ  # both rows
+            h[2 * i] = u_barrier + own - nz
             v_h = max(0.0, nz) + z.uncertainty_rate
             d_ssm = d - z.uncertainty
             u_ssm = min((d_ssm - v_h * cfg.human_time_s) / cfg.reaction_time_s,
@@ -324,10 +325,11 @@ class KeepOutLimit:
             # a protective stop; inside an uncertain region, a gentle retreat (at most the zone's cap)
             u_ssm = max(-z.speed_cap, d_ssm / cfg.reaction_time_s) if z.uncertainty > 0.0 and d_ssm < 0.0 \
                 else max(0.0, u_ssm)
-            G[2 * i + 1], h[2 * i + 1] = nJ, u_ssm + own
+            h[2 * i + 1] = u_ssm + own
         G.flags.writeable = False
-        h.flags.writeable = False
-        self.rows = Constraint(G, h)
+        h_rows = np.array(h)
+        h_rows.flags.writeable = False
+        self.rows = Constraint(G, h_rows)
         return self.rows
 
 
