@@ -96,6 +96,7 @@ class JointServo:
         self._M = np.zeros((n, n))
         # per-step scratch arrays (no allocation on the fast path)
         self._a = np.zeros(n)
+        self._qpos, self._qvel, self._bias = data.qpos, data.qvel, data.qfrc_bias  # views into MuJoCo's state
         self._tau, self._tau_brake, self._a_brake = np.zeros(n), np.zeros(n), np.zeros(n)
         # beyond this distance to a limit the viable bound exceeds v_max: v_max²/(2A) + v_max·h [rad]
         self._free_gap = [vm * vm / (2.0 * a) + vm * self.h for vm, a in zip(self.v_max, self.A)]
@@ -124,7 +125,7 @@ class JointServo:
         the servo may rely on it: whenever the viable box or the torque limit is active.
         """
         d, h, data_time = self.data, self.h, self.data.time
-        q, v = d.qpos.tolist(), d.qvel.tolist()  # nq = nv = n (checked in __init__)
+        q, v = self._qpos.tolist(), self._qvel.tolist()  # nq = nv = n (checked in __init__)
         q_c, v_c, a_c, t_end = self._seg_l
         r = max(t_end - data_time, 0.0)
         kp, kd = self.kp, self.kd
@@ -149,7 +150,7 @@ class JointServo:
         a, tau = self._a, self._tau
         a[:] = a_l
         mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
-        tau += d.qfrc_bias
+        tau += self._bias
         fits = all(map(operator.le, map(abs, tau.tolist()), self._tau_max_l))  # |τ_i| ≤ τ_max,i
         if active or not fits:
             self._check_brake(v)
