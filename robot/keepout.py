@@ -171,6 +171,12 @@ def _dots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
 
 
+def _lerp(x: list[float], y: list[float], s: float) -> tuple[float, float, float]:
+    """(1 − s)·x + s·y of two 3-vectors, elementwise as numpy computes it (the same floats)."""
+    w = 1.0 - s
+    return w * x[0] + s * y[0], w * x[1] + s * y[1], w * x[2] + s * y[2]
+
+
 @dataclass(frozen=True)
 class KeepOutConfig:
     """Settings of the keep-out rows.
@@ -298,11 +304,13 @@ class KeepOutLimit:
         G, h = np.zeros((rows, state.q.size)), [_FREE] * rows
         tip, heel = self.knife(state.q, state.v)
         T, H = tip.p.tolist(), heel.p.tolist()
+        tv, hv, ta, ha = tip.v.tolist(), heel.v.tolist(), tip.drift.tolist(), heel.drift.tolist()
         self.clearances, self.approach = [], []
         for i, z in enumerate(self.zones):
             c = _clearance(tip.p, heel.p, T, H, z)
             s, n = c.s, c.normal
-            vb = (1.0 - s) * tip.v + s * heel.v
+            vb_l = _lerp(tv, hv, s)
+            vb = np.array(vb_l)  # (1 − s)·v_tip + s·v_heel
             nvb = float(n @ vb)
             self.clearances.append(c)
             self.approach.append(-nvb)
@@ -310,11 +318,12 @@ class KeepOutLimit:
             if d - z.uncertainty > cfg.active_distance_m:
                 continue
             Jb = (1.0 - s) * tip.J + s * heel.J
-            ab = (1.0 - s) * tip.drift + s * heel.drift
+            ab = np.array(_lerp(ta, ha, s))
             nJ = -dt * (n @ Jb)
             own = nvb + dt * float(n @ ab)  # −(the knife's own approach speed after a = 0)
             nz = float(n @ z.velocity)
-            s_rel = -float(n @ (vb - z.velocity))
+            zv0, zv1, zv2 = z.velocity.tolist()
+            s_rel = -float(n @ np.array((vb_l[0] - zv0, vb_l[1] - zv1, vb_l[2] - zv2)))
             u_barrier = _viable_bound_scalar(d, s_rel, dt, cfg.brake_acceleration)
             G[2 * i:2 * i + 2] = nJ  # both rows
             h[2 * i] = u_barrier + own - nz
