@@ -84,8 +84,9 @@ class FloorLimit:
         if n is not None:
             for i, pt in enumerate(self.blade.knife(state.q, state.v)):
                 d = float(n @ pt.p) - self.offset
-                s = -float(n @ pt.v)
-                own = float(n @ pt.v) + dt * float(n @ pt.drift)  # −(approach speed after a = 0)
+                nv = float(n @ pt.v)
+                s = -nv
+                own = nv + dt * float(n @ pt.drift)  # −(approach speed after a = 0)
                 if d >= 0.0:
                     u = _viable_bound_scalar(d, s, dt, cfg.brake_acceleration)
                 else:

@@ -84,7 +84,11 @@ def closest_segment_points(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: n
 
     Plain floats: for 3-vectors they are several times faster than numpy calls (it runs per
     zone and step)."""
-    P0, P1, Q0, Q1 = p0.tolist(), p1.tolist(), q0.tolist(), q1.tolist()
+    return _closest(p0.tolist(), p1.tolist(), q0.tolist(), q1.tolist())
+
+
+def _closest(P0: list[float], P1: list[float], Q0: list[float], Q1: list[float]) -> tuple[float, float]:
+    """:func:`closest_segment_points` on plain lists."""
     d1 = (P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2])
     d2 = (Q1[0] - Q0[0], Q1[1] - Q0[1], Q1[2] - Q0[2])
     r = (P0[0] - Q0[0], P0[1] - Q0[1], P0[2] - Q0[2])
@@ -110,19 +114,25 @@ def closest_segment_points(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: n
 
 def segment_zone_clearance(tip: np.ndarray, heel: np.ndarray, zone: Zone) -> ZoneClearance:
     """Clearance of the blade segment tip–heel to ``zone`` (surface distance, no margin)."""
-    s, t = closest_segment_points(tip, heel, zone.a, zone.b)
-    pb = tip + s * (heel - tip)
-    pz = zone.a + t * (zone.b - zone.a)
-    diff = pb - pz
-    dist = math.sqrt(_dot(diff.tolist(), diff.tolist()))
+    return _clearance(tip, heel, tip.tolist(), heel.tolist(), zone)
+
+
+def _clearance(tip: np.ndarray, heel: np.ndarray, T: list[float], H: list[float], zone: Zone) -> ZoneClearance:
+    """:func:`segment_zone_clearance` with the blade also as lists ``T``, ``H``."""
+    A, B = zone.a.tolist(), zone.b.tolist()
+    s, t = _closest(T, H, A, B)
+    pb = [x + s * (y - x) for x, y in zip(T, H)]  # elementwise as numpy's: the same floats
+    pz = [x + t * (y - x) for x, y in zip(A, B)]
+    diff = [x - y for x, y in zip(pb, pz)]
+    dist = math.sqrt(_dot(diff, diff))
     if dist > 1e-12:
-        normal = diff / dist
+        normal = np.array([x / dist for x in diff])
     else:  # on the axis: push along the blade's perpendicular nearest to world up
         axis = heel - tip
         normal = np.cross(axis, np.cross(np.array([0.0, 0.0, 1.0]), axis))
         nn = float(np.linalg.norm(normal))
         normal = normal / nn if nn > 1e-12 else np.array([0.0, 0.0, 1.0])
-    return ZoneClearance(dist - zone.radius, s, normal, pb, pz)
+    return ZoneClearance(dist - zone.radius, s, normal, np.array(pb), np.array(pz))
 
 
 def segment_zone_clearances(tip: np.ndarray, heel: np.ndarray, a: np.ndarray, b: np.ndarray,
@@ -159,6 +169,12 @@ def segment_zone_clearances(tip: np.ndarray, heel: np.ndarray, a: np.ndarray, b:
 def _dots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Row-wise x·y of (N, 3) arrays in :func:`_dot`'s order of operations."""
     return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
+
+
+def _lerp(x: list[float], y: list[float], s: float) -> tuple[float, float, float]:
+    """(1 − s)·x + s·y of two 3-vectors, elementwise as numpy computes it (the same floats)."""
+    w = 1.0 - s
+    return w * x[0] + s * y[0], w * x[1] + s * y[1], w * x[2] + s * y[2]
 
 
 @dataclass(frozen=True)
@@ -285,26 +301,32 @@ class KeepOutLimit:
     def compute_qp_inequalities(self, state: ControlState) -> Constraint:
         cfg, dt = self.config, state.dt
         rows = 2 * cfg.max_zones
-        G, h = np.zeros((rows, state.q.size)), np.full(rows, _FREE)
+        G, h = np.zeros((rows, state.q.size)), [_FREE] * rows
         tip, heel = self.knife(state.q, state.v)
+        T, H = tip.p.tolist(), heel.p.tolist()
+        tv, hv, ta, ha = tip.v.tolist(), heel.v.tolist(), tip.drift.tolist(), heel.drift.tolist()
         self.clearances, self.approach = [], []
         for i, z in enumerate(self.zones):
-            c = segment_zone_clearance(tip.p, heel.p, z)
+            c = _clearance(tip.p, heel.p, T, H, z)
             s, n = c.s, c.normal
-            vb = (1.0 - s) * tip.v + s * heel.v
+            vb_l = _lerp(tv, hv, s)
+            vb = np.array(vb_l)  # (1 − s)·v_tip + s·v_heel
+            nvb = float(n @ vb)
             self.clearances.append(c)
-            self.approach.append(-float(n @ vb))
+            self.approach.append(-nvb)
             d = c.distance - cfg.margin
             if d - z.uncertainty > cfg.active_distance_m:
                 continue
             Jb = (1.0 - s) * tip.J + s * heel.J
-            ab = (1.0 - s) * tip.drift + s * heel.drift
+            ab = np.array(_lerp(ta, ha, s))
             nJ = -dt * (n @ Jb)
-            own = float(n @ vb) + dt * float(n @ ab)  # −(the knife's own approach speed after a = 0)
+            own = nvb + dt * float(n @ ab)  # −(the knife's own approach speed after a = 0)
             nz = float(n @ z.velocity)
-            s_rel = -float(n @ (vb - z.velocity))
+            zv0, zv1, zv2 = z.velocity.tolist()
+            s_rel = -float(n @ np.array((vb_l[0] - zv0, vb_l[1] - zv1, vb_l[2] - zv2)))
             u_barrier = _viable_bound_scalar(d, s_rel, dt, cfg.brake_acceleration)
-            G[2 * i], h[2 * i] = nJ, u_barrier + own - nz
+            G[2 * i:2 * i + 2] = nJ  # both rows
+            h[2 * i] = u_barrier + own - nz
             v_h = max(0.0, nz) + z.uncertainty_rate
             d_ssm = d - z.uncertainty
             u_ssm = min((d_ssm - v_h * cfg.human_time_s) / cfg.reaction_time_s,
@@ -312,10 +334,11 @@ class KeepOutLimit:
             # a protective stop; inside an uncertain region, a gentle retreat (at most the zone's cap)
             u_ssm = max(-z.speed_cap, d_ssm / cfg.reaction_time_s) if z.uncertainty > 0.0 and d_ssm < 0.0 \
                 else max(0.0, u_ssm)
-            G[2 * i + 1], h[2 * i + 1] = nJ, u_ssm + own
+            h[2 * i + 1] = u_ssm + own
         G.flags.writeable = False
-        h.flags.writeable = False
-        self.rows = Constraint(G, h)
+        h_rows = np.array(h)
+        h_rows.flags.writeable = False
+        self.rows = Constraint(G, h_rows)
         return self.rows
 
 

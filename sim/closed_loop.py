@@ -200,14 +200,17 @@ class _Loop:
             bt, bq, bv, bf = self.rec_t[blk], self.rec_q[blk], self.rec_v[blk], self.rec_tau[blk]
         else:
             bt, bq, bv, bf = self._buf
+        qpos, qvel, force, ctrl = d.qpos, d.qvel, d.actuator_force, d.ctrl  # views into MuJoCo's state
+        set_time, torque, step1, step2, h = world.set_time, self.servo.torque, mujoco.mj_step1, mujoco.mj_step2, \
+            sc.timestep
         for j in range(n_sub):
             if j:  # the first sub-step's kinematics were computed by control_step
-                world.set_time(t_k + j * sc.timestep)
-                mujoco.mj_step1(m, d)
-            d.ctrl = self.servo.torque()
-            mujoco.mj_step2(m, d)
+                set_time(t_k + j * h)
+                step1(m, d)
+            ctrl[:] = torque()
+            step2(m, d)
             bt[j] = d.time
-            bq[j], bv[j], bf[j] = d.qpos, d.qvel, d.actuator_force  # the arm is the whole state
+            bq[j], bv[j], bf[j] = qpos, qvel, force  # the arm is the whole state
         self._check_limits(bq, bv, bf)
 
     def _check_limits(self, bq: np.ndarray, bv: np.ndarray, bf: np.ndarray) -> None:

@@ -225,6 +225,12 @@ class EatingScene:
         self.phases = np.random.default_rng(seed).uniform(0.0, 2.0 * math.pi, 2)
         self._ph0, self._ph1 = float(self.phases[0]), float(self.phases[1])
         self._quat = np.zeros(4)
+        # the torso's mocap rows as views (set at every physics step)
+        self._torso_pos = self.data.mocap_pos[self.torso_mocap]
+        self._torso_quat = self.data.mocap_quat[self.torso_mocap]
+        c0 = self.config
+        self._sway = (2.0 * math.pi * c0.breathing_hz, 2.0 * math.pi * c0.posture_hz, *c0.breathing_amplitude_m,
+                      *c0.posture_amplitude_m, 0.5 * c0.posture_pitch_rad)
 
     # ------------------------------------------------------------------ poses
     def base_pose(self, t: float) -> np.ndarray:
@@ -238,14 +244,12 @@ class EatingScene:
         Same pose as :meth:`SceneConfig.torso_pose` (pitch about y: quaternion
         (cos θ/2, 0, sin θ/2, 0)), in plain floats: it runs at every physics step.
         """
-        c = self.config
-        sb = math.sin(2.0 * math.pi * c.breathing_hz * t + self._ph0)
-        sp = math.sin(2.0 * math.pi * c.posture_hz * t + self._ph1)
-        ab, ap = c.breathing_amplitude_m, c.posture_amplitude_m
-        self.data.mocap_pos[self.torso_mocap] = (ab[0] * sb + ap[0] * sp, ab[1] * sb + ap[1] * sp,
-                                                 ab[2] * sb + ap[2] * sp)
-        half = 0.5 * c.posture_pitch_rad * sp
-        self.data.mocap_quat[self.torso_mocap] = (math.cos(half), 0.0, math.sin(half), 0.0)
+        wb, wp, ab0, ab1, ab2, ap0, ap1, ap2, half_pitch = self._sway
+        sb = math.sin(wb * t + self._ph0)
+        sp = math.sin(wp * t + self._ph1)
+        self._torso_pos[:] = (ab0 * sb + ap0 * sp, ab1 * sb + ap1 * sp, ab2 * sb + ap2 * sp)
+        half = half_pitch * sp
+        self._torso_quat[:] = (math.cos(half), 0.0, math.sin(half), 0.0)
 
     def set_fork(self, pose: np.ndarray, t: float | None = None) -> None:
         """Place the fork tip at ``pose`` = (x, y, z [m], roll, pitch, yaw [rad]) in the plate frame,

@@ -23,6 +23,7 @@ the steps where it would not).
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 
 import mujoco
@@ -94,10 +95,12 @@ class JointServo:
         self.kd = 2.0 * self.config.zeta * self.config.omega
         self._M = np.zeros((n, n))
         # per-step scratch arrays (no allocation on the fast path)
-        self._a, self._lo, self._hi, self._a_des = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+        self._a = np.zeros(n)
+        self._qpos, self._qvel, self._bias = data.qpos, data.qvel, data.qfrc_bias  # views into MuJoCo's state
         self._tau, self._tau_brake, self._a_brake = np.zeros(n), np.zeros(n), np.zeros(n)
         # beyond this distance to a limit the viable bound exceeds v_max: v_max²/(2A) + v_max·h [rad]
         self._free_gap = [vm * vm / (2.0 * a) + vm * self.h for vm, a in zip(self.v_max, self.A)]
+        self._joints = list(zip(self.q_min, self.q_max, self.v_max, self.A, self._free_gap))  # per joint, in order
         self._qp = make_backend("auto", n, 2 * n, 1e-12)
         self._G = np.zeros((2 * n, n))
         self.qp_steps = self.fallback_steps = self.brake_infeasible = 0
@@ -121,38 +124,40 @@ class JointServo:
         below v_max and is not evaluated.  Braking feasibility is checked where
         the servo may rely on it: whenever the viable box or the torque limit is active.
         """
-        d, h = self.data, self.h
-        q, v = d.qpos.tolist(), d.qvel.tolist()  # nq = nv = n (checked in __init__)
+        d, h, data_time = self.data, self.h, self.data.time
+        q, v = self._qpos.tolist(), self._qvel.tolist()  # nq = nv = n (checked in __init__)
         q_c, v_c, a_c, t_end = self._seg_l
-        r = max(t_end - d.time, 0.0)
-        kp, kd, vmax, A, free = self.kp, self.kd, self.v_max, self.A, self._free_gap
-        a, lo, hi, a_des = self._a, self._lo, self._hi, self._a_des
+        r = max(t_end - data_time, 0.0)
+        kp, kd = self.kp, self.kd
+        a_l, lo_l, hi_l, ad_l = [], [], [], []
         active = False
-        for i in range(self.n):
-            qi, vi = q[i], v[i]
-            ad = a_c[i] + kp * (q_c[i] - v_c[i] * r + 0.5 * a_c[i] * r * r - qi) + kd * (v_c[i] - a_c[i] * r - vi)
-            gap_up, gap_lo = self.q_max[i] - qi, qi - self.q_min[i]
-            v_up = vmax[i] if gap_up >= free[i] else min(vmax[i], viable_next_velocity(gap_up, A[i], h))
-            v_lo = -vmax[i] if gap_lo >= free[i] else max(-vmax[i], -viable_next_velocity(gap_lo, A[i], h))
+        for qi, vi, qc, vc, ac, (q_lo, q_hi, vm, A, free) in zip(q, v, q_c, v_c, a_c, self._joints):
+            ad = ac + kp * (qc - vc * r + 0.5 * ac * r * r - qi) + kd * (vc - ac * r - vi)
+            gap_up, gap_lo = q_hi - qi, qi - q_lo
+            v_up = vm if gap_up >= free else min(vm, viable_next_velocity(gap_up, A, h))
+            v_lo = -vm if gap_lo >= free else max(-vm, -viable_next_velocity(gap_lo, A, h))
             if v_lo > v_up:  # only beyond a position limit: head back at the speed limit
-                v_lo = v_up = vmax[i] if qi < self.q_min[i] else -vmax[i]
+                v_lo = v_up = vm if qi < q_lo else -vm
             lo_i, hi_i = (v_lo - vi) / h, (v_up - vi) / h
-            lo[i], hi[i], a_des[i] = lo_i, hi_i, ad
+            lo_l.append(lo_i)
+            hi_l.append(hi_i)
+            ad_l.append(ad)
             if ad < lo_i:
                 ad, active = lo_i, True
             elif ad > hi_i:
                 ad, active = hi_i, True
-            a[i] = ad
-        tau = self._tau
+            a_l.append(ad)
+        a, tau = self._a, self._tau
+        a[:] = a_l
         mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
-        tau += d.qfrc_bias
-        fits = all(abs(t) <= m for t, m in zip(tau.tolist(), self._tau_max_l))
+        tau += self._bias
+        fits = all(map(operator.le, map(abs, tau.tolist()), self._tau_max_l))  # |τ_i| ≤ τ_max,i
         if active or not fits:
             self._check_brake(v)
         if fits:
             return tau.copy()
         mujoco.mj_fullM(self.model, d, self._M)
-        return self._constrained(self._M.copy(), d.qfrc_bias.copy(), a_des.copy(), lo.copy(), hi.copy())
+        return self._constrained(self._M.copy(), d.qfrc_bias.copy(), np.array(ad_l), np.array(lo_l), np.array(hi_l))
 
     def _check_brake(self, v: list[float]) -> None:
         """Count the step if braking a_b = clip(−v/h, ±A) would need more than τ_max."""

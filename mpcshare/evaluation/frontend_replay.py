@@ -8,6 +8,7 @@ stream and the gate on the model ticks (``controller.bundle.predictor``, ``.gate
 :class:`FrontEndRecording` holds what each of those calls returned (or raised), in call order, with its control
 step (one ``frontend.step``), and the arbitration's observation-only inputs (``controller.arbiter.decide``:
 time, gate probability, novelty, prediction finite, available, mode posterior; the arbitration always runs).
+The keep-out's zones are given back where their inputs are the recorded ones (:mod:`.keepout_replay`).
 :func:`record_front_end` wraps a live controller's parts so that its episode records them;
 :func:`replay_front_end` swaps in parts that give the recording back; :func:`simulate_cached` does either, per
 process, bundle and trial.
@@ -28,6 +29,7 @@ import numpy as np
 
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation.episode import simulate_episode
+from mpcshare.evaluation.keepout_replay import RecordedKeepOut, ZoneLog
 
 __all__ = ["FrontEndDiverged", "FrontEndRecording", "decisions", "record_front_end", "replay_front_end", "replayable",
            "simulate_cached"]
@@ -48,6 +50,7 @@ class FrontEndRecording:
 
     calls: dict[str, list[tuple[int, Any, tuple[bool, Any]]]] = field(
         default_factory=lambda: {name: [] for name in _CALLS})
+    zones: ZoneLog = field(default_factory=list)  # the keep-out's calls (:mod:`.keepout_replay`)
 
     @property
     def steps(self) -> int:
@@ -269,7 +272,9 @@ def _wrap(controller: Any, via: _Recorder | _Player) -> None:
     controller.parts = replace(
         parts, frontend=_FrontEnd(parts.frontend, via), bundle=_Bundle(parts.bundle, via),
         fast=None if parts.fast is None else _Fast(parts.fast, via), forecast=_Track(parts.forecast, via),
-        arbiter=_Arbiter(parts.arbiter, via))
+        arbiter=_Arbiter(parts.arbiter, via),
+        keepout=None if parts.keepout is None else
+        RecordedKeepOut(parts.keepout, via.recording.zones, replaying=isinstance(via, _Player)))
 
 
 def record_front_end(controller: Any) -> FrontEndRecording:

@@ -47,6 +47,21 @@ def test_batched_clearances_are_the_scalar_ones_row_by_row():
         assert dist[k] == one.distance and s[k] == one.s and np.array_equal(normal[k], one.normal), k
 
 
+def test_the_closest_points_are_numpys_interpolation_to_the_last_bit():
+    rng = np.random.default_rng(2)
+    for tip, heel, a, b in rng.normal(size=(200, 4, 3)) * rng.uniform(0.01, 10.0, (200, 1, 1)):
+        c = segment_zone_clearance(tip, heel, Zone("z", a, b, 0.05, np.zeros(3), 0.1))
+        s, t = closest_segment_points(tip, heel, a, b)
+        pb, pz = tip + s * (heel - tip), a + t * (b - a)
+        assert np.array_equal(c.blade_point, pb) and np.array_equal(c.zone_point, pz)
+        dist = float(np.sqrt(_dot3(pb - pz)))
+        assert c.distance == dist - 0.05 and np.array_equal(c.normal, (pb - pz) / dist)
+
+
+def _dot3(x):
+    return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
+
+
 def test_segment_distance_matches_brute_force():
     rng = np.random.default_rng(0)
     for _ in range(40):

@@ -86,13 +86,12 @@ class _NaiveServo(JointServo):
     """Tracks without the viable box (torque clipped only): what the limits look like without it."""
 
     def torque(self):
-        lo, hi = self.q_min, self.q_max
-        self.q_min, self.q_max = [-1e9] * 3, [1e9] * 3
-        self.v_max, saved = [1e9] * 3, self.v_max
+        saved = self._joints  # per joint (q_min, q_max, v_max, A, free gap)
+        self._joints = [(-1e9, 1e9, 1e9, A, free) for _, _, _, A, free in saved]
         try:
             return super().torque()
         finally:
-            self.q_min, self.q_max, self.v_max = lo, hi, saved
+            self._joints = saved
 
 
 def test_without_the_viable_box_the_same_command_violates_the_limits():

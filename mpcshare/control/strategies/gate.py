@@ -168,6 +168,7 @@ class ModeCostGate:
         self._last_t = -math.inf
         self._pi: np.ndarray | None = None
         self._score = math.nan
+        self._share: tuple[np.ndarray | None, float] | None = None  # (π, its robot share)
 
     def score(self, mode_proba: np.ndarray | None) -> float:
         """s = max_k π·A^k·v (NaN without mode probabilities); recomputed only for a new π object (the
@@ -195,14 +196,20 @@ class ModeCostGate:
         return self._push >= 0.63 * tau  # a sustained push: the integral has reached 1 − 1/e of its limit
 
     def _robot_share(self, mode_proba: np.ndarray | None) -> float:
-        """α = π·a while the robot leads (1 without ``robot_alphas``; their largest without π)."""
+        """α = π·a while the robot leads (1 without ``robot_alphas``; their largest without π); recomputed only
+        for a new π object, as :meth:`score`."""
+        if self._share is not None and mode_proba is self._share[0]:
+            return self._share[1]
         a = self.robot_alphas
         if a is None:
-            return 1.0
-        if mode_proba is None or np.shape(mode_proba) != a.shape or not np.all(np.isfinite(mode_proba)):
-            return float(np.max(a))
-        p = np.clip(np.asarray(mode_proba, dtype=float), 0.0, None)
-        return float(np.clip(p @ a / max(float(p.sum()), 1e-12), 0.5, 1.0))
+            share = 1.0
+        elif mode_proba is None or np.shape(mode_proba) != a.shape or not np.all(np.isfinite(mode_proba)):
+            share = float(np.max(a))
+        else:
+            p = np.clip(np.asarray(mode_proba, dtype=float), 0.0, None)
+            share = float(np.clip(p @ a / max(float(p.sum()), 1e-12), 0.5, 1.0))
+        self._share = (mode_proba, share)
+        return share
 
     def decide(self, t: float, inputs: StepInputs, arbiter: ArbiterView) -> Target:
         s = self.settings

@@ -10,6 +10,7 @@ import pytest
 from learning.data import Demonstrations
 from mpcshare.calibration import rule_choice
 from mpcshare.control.controller import SharedController
+from mpcshare.control.keepout import KeepOut
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import compare_strategies, frontend_replay, runs
 from mpcshare.evaluation.distinct import decision_trace
@@ -29,6 +30,7 @@ from sim.task.eating import MODE_NAMES
 
 TIMING = ("step_p50_ms", "step_p99_ms", "realtime_factor")
 SETTINGS = {"beta": 0.5, "duration_s": 1.0, "seed": 1, "wearer": None, "mode_names": MODE_NAMES}
+ZONES = {"beta": 0.5, "duration_s": 1.0, "wearer": None, "mode_names": MODE_NAMES}
 
 
 @pytest.fixture(scope="module")
@@ -152,3 +154,26 @@ def test_the_comparison_and_the_rule_choice_are_the_same_replayed_and_deduplicat
                         choice))
     assert results[0] == results[1]
     assert counts[0] < counts[1]  # some candidates decide as another at every step: run once
+
+
+def test_a_replayed_episode_with_its_zones_is_the_live_one(trained, monkeypatch):
+    """The keep-out's zones given back (the recording's seed) or run live (another seed's sway): every array
+    and metric of the episode is the live one's."""
+    demos, bundle = trained
+    trial = next(t for t in demos.trials if t.trial_id == bundle.heldout_trials[0])
+    frontend_replay._CACHE.clear()
+    simulate_cached(bundle, demos, trial, StrategyRun("voluntary", "voluntary"), {}, seed=1, **ZONES)
+    real, live_calls = KeepOut.update, []
+    monkeypatch.setattr(KeepOut, "update", lambda self, *a: (live_calls.append(1), real(self, *a))[1])
+    for seed, given_back in ((1, True), (2, False)):
+        run = StrategyRun("gate", "gate")
+        live = simulate_episode(bundle, demos, trial, run, {}, seed=seed, **ZONES)
+        n_live = len(live_calls)
+        episode, metrics, known = simulate_cached(bundle, demos, trial, run, {}, seed=seed, **ZONES)
+        assert known is not None  # replayed, not run again live
+        assert (len(live_calls) == n_live) is given_back and len(live_calls) - n_live in (0, len(episode.t))
+        for name, value in vars(live[0]).items():
+            if isinstance(value, np.ndarray) and name != "step_time":
+                assert np.array_equal(value, getattr(episode, name), equal_nan=value.dtype.kind == "f"), name
+        assert {k: v for k, v in live[1].items() if k not in TIMING} == \
+            {k: v for k, v in metrics.items() if k not in TIMING}
