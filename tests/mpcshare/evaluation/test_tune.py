@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -106,8 +107,47 @@ def test_the_plan_and_its_time_are_said_before_the_episodes_run(data, swept, tmp
     # voluntary, reactive p90, gate p90 b0.5 and its 2 placebo draws
     assert said[0] == ("tune plans 5 closed-loop episodes of 0.5 s: 3 of the settings and the parties, 2 placebo "
                        "draws (2 per setting episode), on 1 local worker(s)")
-    assert said[1].startswith("the first episode took ") and said[1].endswith(" for the 4 left on 1 worker(s)")
-    assert len(run["rows"]) == 5
+    assert re.fullmatch(r"about [0-9.]+ min for the [23] episodes left on 1 worker\(s\) \(measured: a bundle and "
+                        r"trial's first episode in a worker [0-9.]+ s, the others [0-9.]+ s\)", said[1])
+    assert len(run["rows"]) == 5 and said[2].endswith(" given the figures of an episode that decided alike")
+
+
+def test_the_estimate_counts_recordings_and_replays():
+    from mpcshare.evaluation.tuning.dispatch import Costs
+
+    costs = Costs()
+    task = plan_tasks([90.0], [0.5], ["gate"], [3], [0], {90.0: "b"}, "d", 1.0, "w")[0]
+    costs.add(task, 6.0, pid=1)  # the first of bundle b, trial 3 in process 1: a recording
+    assert not costs.ready(workers=2)
+    costs.add(task, 4.0, pid=1)
+    costs.add(task, 2.0, pid=1)
+    assert costs.recorded == [6.0] and costs.replayed == [4.0, 2.0] and costs.ready(workers=2)
+    # 2 processes x 2 bundles and trials = 4 recordings, 1 done: 3 more at 6 s, the other 7 at 3 s, on 2 processes
+    assert costs.estimate(10, wheres=2, workers=2) == pytest.approx((3 * 6.0 + 7 * 3.0) / 2)
+
+
+def test_episodes_that_decide_alike_share_figures_equal_to_their_own_runs(data, swept, tmp_path):
+    from mpcshare.evaluation import frontend_replay
+    from mpcshare.evaluation.tuning import episodes
+    from mpcshare.training.config import TrainConfig
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "bundles").symlink_to(swept / "bundles")
+    said: list[str] = []
+    kwargs = dict(percentiles=[90.0], betas=[0.0, 1.0], strategies=["gate", "paper_gate"], n_trials=1, seeds=[0],
+                  duration_s=1.0, wearer="hemiparetic_mild", mode_names=MODE_NAMES)
+    run = run_tune(data, tmp_path / "a", progress=False, log=said.append, draws=2, config=TrainConfig(max_epochs=3),
+                   workers=1, **kwargs)
+    run_n, shared_n = (int(w) for w in said[-1].split(": ")[-1].replace(",", "").split()[0:3:2])
+    assert shared_n > 0 and run_n + shared_n == len(run["rows"]) == 2 + 4 + 8
+    tasks = plan_tasks(kwargs["percentiles"], kwargs["betas"], kwargs["strategies"], run["trials"], [0],
+                       {90.0: str(tmp_path / "a" / "bundles" / "p90")}, str(data.resolve()), 1.0, "hemiparetic_mild",
+                       MODE_NAMES)
+    settings = [r for r in run["rows"] if r["strategy"] in ("gate", "paper_gate")]
+    frontend_replay._CACHE.clear()
+    live = [episodes.run_task(t) for t in tasks + random_tasks(settings, tasks, 2)]
+    assert _comparable(run["rows"]) == _comparable(live)
+    assert len(frontend_replay._CACHE) == 1  # the parties, settings and placebos of a trial share one recording
 
 
 def test_gate_against_random_is_a_paired_one_sided_test():
