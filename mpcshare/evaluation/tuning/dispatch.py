@@ -183,11 +183,10 @@ def dispatch(backend: Any, tasks: Sequence[EpisodeTask], done: dict[str, dict[st
     wheres, said = {where(t) for t in tasks}, on_ready is None
     while d.pending or d.flying:
         d.fill()
-        if not d.flying:
-            continue
-        d.collect()
-        if not said and d.costs.ready(backend.workers) and wheres <= set(d.alike.inputs):
+        if not said and d.costs.ready(backend.workers) and wheres <= set(d.alike.inputs):  # the workers busy
             said = True
             left = d.left()
             on_ready(d.costs.estimate(left, len(wheres), backend.workers), left, d.costs)
+        if d.flying:
+            d.collect()
     return d.counts
