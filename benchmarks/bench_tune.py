@@ -1,7 +1,8 @@
 """Speed of ``mpcshare tune``: the same sweep with 1 and with 2 local workers (issue 20).
 
-Prints one JSON object: ``planned`` (what ``run_tune`` announced before it began: the episodes it
-plans, then its estimate from the first episode, per worker count), ``episodes``, ``seconds`` per worker
+Prints one JSON object: ``planned`` (what ``run_tune`` announced: the episodes it plans, then its estimate
+once its first episodes have measured the costs, per worker count), ``ran`` (its last line: the episodes run and
+those given the figures of one that decided alike), ``episodes``, ``seconds`` per worker
 count, ``seconds_per_episode`` (1 worker), ``speedup`` (1 worker / 2 workers; target ≥ 1.8 on 2 free
 cores) and ``same_rows`` (the rows equal but the timing keys).
 The bundles are trained once (into ``--out``/bundles) and shared by both runs, so only the
@@ -54,7 +55,8 @@ def main() -> None:
         res = run_tune(data, folder, workers=workers, **{**kwargs, "log": said[workers].append})
         seconds[workers] = time.perf_counter() - t0
         rows[workers] = [{k: v for k, v in r.items() if k not in TIMING_KEYS} for r in res["rows"]]
-    print(json.dumps({"planned": {w: lines[:2] for w, lines in said.items()}, "episodes": len(rows[1]),
+    print(json.dumps({"planned": {w: lines[:2] for w, lines in said.items()},
+                      "ran": {w: lines[-1].split(": ")[-1] for w, lines in said.items()}, "episodes": len(rows[1]),
                       "seconds": seconds, "seconds_per_episode": seconds[1] / len(rows[1]),
                       "speedup": seconds[1] / seconds[2], "same_rows": rows[1] == rows[2]}))
 

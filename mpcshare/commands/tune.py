@@ -2,11 +2,11 @@
 
 ``mpcshare tune DATA --out DIR`` trains one bundle per percentile (the HMM and quotients
 fitted once), simulates every setting and what its comparison needs (the parties ``voluntary`` and
-``reactive``, ``random_handover`` matched to each setting, the mean of :data:`DEFAULT_DRAWS` draws per
-pair; ``oracle_preview`` only with ``--oracle-preview``) on held-out trials × seeds (defaults: ≥ 10 pairs,
-tests Holm-corrected across settings) (:mod:`mpcshare.evaluation.tuning`), and writes ``tune.json``,
-``tune.md`` and ``pareto.png``. It says first how many episodes it plans and, after a first one timed, about
-how long they will take. Episodes run in a local process pool (``--workers``, default the CPU count, at
+``reactive``, ``random_handover`` matched to each setting, :data:`DEFAULT_DRAWS` draw per pair;
+``oracle_preview`` only with ``--oracle-preview``) on held-out trials × seeds (defaults: ≥ 10 pairs, tests
+Holm-corrected across settings) (:mod:`mpcshare.evaluation.tuning`), episodes that decide alike once, and writes
+``tune.json``, ``tune.md`` and ``pareto.png``. It says first how many episodes it plans and, after its first
+ones, about how long the rest will take. Episodes run in a local process pool (``--workers``, default the CPU count, at
 most 2) or on Ray (``--backend ray``, the optional extra ``pip install -e .[ray]``); an interrupted sweep
 started again with the same arguments resumes.
 """
@@ -30,14 +30,15 @@ __all__ = ["TUNE_COMMAND"]
 #: Defaults: up to 5 held-out trials x enough paired seeds for >= 10 pairs per setting (the default
 #: data's 4 held-out trials x 3 seeds = 12), so that one-sided p < 0.01 is reachable after Holm's
 #: correction across the 6 settings (exact Wilcoxon floor 0.5^10 ≈ 0.001); 2 percentiles x 1 β x
-#: 3 strategies; per pair 1 + 2 x (1 + 3) = 9 episodes and 6 x 2 placebo draws.
+#: 3 strategies; per pair 1 + 2 x (1 + 3) = 9 episodes and 6 placebo draws.
 DEFAULT_PERCENTILES = (100.0, 70.0)
 DEFAULT_BETAS = (0.5,)
 DEFAULT_TRIALS, MIN_PAIRS = 5, 10
-#: Placebo draws per pair: the pairs give the test its power, the draws only steady each pair's placebo
-#: figure; 2 keep 3 percentiles x 2 β x 3 strategies x 10 pairs at 30 s (580 episodes) within 15 min on 2
-#: cores, where 5 (the comparison's) take 1,120 (about 20 min).
-DEFAULT_DRAWS = 2
+#: Placebo draws per pair: the pairs (trial x seed) give the test its power; with one draw the setting's and the
+#: placebo's episode are exchangeable under the null, so d is symmetric and the signed-rank test exact (the mean
+#: of several draws is not: benchmarks/tune_null_rate.py), and 3 percentiles x 2 β x 3 strategies x 10 pairs at
+#: 30 s plan 400 episodes, where 2 draws plan 580.
+DEFAULT_DRAWS = 1
 
 
 def default_trials_and_seeds(n_heldout: int, trials: int | None, seeds: int | None) -> tuple[int, int]:

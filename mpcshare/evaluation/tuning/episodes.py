@@ -29,8 +29,8 @@ from typing import Any, Sequence
 from mpcshare.run_table import RANDOM_DRAWS, TUNABLE, strategy_code
 from sim.task import DEFAULT_TASK, task_named
 
-__all__ = ["BASELINES", "SETTING_STRATEGIES", "TIMING_KEYS", "EpisodeTask", "load_inputs", "plan_tasks", "random_tasks",
-           "run_task", "task_key"]
+__all__ = ["BASELINES", "SETTING_STRATEGIES", "TIMING_KEYS", "EpisodeTask", "bundle_of", "episode_setup", "identity",
+           "load_inputs", "plan_tasks", "random_tasks", "run_task", "run_task_seen", "task_key"]
 
 #: Strategies that can be swept (each gets a matched ``random_handover``): the registry's tunable ones.
 SETTING_STRATEGIES: tuple[str, ...] = TUNABLE
@@ -126,40 +126,69 @@ def load_inputs(task: EpisodeTask) -> None:
     _demos(task.data_path)
 
 
-def run_task(task: EpisodeTask) -> dict[str, Any]:
+def episode_setup(task: EpisodeTask) -> tuple[Any, dict[str, Any], float]:
+    """(the :class:`~mpcshare.evaluation.StrategyRun`, the controller's options, β) of ``task``'s episode."""
+    from mpcshare.evaluation import StrategyRun
+    from mpcshare.evaluation.handover import random_schedules_from
+
+    options: dict[str, Any] = {}
+    run = StrategyRun(task.strategy, task.strategy)
+    if task.strategy == "oracle_preview":
+        run = StrategyRun(task.strategy, "reactive", oracle=True)
+    elif task.strategy == "random_handover":
+        run = StrategyRun(task.strategy, "schedule")
+        seed = [task.seed, task.trial, round(1000 * (task.percentile or 0)), round(1000 * (task.beta or 0)),
+                strategy_code(task.matched_to or "gate")]
+        options["schedule"] = random_schedules_from(dict(task.schedule or ()), task.draw + 1, seed)[task.draw]
+    return run, options, 0.5 if task.beta is None else task.beta
+
+
+def bundle_of(task: EpisodeTask) -> Any:
+    """``task``'s bundle, loaded once per process."""
+    return _bundle(task.bundle_dir)
+
+
+def run_task_seen(task: EpisodeTask) -> tuple[dict[str, Any], Any, float, int]:
     """Simulate one episode (any process: the bundle and data are loaded once per process, and the front end of
-    a bundle and trial computed once, :func:`mpcshare.evaluation.frontend_replay.simulate_cached`) → its row."""
+    a bundle and trial computed once, :func:`mpcshare.evaluation.frontend_replay.simulate_cached`) → (its row,
+    the arbitration's observation-only inputs it saw (:func:`~mpcshare.evaluation.frontend_replay.decisions`;
+    None where not known), its wall time [s] after loading the bundle and data, the process id)."""
+    import os
+    import time
+
     import torch
 
-    from mpcshare.evaluation import StrategyRun
     from mpcshare.evaluation.frontend_replay import simulate_cached
-    from mpcshare.evaluation.handover import random_schedules_from, schedule_record
+    from mpcshare.evaluation.handover import schedule_record
     from sim.wearer_presets import wearer_preset
 
+    demos = _demos(task.data_path)
+    bundle = _bundle(task.bundle_dir)
+    t0 = time.perf_counter()  # the episode, not the loading
     threads = torch.get_num_threads()
     torch.set_num_threads(1)  # the same arithmetic in every process, whatever the pool
     try:
-        demos = _demos(task.data_path)
         trial = next(tr for tr in demos.trials if tr.trial_id == task.trial)
-        options: dict[str, Any] = {}
-        run = StrategyRun(task.strategy, task.strategy)
-        if task.strategy == "oracle_preview":
-            run = StrategyRun(task.strategy, "reactive", oracle=True)
-        elif task.strategy == "random_handover":
-            run = StrategyRun(task.strategy, "schedule")
-            seed = [task.seed, task.trial, round(1000 * (task.percentile or 0)), round(1000 * (task.beta or 0)),
-                    strategy_code(task.matched_to or "gate")]
-            options["schedule"] = random_schedules_from(dict(task.schedule or ()), task.draw + 1, seed)[task.draw]
-        beta = 0.5 if task.beta is None else task.beta
-        episode, metrics, _ = simulate_cached(_bundle(task.bundle_dir), demos, trial, run, options, beta=beta,
-                                              duration_s=task.duration_s, seed=task.seed,
-                                              wearer=wearer_preset(task.wearer), mode_names=task.mode_names,
-                                              task=task_named(task.task))
+        run, options, beta = episode_setup(task)
+        episode, metrics, seen = simulate_cached(bundle, demos, trial, run, options, beta=beta,
+                                                 duration_s=task.duration_s, seed=task.seed,
+                                                 wearer=wearer_preset(task.wearer), mode_names=task.mode_names,
+                                                 task=task_named(task.task))
     finally:
         torch.set_num_threads(threads)
-    row = {k: v for k, v in asdict(task).items()
-           if k in ("percentile", "beta", "strategy", "matched_to", "trial", "seed", "draw")}
+    row = identity(task)
     row.update(metrics)
     if task.strategy in SETTING_STRATEGIES:
         row["schedule"] = schedule_record(episode)
-    return row
+    return row, seen, time.perf_counter() - t0, os.getpid()
+
+
+def run_task(task: EpisodeTask) -> dict[str, Any]:
+    """The row of one episode (:func:`run_task_seen`)."""
+    return run_task_seen(task)[0]
+
+
+def identity(task: EpisodeTask) -> dict[str, Any]:
+    """The fields of a row that name its episode: percentile, β, strategy, matched_to, trial, seed, draw."""
+    return {k: v for k, v in asdict(task).items()
+            if k in ("percentile", "beta", "strategy", "matched_to", "trial", "seed", "draw")}

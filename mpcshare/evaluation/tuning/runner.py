@@ -2,9 +2,10 @@
 
 :func:`run_tune` trains one bundle per percentile on one data preparation
 (:func:`mpcshare.training.train.train_bundles`: the HMM and quotients are fitted once) into
-``out/bundles/p<P>``, runs phase 1 and then phase 2 of :mod:`mpcshare.evaluation.tuning.episodes` on a
-backend, and appends each finished row at once to ``out/episodes.jsonl``. Started again with
-the same arguments (``out/sweep_args.json``) it reuses the bundles and the rows already there
+``out/bundles/p<P>``, runs phase 1 of :mod:`mpcshare.evaluation.tuning.episodes` and each setting's phase 2
+as soon as the setting is done on a backend, episodes that decide alike once
+(:mod:`mpcshare.evaluation.tuning.dispatch`), and appends each finished row at once to ``out/episodes.jsonl``.
+Started again with the same arguments (``out/sweep_args.json``) it reuses the bundles and the rows already there
 and runs only the rest; with other arguments it starts over.
 
 Backends (:func:`open_backend`, one for the whole sweep): ``local`` — in this process (``workers`` = 1) or a
@@ -18,21 +19,15 @@ from __future__ import annotations
 
 import json
 import multiprocessing
-import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Callable, Sequence
 
 from learning.atomic import write_json
 from mpcshare.errors import MpcshareError
-from mpcshare.evaluation.tuning.episodes import (
-    EpisodeTask,
-    load_inputs,
-    plan_tasks,
-    random_tasks,
-    run_task,
-    task_key,
-)
+from mpcshare.evaluation.tuning.dispatch import dispatch
+from mpcshare.evaluation.tuning.episodes import EpisodeTask, plan_tasks, random_tasks, run_task_seen, task_key
 from mpcshare.run_table import RANDOM_DRAWS
 from sim.task import DEFAULT_TASK
 
@@ -50,17 +45,27 @@ class _LocalPool:
 
     def __init__(self, workers: int) -> None:
         self.workers = workers
+        self.capacity = 1 if workers <= 1 else workers + 1  # one queued per free worker: no idle turn
         self.pool: ProcessPoolExecutor | None = None
+        self.queue: deque[EpisodeTask] = deque()
+        self.futures: dict[Future, EpisodeTask] = {}
 
-    def map(self, tasks: Sequence[EpisodeTask]) -> Iterator[dict[str, Any]]:
+    def submit(self, task: EpisodeTask) -> None:
         if self.workers <= 1:
-            yield from (run_task(t) for t in tasks)
+            self.queue.append(task)
             return
         if self.pool is None:
             ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
             self.pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx)
-        for fut in as_completed([self.pool.submit(run_task, t) for t in tasks]):
-            yield fut.result()
+        self.futures[self.pool.submit(run_task_seen, task)] = task
+
+    def next_done(self) -> tuple[EpisodeTask, Any]:
+        if self.workers <= 1:
+            task = self.queue.popleft()
+            return task, run_task_seen(task)
+        done, _ = wait(self.futures, return_when=FIRST_COMPLETED)
+        fut = next(iter(done))
+        return self.futures.pop(fut), fut.result()
 
     def close(self) -> None:
         if self.pool is not None:
@@ -78,20 +83,26 @@ class _RayCluster:
         if not ray.is_initialized():
             ray.init(address=address, include_dashboard=False, log_to_driver=False)
         self.ray = ray
-        self.remote = ray.remote(num_cpus=1)(run_task)
+        self.remote = ray.remote(num_cpus=1)(run_task_seen)
+        self.workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
+        self.capacity = self.workers + 1
+        self.refs: dict[Any, EpisodeTask] = {}
 
-    def map(self, tasks: Sequence[EpisodeTask]) -> Iterator[dict[str, Any]]:
-        pending = [self.remote.remote(t) for t in tasks]
-        while pending:
-            done, pending = self.ray.wait(pending, num_returns=1)
-            yield self.ray.get(done[0])
+    def submit(self, task: EpisodeTask) -> None:
+        self.refs[self.remote.remote(task)] = task
+
+    def next_done(self) -> tuple[EpisodeTask, Any]:
+        (ref,), _ = self.ray.wait(list(self.refs), num_returns=1)
+        return self.refs.pop(ref), self.ray.get(ref)
 
     def close(self) -> None:
         pass
 
 
 def open_backend(backend: str = "local", workers: int = 1, address: str | None = None) -> _LocalPool | _RayCluster:
-    """A backend with ``map(tasks)`` → the rows in the order they finish, and ``close()`` (module docstring)."""
+    """A backend with ``workers``, ``capacity`` (episodes kept in flight), ``submit(task)``, ``next_done()`` → (a
+    task, :func:`~mpcshare.evaluation.tuning.episodes.run_task_seen` of it), one at a time as they finish, and
+    ``close()`` (module docstring)."""
     if backend == "local":
         return _LocalPool(workers)
     if backend == "ray":
@@ -136,14 +147,12 @@ def _bundles(data: Any, config: Any, percentiles: Sequence[float], out: Path, pr
     return {p: str(paths[p]) for p in percentiles}
 
 
-def estimate_line(n_left: int, first_s: float, workers: int | None) -> str:
-    """``about M min for the N episodes left`` at ``first_s`` [s] a episode (the first one, timed) on
-    ``workers`` processes (None: a Ray cluster, the time of one process given)."""
-    if workers is None:
-        return (f"the first episode took {first_s:.1f} s: about {n_left * first_s / 60:.0f} min of episodes left "
-                "for one process (divided among the cluster's)")
-    return (f"the first episode took {first_s:.1f} s: about {n_left * first_s / max(1, workers) / 60:.1f} min for "
-            f"the {n_left} left on {workers} worker(s)")
+def estimate_line(seconds: float, n_left: int, workers: int, first_s: float, replay_s: float) -> str:
+    """``about M min for the N episodes left on W worker(s)``: ``seconds`` [s] of wall time projected
+    (:meth:`mpcshare.evaluation.tuning.dispatch.Costs.estimate`) from ``first_s`` [s], a bundle and trial's
+    first episode in a worker (it records the front end), and ``replay_s`` [s], the others."""
+    return (f"about {seconds / 60:.1f} min for the {n_left} episodes left on {workers} worker(s) (measured: a "
+            f"bundle and trial's first episode in a worker {first_s:.1f} s, the others {replay_s:.1f} s)")
 
 
 def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[float], betas: Sequence[float],
@@ -155,8 +164,8 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
     """Run the sweep (module docstring; ``draws`` placebo episodes per setting episode; ``oracle``: with the
     ``oracle_preview`` upper bound; ``task``: the name of the task whose figures the rows hold,
     :func:`sim.task.task_named`); returns ``{"rows": [...], "trials": [...], "bundles": {...}}``. Before
-    the bundles are trained it logs how many episodes it plans, and after a first episode run here and timed,
-    about how long the rest will take (:func:`estimate_line`).
+    the bundles are trained it logs how many episodes it plans, and once its first episodes have measured what
+    an episode costs, about how long the rest will take (:func:`estimate_line`); at the end how many ran.
 
     Raises ValueError when the data has fewer held-out trials than ``n_trials``.
     """
@@ -190,38 +199,34 @@ def run_tune(data_path: str | Path, out: str | Path, *, percentiles: Sequence[fl
             f"settings and the parties, {n_placebo} placebo draws ({draws} per setting episode), on {where}"
             + (f"; {len(store.rows)} already done" if store.rows else ""))
     bundles = _bundles(demos, config, percentiles, out, progress)
-    todo = [t for t in tasks if task_key(t) not in store.rows]
-    if todo:  # the first episode here, timed (its bundle and data loaded first, as a worker has): the rest's time
-        load_inputs(todo[0])
-        t0 = time.perf_counter()
-        store.add(run_task(todo[0]))
-        seconds = time.perf_counter() - t0
-        if log is not None:
-            log(estimate_line(n_total - len(store.rows), seconds, workers if backend == "local" else None))
     bar = None
     if progress:
         from learning.progress import progress_bar
         bar = progress_bar(total=int(n_total), desc="tune", unit="episode", initial=len(store.rows))
     runner = open_backend(backend, workers, address)
 
-    def run(batch: list[EpisodeTask]) -> None:
-        todo = [t for t in batch if task_key(t) not in store.rows]
-        for row in runner.map(todo):
-            store.add(row)
-            if bar is not None:
-                bar.update(1)
+    def add(row: dict[str, Any]) -> None:
+        store.add(row)
+        if bar is not None:
+            bar.update(1)
+
+    def said(seconds: float, n_left: int, costs: Any) -> None:
+        if log is not None:
+            log(estimate_line(seconds, n_left, runner.workers, *costs.means()))
 
     try:
-        run(tasks)
-        settings = [store.rows[task_key(t)] for t in tasks if t.strategy in strategies]
-        phase2 = random_tasks(settings, tasks, draws)
-        run(phase2)
+        counts = dispatch(runner, tasks, dict(store.rows), add,
+                          lambda t, row: random_tasks([row], [t], draws) if t.strategy in strategies else [],
+                          said)
     finally:
         runner.close()
         if bar is not None:
             bar.close()
+    settings = [store.rows[task_key(t)] for t in tasks if t.strategy in strategies and task_key(t) in store.rows]
+    phase2 = random_tasks(settings, tasks, draws)
     order = {task_key(t): i for i, t in enumerate(tasks + phase2)}
     rows = sorted((r for k, r in store.rows.items() if k in order), key=lambda r: order[task_key(r)])
     if log is not None:
-        log(f"{len(rows)} episodes ({len(tasks) + len(phase2) - len(rows)} missing) in {out / 'episodes.jsonl'}")
+        log(f"{len(rows)} episodes ({len(tasks) + len(phase2) - len(rows)} missing) in {out / 'episodes.jsonl'}: "
+            f"{counts['run']} run, {counts['shared']} given the figures of an episode that decided alike")
     return {"rows": rows, "trials": trials, "bundles": {f"{p:g}": b for p, b in bundles.items()}}

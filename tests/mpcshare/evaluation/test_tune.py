@@ -3,32 +3,15 @@
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
-from learning.data import save
 from mpcshare.cli import main
 from mpcshare.evaluation.tuning.episodes import TIMING_KEYS, plan_tasks
 from mpcshare.evaluation.tuning.runner import run_tune
-from sim.demonstrator import generate_demonstrations
 from sim.task.eating import MODE_NAMES
-
-SWEEP = ["--percentiles", "90", "70", "--betas", "0", "1", "--strategies", "gate", "--trials", "1",
-         "--duration", "2", "--seeds", "2", "--draws", "2", "--epochs", "3", "--quiet", "--workers", "1"]
-
-
-@pytest.fixture(scope="module")
-def data(tmp_path_factory):
-    path = tmp_path_factory.mktemp("tune") / "demos.npz"
-    save(generate_demonstrations(3, 4.0, seed=5), path)
-    return path
-
-
-@pytest.fixture(scope="module")
-def swept(data, tmp_path_factory):
-    out = tmp_path_factory.mktemp("tune_out")
-    assert main(["tune", str(data), "--out", str(out), *SWEEP]) == 0
-    return out
+from tests.mpcshare.evaluation.tune_rows import SWEEP
 
 
 def _comparable(rows):
@@ -102,8 +85,9 @@ def test_the_plan_and_its_time_are_said_before_the_episodes_run(data, swept, tmp
     # voluntary, reactive p90, gate p90 b0.5 and its 2 placebo draws
     assert said[0] == ("tune plans 5 closed-loop episodes of 0.5 s: 3 of the settings and the parties, 2 placebo "
                        "draws (2 per setting episode), on 1 local worker(s)")
-    assert said[1].startswith("the first episode took ") and said[1].endswith(" for the 4 left on 1 worker(s)")
-    assert len(run["rows"]) == 5
+    assert re.fullmatch(r"about [0-9.]+ min for the [23] episodes left on 1 worker\(s\) \(measured: a bundle and "
+                        r"trial's first episode in a worker [0-9.]+ s, the others [0-9.]+ s\)", said[1])
+    assert len(run["rows"]) == 5 and said[2].endswith(" given the figures of an episode that decided alike")
 
 
 @pytest.mark.parametrize("args, needle", [
