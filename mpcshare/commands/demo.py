@@ -21,8 +21,6 @@ from functools import partial
 from pathlib import Path
 from typing import Any, Callable
 
-from learning.analysis.config import AnalysisConfig
-from learning.analysis.report import AnalysisReport
 from learning.atomic import atomic_open, write_json
 from learning.data import Demonstrations, save
 from mpcshare.commands.analysis import add_analysis_arguments, analysis_config, print_headline, run_analysis
@@ -183,37 +181,6 @@ def _save(bundle: Any, mixture: Any, out: Path) -> tuple[Any, dict | None]:
     return bundle, mode_sources
 
 
-def _run_analysis(_bundle: Any, demos: Demonstrations, config: AnalysisConfig, folder: Path,
-                  progress: bool) -> tuple[AnalysisReport, float]:
-    """Stage 3 into ``folder`` (:func:`mpcshare.commands.analysis.run_analysis`): its summary and its seconds; in
-    any process (an :meth:`EpisodePool.call`, the bundle unused)."""
-    t0 = time.perf_counter()
-    report = run_analysis(demos, config, folder, mode_names=_TASK.mode_names, progress=progress)
-    return report, time.perf_counter() - t0
-
-
-def _start_analysis(args: argparse.Namespace, demos: Demonstrations, out: Path,
-                    pool: EpisodePool) -> Callable[[], tuple[AnalysisReport, float]]:
-    """Stage 3: the predictability analysis, with workers in one of them beside the training (it needs no
-    bundle, and the training none of its results), else at once. Returns what waits for it and prints its
-    headline: (its summary, its seconds)."""
-    config, folder = analysis_config(args), prepare_output_folder(out / "analysis")
-    if pool.workers > 1:
-        _stage(3, "predictability analysis, in a worker process beside the training (its lines when it ends)")
-        future = pool.call(_run_analysis, None, config, folder, False)
-    else:
-        _stage(3, "predictability analysis")
-        done = _run_analysis(None, demos, config, folder, True)
-
-    def finish() -> tuple[AnalysisReport, float]:
-        report, seconds = future.result() if pool.workers > 1 else done
-        if pool.workers > 1:
-            print("[3/6] the predictability analysis:")
-        print_headline(report)
-        return report, seconds
-    return finish
-
-
 def _run_sweep(_bundle: Any, demos: Demonstrations, config: TrainConfig, folder: Path,
                progress: bool) -> tuple[dict, float]:
     """The K sweep into ``folder`` (:func:`mpcshare.training.sweep.run_sweep`): its rows and conclusion, and its
@@ -303,24 +270,25 @@ def _demo(args: argparse.Namespace) -> int:
     summary, summary_md = _summarise(demos, out)
     lap("data", t0)
 
+    # the analysis in this process (its search fits the modes' restarts on every core, joblib)
+    t0 = time.perf_counter()
+    _stage(3, "predictability analysis")
+    analysis = run_analysis(demos, analysis_config(args), prepare_output_folder(out / "analysis"),
+                            mode_names=_TASK.mode_names)
+    print_headline(analysis)
+    lap("analysis", t0)
+
+    t0 = time.perf_counter()
+    _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
     rule_s = args.rule_duration or min(RULE_DURATION_S, 2 * args.sim_duration)  # shorter in short demos
-    # one pool for the analysis, the K sweep, the rule choice and the comparison; with workers the analysis and
-    # the sweep run beside the training, and the choice beside the mixture's training
+    # one pool for the K sweep, the rule choice and the comparison; with workers the sweep runs beside the
+    # training and the choice beside the mixture's gates
     with EpisodePool(demos, args.workers) as pool:
-        finish_analysis = _start_analysis(args, demos, out, pool)
-        if pool.workers == 1:
-            analysis, seconds = finish_analysis()
-            timings["analysis"] = seconds
         finish_sweep = _start_sweep(args, demos, config, out, pool)
-        t0 = time.perf_counter()
-        _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
         bundle = _fit(demos, config)
         t_choice = time.perf_counter()
         finish_choice = _start_choice(bundle, demos, args.wearer, rule_s, pool)
-        if pool.workers > 1:
-            analysis, seconds = finish_analysis()
-            timings["analysis (beside training)"] = seconds
         mixture = _mixture(demos, config, analysis)
         lap("training", t0)
 
