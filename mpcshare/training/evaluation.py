@@ -31,7 +31,7 @@ if TYPE_CHECKING:  # annotations only
     from learning.predictor import ReactivePredictor
 
 __all__ = ["command_magnitude", "voluntary_effort", "rmse", "evaluate", "fit_ridge", "forecast_errors",
-           "predict_side",
+           "heldout_gate", "predict_side",
            "RMSE_UNITS"]
 
 RMSE_UNITS = "standardised action units (per-sensor unit RMS), RMS over channels and steps"
@@ -138,6 +138,17 @@ def _share_by_label(side: SplitData, wearer: np.ndarray) -> dict[str, float] | N
     return {str(int(j)): float(np.mean(wearer[labels == j])) for j in np.unique(labels) if j >= 0}
 
 
+def heldout_gate(data: TrainingData, gates: ModeGates, K: float) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """The gates on the held-out windows at threshold ``K``: (Z, the quotient labels; ĥ = 1[gate probability ≥ 0.5];
+    :func:`learning.gates.metrics.gate_metrics` against Z)."""
+    from learning.gates.metrics import gate_metrics
+
+    side = data.heldout
+    Z = reactive_labels(side.q, K)
+    h = (gates.predict_proba(side.windows.X, side.window_modes) >= 0.5).astype(int)
+    return Z, h, gate_metrics(gates, side.windows.X, side.window_modes, Z)
+
+
 def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor, K: float,
              baselines: Mapping[str, Any] | None = None,
              baseline_predictions: Mapping[str, np.ndarray] | None = None) -> dict[str, Any]:
@@ -147,14 +158,9 @@ def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor,
     ``baseline_predictions``: name → precomputed held-out predictions (n_windows, d_u).
     Returns a JSON-able dict.
     """
-    from learning.gates.metrics import gate_metrics
-
     side = data.heldout
-    Z = reactive_labels(side.q, K)
+    Z, h, gate = heldout_gate(data, gates, K)
     R = Z.astype(bool)
-    modes = side.window_modes
-    proba = gates.predict_proba(side.windows.X, modes)
-    h = (proba >= 0.5).astype(int)
     magnitude, source, units = command_magnitude(side, data.config.model_hz)
     preds = {name: predict_side(m, side) for name, m in (baselines or {}).items()}
     preds.update(baseline_predictions or {})
@@ -165,7 +171,7 @@ def evaluate(data: TrainingData, gates: ModeGates, predictor: ReactivePredictor,
         "predictor": _errors(data, predict_side(predictor, side), R, h.astype(bool)),
         "forecast": forecast_errors(data, predictor, R),
         "baselines": {name: _errors(data, p, R, None) for name, p in preds.items()},
-        "gate": gate_metrics(gates, side.windows.X, modes, Z),
+        "gate": gate,
         "voluntary_share": float(np.mean(1 - h)),
         "voluntary_share_by_label": _share_by_label(side, 1 - h),
         "voluntary_effort": voluntary_effort(h, magnitude),

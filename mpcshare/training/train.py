@@ -40,7 +40,7 @@ from mpcshare.training.data import (
     prepare_training_data,
     reactive_labels,
 )
-from mpcshare.training.evaluation import evaluate, fit_ridge
+from mpcshare.training.evaluation import evaluate, fit_ridge, heldout_gate
 from mpcshare.training.stages import Stages
 
 if TYPE_CHECKING:  # annotations only (imported where they are used: torch loads on first use)
@@ -138,17 +138,12 @@ def train_gates(demos: Demonstrations, config: TrainConfig | None = None) -> Gat
     ``config.percentile`` and their held-out figures, exactly as :func:`train_bundle` computes them (the same
     split, modes, K and gates). What compares two mode sources needs no predictor. Raises :class:`TrainingError`
     as :func:`train_bundle`."""
-    from learning.gates.metrics import gate_metrics
-
     config = config or TrainConfig()
     data = prepare_training_data(demos, config)
     K = threshold_from_percentile(data.train.q, config.percentile)
     gates = fit_gates(data, reactive_labels(data.train.q, K))
-    side = data.heldout
-    proba = gates.predict_proba(side.windows.X, side.window_modes)
-    share = float(np.mean(1 - (proba >= 0.5).astype(int)))
-    accuracy = gate_metrics(gates, side.windows.X, side.window_modes, reactive_labels(side.q, K))["overall"]["accuracy"]
-    return GateFit(data.modes, gates, float(K), share, float(accuracy))
+    _, h, gate = heldout_gate(data, gates, K)
+    return GateFit(data.modes, gates, float(K), float(np.mean(1 - h)), float(gate["overall"]["accuracy"]))
 
 
 def _fit_fast(data: TrainingData, predictor, config: TrainConfig):
