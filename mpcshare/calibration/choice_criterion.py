@@ -1,8 +1,8 @@
 """The closed-loop rule choice's criterion: which candidate wins, from the figures on the choice trials.
 
-Criterion (:data:`CRITERION`, :func:`criterion_words`): among the candidates whose effort is at most
-``max_effort`` × the voluntary effort, those that meet the task's criterion (:func:`saws`: ``task.done``; eating's:
-the knife saws) in every episode of its stroke mode (one per trial) where the wearer alone does
+Criterion (in words: :func:`mpcshare.reports.rule_choice.criterion_words`): among the candidates whose effort is at
+most ``max_effort`` × the voluntary effort, those that meet the task's criterion (:func:`saws`: ``task.done``;
+eating's: the knife saws) in every episode of its stroke mode (one per trial) where the wearer alone does
 (:func:`saws_where_the_wearer_saws`; an episode where the wearer alone does not does not count against a
 candidate), and of those the lowest line ratio; where the line is
 ill-posed (the robot alone costs the wearer at least ``max_effort`` × the effort of doing it alone), the lowest
@@ -10,6 +10,7 @@ tracking RMS of those. When none is within the effort cap, the same without the 
 ``tracking_rmse_m``, ``voluntary_effort``, ``effort_vs_voluntary``, ``line_ratio`` (None where undefined), the
 pooled ``saw_correlation`` / ``saw_amplitude_ratio`` and, where known, ``saws_by_trial`` (per trial: None
 without cutting, else whether it saws) and ``by_trial`` (per trial: RMS, effort, control steps).
+:func:`criterion` returns the winner and the reason as a record (:func:`criterion`'s fields), never words.
 :func:`predicted` is what the choice predicts of the chosen rule; :func:`cross_validated` the same predicted
 leave one trial out (the rule chosen on the other trials, scored on the one left out).
 """
@@ -22,28 +23,8 @@ from typing import Any
 from mpcshare.line_ratio import line_ratio
 from sim.task import EATING, Task
 
-__all__ = ["CRITERION", "criterion", "criterion_words", "cross_validated", "mix_note", "predicted", "saws",
-           "saws_where_the_wearer_saws", "second_stage", "wearer_saws"]
-
-
-def _sawed(task: Task, trial: str = "") -> str:
-    """Who passes ``task``'s criterion, in words: eating's "that saw in every cutting episode where the wearer
-    alone saws" (a task with a stroke mode: sawing in that mode; without one: the criterion met)."""
-    if task.stroke_mode is None:
-        return f"that meet the task's criterion in every episode{trial} where the wearer alone meets it"
-    return f"that saw in every {task.stroke_mode} episode{trial} where the wearer alone saws"
-
-
-def criterion_words(task: Task = EATING) -> str:
-    """The criterion in ``task``'s words (eating's: :data:`CRITERION`)."""
-    passed = "that saw" if task.stroke_mode is not None else "that meet it"
-    return (f"among the candidates with effort <= max_effort x voluntary, those {_sawed(task, ' (trial)')}, the "
-            "lowest line ratio (the lowest tracking RMS where reactive itself costs >= max_effort x voluntary); if "
-            f"none is within the cap, the same without the cap (the lowest line ratio of those {passed})")
-
-
-#: the criterion in eating's words
-CRITERION = criterion_words(EATING)
+__all__ = ["criterion", "cross_validated", "mix_winner", "predicted", "saws", "saws_where_the_wearer_saws",
+           "second_stage", "wearer_saws"]
 
 
 def saws(row: dict[str, Any], task: Task = EATING) -> bool:
@@ -70,39 +51,37 @@ def saws_where_the_wearer_saws(row: dict[str, Any], voluntary: dict[str, Any], t
 
 
 def criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
-              max_effort: float, task: Task = EATING) -> tuple[dict[str, Any], str]:
-    """The chosen row and why (module docstring), by ``task``'s criterion."""
+              max_effort: float, task: Task = EATING) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The chosen row and the reason (module docstring), by ``task``'s criterion. The reason is a JSON record:
+    ``within_cap`` (some candidate has effort <= ``max_effort`` × voluntary), ``n_within`` of ``n_candidates``,
+    ``max_effort``, ``by`` (``"line_ratio"`` or ``"tracking_rmse_m"``: what ranked the pool), the winner's
+    ``line_ratio`` (None where undefined) and ``tracking_rmse_m`` [m], ``ill_posed`` (within the cap: reactive
+    alone costs >= ``max_effort`` × voluntary), ``reactive_effort_vs_voluntary``, ``task_filter`` (the pool was
+    narrowed to the rows that meet the task's criterion where the wearer alone does) and ``stroke_mode``
+    (``task.stroke_mode``: whose episodes)."""
     within = [r for r in rows if r["effort_vs_voluntary"] <= max_effort]
-    sawed = " of those " + _sawed(task)
-    if not within:
-        sawing = [r for r in rows if saws_where_the_wearer_saws(r, vol, task)]
-        pool, task_words = (sawing, sawed) if wearer_saws(vol, task) and sawing else (rows, "")
-        ranked = [r for r in pool if r["line_ratio"] is not None]
-        if ranked:
-            best = min(ranked, key=lambda r: r["line_ratio"])
-            return best, (f"no candidate has effort <= {max_effort:g}x voluntary; the lowest line ratio "
-                          f"({best['line_ratio']:.3f}){task_words}")
-        best = min(pool, key=lambda r: r["tracking_rmse_m"])
-        return best, (f"no candidate has effort <= {max_effort:g}x voluntary and none a line ratio; the lowest "
-                      f"tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm){task_words}")
-    sawing = [r for r in within if saws_where_the_wearer_saws(r, vol, task)]
-    pool, task_words = (sawing, "," + sawed) if wearer_saws(vol, task) and sawing else (within, "")
+    capped = bool(within)
+    candidates = within if capped else rows
+    sawing = [r for r in candidates if saws_where_the_wearer_saws(r, vol, task)]
+    filtered = wearer_saws(vol, task) and bool(sawing)
+    pool = sawing if filtered else candidates
     posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
     ranked = [r for r in pool if r["line_ratio"] is not None]
-    if posed and ranked:
-        best = min(ranked, key=lambda r: r["line_ratio"])
-        return best, (f"lowest line ratio ({best['line_ratio']:.3f}) among the {len(within)} of {len(rows)} "
-                      f"candidates with effort <= {max_effort:g}x voluntary{task_words}")
-    best = min(pool, key=lambda r: r["tracking_rmse_m"])
-    cause = (f"reactive alone costs {rea['voluntary_effort'] / vol['voluntary_effort']:.2f}x the voluntary effort, "
-             "so the line is ill-posed" if not posed else "no line ratio is defined")
-    return best, (f"{cause}; the lowest tracking RMS ({best['tracking_rmse_m'] * 1e3:.1f} mm) among the "
-                  f"{len(within)} of {len(rows)} candidates with effort <= {max_effort:g}x voluntary{task_words}")
+    if ranked and (posed or not capped):
+        best, by = min(ranked, key=lambda r: r["line_ratio"]), "line_ratio"
+    else:
+        best, by = min(pool, key=lambda r: r["tracking_rmse_m"]), "tracking_rmse_m"
+    return best, {"within_cap": capped, "n_within": len(within), "n_candidates": len(rows),
+                  "max_effort": float(max_effort), "by": by, "line_ratio": best["line_ratio"],
+                  "tracking_rmse_m": float(best["tracking_rmse_m"]), "ill_posed": capped and not posed,
+                  "reactive_effort_vs_voluntary": (float(rea["voluntary_effort"] / vol["voluntary_effort"])
+                                                   if vol["voluntary_effort"] else None),
+                  "task_filter": filtered, "stroke_mode": task.stroke_mode}
 
 
 def second_stage(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any], max_effort: float,
                  top: int, task: Task = EATING) -> list[dict[str, Any]]:
-    """The first stage's ``top`` rows in the criterion's order (:func:`_criterion` applied again to what
+    """The first stage's ``top`` rows in the criterion's order (:func:`criterion` applied again to what
     is left), and the empty set's row (the robot leading every mode) where it is not among them."""
     left, picked = list(rows), []
     while left and len(picked) < top:
@@ -122,19 +101,19 @@ def predicted(row: dict[str, Any], voluntary: dict[str, Any], task: Task = EATIN
             "saws": saws_where_the_wearer_saws(row, voluntary, task)}
 
 
-def mix_note(best: dict[str, Any], mixes: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
-             max_effort: float, task: Task = EATING) -> str:
-    """"" unless a constant mixture's row (``mixes``, each with its ``strategy``) would win the criterion over the
-    candidates' ``best``; then the words that say so (the gate's rule cannot be a constant mixture: the default
-    strategy would have to become that mixture, without the gate's overrides)."""
+def mix_winner(best: dict[str, Any], mixes: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
+               max_effort: float, task: Task = EATING) -> dict[str, Any] | None:
+    """None unless a constant mixture's row (``mixes``, each with its ``strategy``) would win the criterion over the
+    candidates' ``best``; then that mixture's ``strategy``, ``line_ratio`` (None where undefined) and
+    ``effort_vs_voluntary`` (the gate's rule cannot be a constant mixture: the default strategy would have to become
+    that mixture, without the gate's overrides)."""
     if not mixes:
-        return ""
+        return None
     winner, _ = criterion([best, *mixes], vol, rea, max_effort, task)
     if winner is best:
-        return ""
-    lr = "n/a" if winner["line_ratio"] is None else f"{winner['line_ratio']:.3f}"
-    return (f"; the constant mixture {winner['strategy']} would win the criterion (line ratio {lr} at "
-            f"{winner['effort_vs_voluntary']:.2f}x voluntary), but the gate's rule cannot be a constant mixture")
+        return None
+    return {"strategy": winner["strategy"], "line_ratio": winner["line_ratio"],
+            "effort_vs_voluntary": float(winner["effort_vs_voluntary"])}
 
 
 def _subset(row: dict[str, Any], keep: list[int]) -> dict[str, Any]:

@@ -15,9 +15,9 @@ the two parties at the same effort e). The criterion (:mod:`mpcshare.calibration
 ``max_effort`` × the voluntary effort, those that saw in every cutting episode where the wearer alone saws, and of
 those the lowest r (the lowest RMS where the line is ill-posed); if none is within the cap, the same without it.
 Returns the choice, every candidate's figures (the constant mixtures :data:`MIXES` as comparators), the per-mode
-costs, why, and what it predicts of the chosen rule, for the bundle's rule (in words:
-:mod:`mpcshare.reports.rule_choice`); raises ValueError without a mode model or a trial. Why these candidates and
-this criterion: docs/design.md, "Chosen in the closed loop, by what each mode costs".
+costs, the reason (a record) and its words (:mod:`mpcshare.reports.rule_choice`), and what it predicts of the
+chosen rule; raises ValueError without a mode model or a trial. Why these candidates and this criterion:
+docs/design.md, "Chosen in the closed loop, by what each mode costs".
 """
 
 from __future__ import annotations
@@ -31,11 +31,9 @@ import numpy as np
 from learning.data import Demonstrations
 from mpcshare.bundle.rule import CalibratedRule
 from mpcshare.calibration.choice_criterion import (
-    CRITERION,
     criterion,
-    criterion_words,
     cross_validated,
-    mix_note,
+    mix_winner,
     predicted,
     saws,
     saws_where_the_wearer_saws,
@@ -51,11 +49,12 @@ from mpcshare.evaluation.distinct import map_distinct
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
 from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.line_ratio import line_ratio as _line_ratio
+from mpcshare.reports.rule_choice import candidate_line, criterion_words, pruned_line, ran_line, why_words
 from mpcshare.training.config import RULE_DURATION_S
 from sim.task import EATING, Task
 from sim.wearer import WearerConfig
 
-__all__ = ["CRITERION", "EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "MIXES", "ROBOT_ALPHAS",
+__all__ = ["EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "MIXES", "ROBOT_ALPHAS",
            "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
            "pooled_run", "pooled_runs", "predicted", "saws", "saws_where_the_wearer_saws", "wearer_saws"]
 
@@ -224,23 +223,16 @@ def _mix_rows(names: Sequence[str], figures: Sequence[dict[str, Any]], vol: dict
              "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]} for name, m in zip(names, figures)]
 
 
-def _task_note(task_effort: float | None, cutting: Sequence[int], best: dict[str, Any], vol: dict[str, Any],
-               max_effort: float, task: Task = EATING) -> str:
-    """"" unless leading the ``cutting`` modes costs more than ``max_effort`` (``task_effort``) and the chosen
-    ``best`` does not both saw and stay within it; then the words that say no such rule can."""
+def _task_effort(task_effort: float | None, cutting: Sequence[int], best: dict[str, Any], vol: dict[str, Any],
+                 max_effort: float, task: Task = EATING) -> dict[str, Any] | None:
+    """None unless leading the ``cutting`` modes costs more than ``max_effort`` (``task_effort``) and the chosen
+    ``best`` does not both saw and stay within it (no such rule can); then ``cutting_modes``,
+    ``effort_vs_voluntary`` (``task_effort``) and ``max_effort``."""
     if task_effort is None or task_effort <= max_effort or (saws_where_the_wearer_saws(best, vol, task) and
                                                              best["effort_vs_voluntary"] <= max_effort):
-        return ""
-    return (f"; leading the cutting modes {cutting} costs the wearer {task_effort:.2f}x the effort of doing the "
-            f"task alone (the robot leading the rest; from the per-mode costs), so no rule that leaves them to the "
-            f"wearer stays within {max_effort:g}x here")
-
-
-def _log_ran(log: Callable[[str], None] | None, ran: int, planned: int) -> None:
-    """Say how many of the choice's episodes were simulated, where some were not (they repeat one)."""
-    if log is not None and ran < planned:
-        log(f"  {ran} of the {planned} episodes simulated: the others decide as one of them at every step "
-            "(the same episode)")
+        return None
+    return {"cutting_modes": [int(j) for j in cutting], "effort_vs_voluntary": float(task_effort),
+            "max_effort": float(max_effort)}
 
 
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
@@ -262,7 +254,10 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
     ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; their rows
     under ``"mixes"``, and the why says so where one would win the criterion: the gate's rule cannot be one).
-    Returns ``{"settings", "wearer_modes", "why", "criterion", "predicted", "cross_validated", "candidates",
+    Returns ``{"settings", "wearer_modes", "reason" (``criterion``: :func:`~mpcshare.calibration.choice_criterion.
+    criterion`'s record; ``mixture``: :func:`~mpcshare.calibration.choice_criterion.mix_winner`'s; ``task_effort``:
+    None, or the cutting modes whose lead costs more than ``max_effort``), "why" (the reason in words:
+    :func:`mpcshare.reports.rule_choice.why_words`), "criterion", "predicted", "cross_validated", "candidates",
     "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
     "episodes_run" (simulated: an episode that decides as another at every step is that episode), "seconds"}``. Raises
@@ -298,25 +293,22 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                          "line_ratio": line_ratio(m["tracking_rmse_m"], m["voluntary_effort"], vol, rea),
                          "effort_vs_voluntary": m["voluntary_effort"] / vol["voluntary_effort"]})
             if log is not None:
-                r = rows[-1]
-                lr = "n/a" if r["line_ratio"] is None else f"{r['line_ratio']:.3f}"
-                log(f"  gate with wearer modes {r['wearer_modes']} ({timing} hand-over, robot share {a_w:g} while "
-                    f"the wearer leads, {a_r:g} while it leads): "
-                    f"RMS {r['tracking_rmse_m'] * 1e3:.1f} mm, effort "
-                    f"{r['effort_vs_voluntary']:.2f}x voluntary, line ratio {lr}")
+                log(candidate_line(rows[-1]))
 
     sets, pruned = prune_sets(costs, candidate_sets(order, cutting, n_modes), vol["voluntary_effort"], prune)
     for r in pruned if log is not None else []:
-        log(f"  gate with wearer modes {r['wearer_modes']}: not simulated (the per-mode costs: {r['why']})")
+        log(pruned_line(r))
     evaluate(_variants(sets, list(timings), wearer_alphas, robot_alphas[:1]))
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
               for r in second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP, task) for a_r in robot_alphas[1:]])
-    best, why = criterion(rows, vol, rea, max_effort, task)
-    why += mix_note(best, mix_rows, vol, rea, max_effort, task)
-    _log_ran(log, sum(ran), len(trials) * (2 + len(mixes) + len(rows)))
+    best, by_criterion = criterion(rows, vol, rea, max_effort, task)
+    if log is not None and sum(ran) < (planned := len(trials) * (2 + len(mixes) + len(rows))):
+        log(ran_line(sum(ran), planned))
     task_effort = cutting_effort(costs, cutting)
-    why += _task_note(task_effort, cutting, best, vol, max_effort, task)
-    return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "why": why,
+    reason = {"criterion": by_criterion, "mixture": mix_winner(best, mix_rows, vol, rea, max_effort, task),
+              "task_effort": _task_effort(task_effort, cutting, best, vol, max_effort, task)}
+    return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "reason": reason,
+            "why": why_words(reason),
             "criterion": criterion_words(task), "predicted": predicted(best, vol, task),
             "cross_validated": cross_validated(rows, vol, rea, max_effort, task),
             "cutting_effort_vs_voluntary": task_effort, "max_effort": max_effort, "candidates": rows,

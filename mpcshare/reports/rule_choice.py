@@ -1,12 +1,97 @@
 """The closed-loop choice of the hand-over rule (:mod:`mpcshare.calibration.rule_choice`) in words:
-a Markdown section of ``training.md`` (the choice, why, the sets not simulated, the per-mode costs and
-every candidate's figures), or why it was skipped."""
+the criterion (:func:`criterion_words`), why the rule won from the choice's reason record (:func:`why_words`),
+the choice's progress lines, and a Markdown section of ``training.md`` (the choice, why, the sets not simulated,
+the per-mode costs and every candidate's figures), or why it was skipped."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Mapping
 
-__all__ = ["rule_markdown", "skipped_markdown"]
+from sim.task import EATING, Task
+
+__all__ = ["CRITERION", "candidate_line", "criterion_why", "criterion_words", "pruned_line", "ran_line",
+           "rule_markdown", "skipped_markdown", "why_words"]
+
+
+def _sawed(stroke_mode: str | None, trial: str = "") -> str:
+    """Who passes the task's criterion, in words: eating's "that saw in every cutting episode where the wearer
+    alone saws" (a task with a stroke mode: sawing in that mode; without one: the criterion met)."""
+    if stroke_mode is None:
+        return f"that meet the task's criterion in every episode{trial} where the wearer alone meets it"
+    return f"that saw in every {stroke_mode} episode{trial} where the wearer alone saws"
+
+
+def criterion_words(task: Task = EATING) -> str:
+    """The choice's criterion (:mod:`mpcshare.calibration.choice_criterion`) in ``task``'s words (eating's:
+    :data:`CRITERION`)."""
+    passed = "that saw" if task.stroke_mode is not None else "that meet it"
+    return (f"among the candidates with effort <= max_effort x voluntary, those "
+            f"{_sawed(task.stroke_mode, ' (trial)')}, the lowest line ratio (the lowest tracking RMS where reactive "
+            "itself costs >= max_effort x voluntary); if none is within the cap, the same without the cap (the "
+            f"lowest line ratio of those {passed})")
+
+
+#: the criterion in eating's words
+CRITERION = criterion_words(EATING)
+
+
+def criterion_why(reason: Mapping[str, Any]) -> str:
+    """Why the criterion chose its row, from its reason record
+    (:func:`mpcshare.calibration.choice_criterion.criterion`)."""
+    cap = f"{reason['max_effort']:g}x voluntary"
+    rms = f"{reason['tracking_rmse_m'] * 1e3:.1f} mm"
+    sawed = " of those " + _sawed(reason["stroke_mode"]) if reason["task_filter"] else ""
+    if not reason["within_cap"]:
+        if reason["by"] == "line_ratio":
+            return f"no candidate has effort <= {cap}; the lowest line ratio ({reason['line_ratio']:.3f}){sawed}"
+        return f"no candidate has effort <= {cap} and none a line ratio; the lowest tracking RMS ({rms}){sawed}"
+    among = (f"among the {reason['n_within']} of {reason['n_candidates']} candidates with effort <= {cap}"
+             f"{',' + sawed if sawed else ''}")
+    if reason["by"] == "line_ratio":
+        return f"lowest line ratio ({reason['line_ratio']:.3f}) {among}"
+    cause = (f"reactive alone costs {reason['reactive_effort_vs_voluntary']:.2f}x the voluntary effort, so the line "
+             "is ill-posed" if reason["ill_posed"] else "no line ratio is defined")
+    return f"{cause}; the lowest tracking RMS ({rms}) {among}"
+
+
+def why_words(reason: Mapping[str, Any]) -> str:
+    """The choice's why (``choice["why"]``) from its reason record (:func:`mpcshare.calibration.rule_choice.
+    choose_rule`'s ``reason``): the criterion's (:func:`criterion_why`), then, where one would win the criterion,
+    the constant mixture the gate's rule cannot be, then, where leading the cutting modes costs more than the cap,
+    that no rule leaving them to the wearer stays within it."""
+    words = criterion_why(reason["criterion"])
+    mix = reason.get("mixture")
+    if mix:
+        lr = "n/a" if mix["line_ratio"] is None else f"{mix['line_ratio']:.3f}"
+        words += (f"; the constant mixture {mix['strategy']} would win the criterion (line ratio {lr} at "
+                  f"{mix['effort_vs_voluntary']:.2f}x voluntary), but the gate's rule cannot be a constant mixture")
+    over = reason.get("task_effort")
+    if over:
+        words += (f"; leading the cutting modes {over['cutting_modes']} costs the wearer "
+                  f"{over['effort_vs_voluntary']:.2f}x the effort of doing the task alone (the robot leading the "
+                  f"rest; from the per-mode costs), so no rule that leaves them to the wearer stays within "
+                  f"{over['max_effort']:g}x here")
+    return words
+
+
+def candidate_line(row: Mapping[str, Any]) -> str:
+    """The progress line of one simulated candidate (its wearer modes, timing, shares and figures)."""
+    lr = "n/a" if row["line_ratio"] is None else f"{row['line_ratio']:.3f}"
+    return (f"  gate with wearer modes {row['wearer_modes']} ({row['timing']} hand-over, robot share "
+            f"{row['wearer_alpha']:g} while the wearer leads, {row['robot_alpha']:g} while it leads): "
+            f"RMS {row['tracking_rmse_m'] * 1e3:.1f} mm, effort {row['effort_vs_voluntary']:.2f}x voluntary, "
+            f"line ratio {lr}")
+
+
+def pruned_line(row: Mapping[str, Any]) -> str:
+    """The progress line of a wearer-mode set not simulated (:func:`mpcshare.calibration.mode_cost.prune_sets`)."""
+    return f"  gate with wearer modes {row['wearer_modes']}: not simulated (the per-mode costs: {row['why']})"
+
+
+def ran_line(ran: int, planned: int) -> str:
+    """The progress line that says ``ran`` of the ``planned`` episodes were simulated (the others repeat one)."""
+    return (f"  {ran} of the {planned} episodes simulated: the others decide as one of them at every step "
+            "(the same episode)")
 
 
 def rule_markdown(choice: dict[str, Any]) -> str:

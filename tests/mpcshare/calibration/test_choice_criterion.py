@@ -5,9 +5,7 @@ from __future__ import annotations
 import pytest
 
 from mpcshare.calibration.choice_criterion import (
-    CRITERION,
     criterion,
-    criterion_words,
     cross_validated,
     predicted,
     saws_where_the_wearer_saws,
@@ -65,11 +63,9 @@ def test_the_criterion_is_the_tasks_own():
     late = {"name": "late", "effort_vs_voluntary": 0.5, "line_ratio": 0.7, "tracking_rmse_m": 0.006,
             "saws_by_trial": [False], "lag_s": 0.5}
     on_time = {**late, "name": "on time", "line_ratio": 0.9, "saws_by_trial": [True], "lag_s": 0.05}
-    best, why = criterion([late, on_time], vol, rea, 0.75, Pouring())
-    assert best["name"] == "on time" and why.endswith(
-        "of those that meet the task's criterion in every episode where the wearer alone meets it")
+    best, reason = criterion([late, on_time], vol, rea, 0.75, Pouring())
+    assert best["name"] == "on time" and reason["task_filter"] and reason["stroke_mode"] is None
+    assert reason["by"] == "line_ratio" and reason["line_ratio"] == 0.9 and reason["n_within"] == 2
     no_per_trial = [{k: v for k, v in r.items() if k != "saws_by_trial"} for r in (late, on_time)]
     assert criterion(no_per_trial, vol, rea, 0.75, Pouring())[0]["name"] == "on time"  # pooled: task.done
     assert criterion(no_per_trial, vol, rea, 0.75, EATING)[0]["name"] == "late"  # no sawing figures: the ratio
-    assert criterion_words(EATING) == CRITERION and "every cutting episode (trial)" in CRITERION
-    assert "every episode (trial) where the wearer alone meets it" in criterion_words(Pouring())
