@@ -244,10 +244,12 @@ def _load_fast(root: Path, version: int) -> Any:
 
 
 def _load_rule(root: Path, version: int, metrics: dict[str, Any]) -> CalibratedRule | None:
-    """The rule of ``rule.json``, or of ``metrics`` in a format-1/2 bundle (moved out of it)."""
+    """The rule of ``rule.json``, or of ``metrics`` in a format-1/2 bundle or where ``rule.json`` has none and
+    ``metrics`` says why the choice was skipped (moved out of it)."""
     path = root / ("rule.json" if version >= 3 else "metrics.json")
     try:
-        return rule_from_json(read_json(path)) if version >= 3 else rule_from_metrics(metrics)
+        rule = rule_from_json(read_json(path)) if version >= 3 else None
+        return rule if rule is not None else rule_from_metrics(metrics)
     except (TypeError, ValueError) as exc:
         if isinstance(exc, BundleError):
             raise

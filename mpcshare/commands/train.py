@@ -167,7 +167,8 @@ def _run(args: argparse.Namespace) -> int:
         bundle.config["task"] = args.task  # `mpcshare sim`'s task
     except TrainingError as exc:
         raise CommandError(f"cannot train on {args.data}: {exc}") from None
-    choice, skipped = _calibrate(bundle, demos, args)  # stage 2: calibration, in the closed loop
+    choice = _calibrate(bundle, demos, args)  # stage 2: calibration, in the closed loop
+    skipped = None if bundle.rule is None else bundle.rule.skipped
     from mpcshare.bundle import save_bundle
     try:
         save_bundle(bundle, out)
@@ -188,25 +189,27 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _calibrate(bundle, demos, args: argparse.Namespace) -> tuple[dict | None, str | None]:
-    """(the gate's settings chosen in the closed loop (:mod:`mpcshare.calibration.rule_choice`), recorded in
-    ``bundle.rule``, or None; why the choice was skipped, or None).
-    Skipped with ``--no-rule-choice`` (no reason given) and where the data cannot drive the simulator."""
+def _calibrate(bundle, demos, args: argparse.Namespace) -> dict | None:
+    """The gate's settings chosen in the closed loop (:mod:`mpcshare.calibration.rule_choice`), recorded in
+    ``bundle.rule``, or None. Skipped with ``--no-rule-choice`` (no rule) and where the data cannot drive the
+    simulator (then ``bundle.rule`` says why: :func:`~mpcshare.bundle.rule.skipped_rule`)."""
     if args.no_rule_choice:
-        return None, None
+        return None
     task = chosen_task(args)
     gaps = simulator_gaps(demos.obs_names, demos.act_names, demos.vol_names if demos.has_voluntary else (),
                           demos.rate_hz, task)
     if gaps:
+        from mpcshare.bundle.rule import skipped_rule
+
         why = ("closed-loop choice was skipped (the gate keeps its default settings): the data cannot drive the "
                "simulator: " + "; ".join(gaps))
-        bundle.metrics["rule_choice_skipped"] = why
-        return None, why
+        bundle.rule = skipped_rule(why)
+        return None
     from mpcshare.calibration.rule_choice import choose_for_bundle
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
                              wearer_name=args.rule_wearer, mode_names=task.mode_names, task=task,
-                             log=None if args.quiet else print), None
+                             log=None if args.quiet else print)
 
 
 TRAIN_COMMAND = Command("train", "train gates and the reactive predictor into a model bundle, "

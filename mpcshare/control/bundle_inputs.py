@@ -142,11 +142,12 @@ def mode_figures(bundle: ModelBundle) -> ModeFigures:
 def rule_settings(bundle: ModelBundle, strategy: str, given: Any = None) -> Any:
     """The settings the strategy runs with: ``given`` (the controller's ``strategy_settings``) when not None,
     else the bundle's calibrated rule's (``bundle.rule``) when it is for ``strategy`` (or the strategy its spec's
-    ``rule_of`` names), else None (the strategy's defaults). The Arbiter turns them into the strategy's typed
-    settings."""
+    ``rule_of`` names) and was not skipped, else None (the strategy's defaults). The Arbiter turns them into the
+    strategy's typed settings."""
     if given is not None:
         return given
     rule = getattr(bundle, "rule", None)
     spec = REGISTRY.get(strategy)
     reads = spec.rule_of if spec is not None and spec.rule_of is not None else strategy
-    return rule.settings if rule is not None and rule.strategy == reads else None
+    ran = rule is not None and getattr(rule, "skipped", None) is None
+    return rule.settings if ran and rule.strategy == reads else None

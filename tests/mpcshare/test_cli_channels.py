@@ -56,6 +56,9 @@ def test_renamed_channels_and_a_two_angle_shoulder_from_import_to_sim(bags, tmp_
     lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("hand-over rule:")]
     assert len(lines) == 1 and "closed-loop choice was skipped" in lines[0] and "--map knife_x=blade_x" in lines[0]
     assert (plain / "bundle.json").exists() and "was skipped" in (plain / "training.md").read_text()
+    rule = json.loads((plain / "rule.json").read_text())["rule"]  # the typed record says why, not the metrics
+    assert rule["skipped"] == lines[0].removeprefix("hand-over rule: the ") and rule["settings"] == {}
+    assert "rule_choice_skipped" not in json.loads((plain / "metrics.json").read_text())
     assert main(["sim", "--model", str(plain), "--out", str(tmp_path / "no_sim")]) == 1
     err = _one_line(capsys.readouterr().err, "sim")
     assert "the bundle's channels cannot drive the simulator" in err and "fork_x=fk_x" in err

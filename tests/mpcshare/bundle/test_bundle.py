@@ -17,6 +17,7 @@ from mpcshare.bundle import (
     load_bundle,
     save_bundle,
 )
+from mpcshare.bundle.rule import skipped_rule
 from mpcshare.training import train_bundle
 from mpcshare.training.config import TrainConfig
 from sim.demonstrator import GeneratorConfig, generate_demonstrations
@@ -190,6 +191,21 @@ def test_the_rule_round_trips_and_a_version_2_bundles_rule_is_moved_out_of_its_m
     migrated = load_bundle(old)
     assert migrated.format_version == 2 and "rule_settings" not in migrated.metrics
     assert migrated.rule == CalibratedRule("gate", {"wearer_modes": (0,), "lead_s": 1.5}, {"why": "old"}, 1)
+
+
+def test_a_skipped_rule_round_trips_and_an_older_bundles_skipped_metric_becomes_one(bundle, tmp_path):
+    import dataclasses
+
+    skipped = skipped_rule("closed-loop choice was skipped: no knife")
+    back = load_bundle(save_bundle(dataclasses.replace(bundle, rule=skipped), tmp_path / "b"))
+    assert back.rule == skipped and "rule_choice_skipped" not in back.metrics
+    old = _copy(tmp_path / "b", tmp_path / "old")  # as written before the rule could say so: in the metrics
+    (old / "rule.json").write_text(json.dumps({"rule": None}))
+    m = json.loads((old / "metrics.json").read_text())
+    (old / "metrics.json").write_text(json.dumps({**m, "rule_choice_skipped": skipped.skipped}))
+    _rewrite_manifest(old)
+    migrated = load_bundle(old)
+    assert migrated.rule == skipped and "rule_choice_skipped" not in migrated.metrics
 
 
 @pytest.mark.parametrize("rule,match", [({"version": 1, "strategy": "gate", "settings": {"lead_s": "1"}},

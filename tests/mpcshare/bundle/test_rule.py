@@ -7,7 +7,14 @@ import math
 
 import pytest
 
-from mpcshare.bundle.rule import RULE_VERSION, CalibratedRule, rule_from_json, rule_from_metrics, rule_to_json
+from mpcshare.bundle.rule import (
+    RULE_VERSION,
+    CalibratedRule,
+    rule_from_json,
+    rule_from_metrics,
+    rule_to_json,
+    skipped_rule,
+)
 
 
 def test_json_round_trip_keeps_the_settings_and_the_record():
@@ -25,6 +32,8 @@ def test_json_round_trip_keeps_the_settings_and_the_record():
     ({"strategy": "gate", "settings": {"lead_s": True}}, "'lead_s' must be a finite number"),
     ({"strategy": "gate", "settings": [1]}, "rule settings must map"),
     ({"strategy": "gate", "settings": {}, "version": RULE_VERSION + 1}, f"rule version {RULE_VERSION + 1}"),
+    ({"strategy": "gate", "settings": {}, "skipped": ""}, "rule skipped must be null or why"),
+    ({"strategy": "gate", "settings": {"lead_s": 1.0}, "skipped": "no knife"}, "a skipped rule has no settings"),
 ])
 def test_a_wrong_field_is_named(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -36,3 +45,18 @@ def test_an_old_bundles_metrics_give_up_their_rule():
     assert rule_from_metrics(metrics) == CalibratedRule("gate", {"wearer_modes": [1]}, {"why": "w"}, 1)
     assert metrics == {"gate": {}}
     assert rule_from_metrics({"gate": {}}) is None
+
+
+def test_a_skipped_rule_says_why_and_round_trips_and_a_version_1_rule_reads_as_not_skipped():
+    rule = skipped_rule("closed-loop choice was skipped: no knife")
+    assert rule == CalibratedRule("gate", {}, {}, RULE_VERSION, "closed-loop choice was skipped: no knife")
+    assert rule_from_json(json.loads(json.dumps(rule_to_json(rule)))) == rule
+    old = {"rule": {"version": 1, "strategy": "gate", "settings": {"lead_s": 1.5}, "choice": {"why": "w"}}}
+    assert rule_from_json(old) == CalibratedRule("gate", {"lead_s": 1.5}, {"why": "w"}, 1) and \
+        rule_from_json(old).skipped is None
+
+
+def test_an_old_bundles_metrics_give_up_why_the_choice_was_skipped():
+    metrics = {"gate": {}, "rule_choice_skipped": "closed-loop choice was skipped: no knife"}
+    assert rule_from_metrics(metrics) == skipped_rule("closed-loop choice was skipped: no knife")
+    assert metrics == {"gate": {}}

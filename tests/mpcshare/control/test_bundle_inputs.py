@@ -1,4 +1,5 @@
-"""What the controller reads of a bundle: the shoulder map of the task the bundle was trained for."""
+"""What the controller reads of a bundle: the shoulder map of the task the bundle was trained for, the rule's
+settings."""
 
 from __future__ import annotations
 
@@ -60,3 +61,13 @@ def test_the_simulated_wearer_and_the_channel_check_use_the_tasks_roles(reaching
                           task=task_named(reaching))
     assert len(gaps) == 1 and "takes at most 1 by position" in gaps[0]
     assert gaps[0].endswith("--map shoulder_elevation=CHANNEL ... names them")
+
+
+def test_a_skipped_rule_leaves_the_strategy_its_defaults():
+    from mpcshare.bundle.rule import CalibratedRule, skipped_rule
+    from mpcshare.control.bundle_inputs import rule_settings
+
+    assert rule_settings(SimpleNamespace(rule=skipped_rule("closed-loop choice was skipped: no knife")), "gate") is None
+    ran = SimpleNamespace(rule=CalibratedRule("gate", {"share_on": 0.4}))
+    assert rule_settings(ran, "gate") == {"share_on": 0.4} and rule_settings(ran, "gate", {"lead_s": 1.0}) == {
+        "lead_s": 1.0}
