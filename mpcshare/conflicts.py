@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 if TYPE_CHECKING:  # the command line imports this module for SCENARIOS: the world is imported when used
-    from robot.wearer_body import WearerBody
     from sim.scene import SceneConfig
+    from sim.task import Task
 
 FORK_CHANNELS = ("fork_x", "fork_y", "fork_z", "fork_roll", "fork_pitch", "fork_yaw")  # sim.closed_loop's
 TIP_CHANNELS = ("knife_x", "knife_y", "knife_z")
@@ -67,10 +67,11 @@ def _sweep_profile(t: np.ndarray, t0: float, dist: float, hold: float = 0.3) -> 
 
 
 class Scenario:
-    """One conflict scenario (module docstring) for data with ``obs_names``/``act_names``."""
+    """One conflict scenario (module docstring) for data with ``obs_names``/``act_names``, in ``scene`` (default
+    ``SceneConfig()``) beside the body of ``task`` (default eating's)."""
 
     def __init__(self, name: str, obs_names: Sequence[str], act_names: Sequence[str],
-                 body: WearerBody | None = None, scene: SceneConfig | None = None) -> None:
+                 scene: SceneConfig | None = None, task: Task | None = None) -> None:
         from sim.scene import SceneConfig
         from sim.task import EATING
 
@@ -83,7 +84,7 @@ class Scenario:
         self.name = name
         self.fork_cols = [obs.index(c) for c in FORK_CHANNELS]
         self.tip_cols = [act.index(c) for c in TIP_CHANNELS]
-        self.body = body or EATING.body
+        self.body = (task or EATING).body
         sc = scene or SceneConfig()
         self.head_plate = np.asarray(self.body.head_center) - np.asarray(sc.plate_position)
 

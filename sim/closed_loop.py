@@ -22,6 +22,7 @@ The controller needs only ``step`` (``reset()`` first if it has one); ``obs`` co
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 import warnings
@@ -35,7 +36,7 @@ from learning.data import Trial
 from sim.episode import Episode
 from sim.scene import EatingScene, SceneConfig
 from sim.servo import JointServo, ServoConfig
-from sim.task import EATING
+from sim.task import EATING, Task
 from sim.wearer_presets import DEFAULT_WEARER
 from sim.wearer_protocol import Wearer, WearerFactory, make_wearer
 
@@ -282,7 +283,8 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
                 wearer: Wearer | WearerFactory | None = None, duration_s: float | None = None, seed: int = 0,
                 record: bool = True, render: str | Path | None = None, progress: bool = False,
                 obs_names: list[str] | None = None, act_names: list[str] | None = None,
-                servo: ServoConfig | None = None, fork_truth: np.ndarray | None = None) -> Episode:
+                servo: ServoConfig | None = None, fork_truth: np.ndarray | None = None,
+                task: Task = EATING) -> Episode:
     """Run ``controller`` beside a simulated wearer whose intent is ``trial``'s knife (module docstring).
 
     Args:
@@ -303,10 +305,14 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         fork_truth: (T, 6) the world's fork pose per sample (plate frame) when it differs from
             what the controller reads in ``trial.obs`` (a lost or faulty marker); default: the
             trial's fork channels.
+        task: the task (:class:`sim.task.Task`): the wearer's body zones in the scene (they replace
+            ``scene.body``).
     """
     from sim.demonstrator import ACT_NAMES, OBS_NAMES
 
     sc = scene or SceneConfig()
+    if sc.body != task.body:
+        sc = dataclasses.replace(sc, body=task.body)
     obs_names = list(OBS_NAMES) if obs_names is None else list(obs_names)
     act_names = list(ACT_NAMES) if act_names is None else list(act_names)
     fork, intent_raw, n_ctrl = _check_inputs(controller, trial, sc, obs_names, act_names, duration_s)

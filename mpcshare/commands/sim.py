@@ -186,7 +186,8 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
           f"({'whole trials' if args.duration is None else f'{args.duration:g} s each'}), wearer {wearer_name}")
     scenario_name = getattr(args, "scenario", None)
     try:
-        scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names)
+        scenario = None if scenario_name is None else Scenario(scenario_name, demos.obs_names, demos.act_names,
+                                                               task=task)
     except ValueError as exc:  # e.g. data without the fork's angles
         raise CommandError(f"--scenario {exc}") from None
     options = None
@@ -210,7 +211,7 @@ def run_comparison(bundle: ModelBundle, demos: Demonstrations, out: Path, args: 
         video, message = render_clip(bundle, demos, trial_ids[0], out / f"{shown.name}_trial.mp4",
                                      strategy=shown.strategy, use_mpc=shown.use_mpc, seed=args.sim_seed,
                                      beta=args.beta, wearer=wearer, scene=scene, scenario=scenario,
-                                     controller_options=options,
+                                     controller_options=options, task=task,
                                      seconds=10.0 if args.duration is None else min(10.0, args.duration))
         comp.video = None if video is None else str(Path(video).relative_to(out))
         print(f"video: {video}" if video else f"no video: {message}")

@@ -8,13 +8,20 @@ TypeError; RuntimeError for a missing optional part) naming what is wrong.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
 from mpcshare.control.arbitration import Arbiter, check_beta, check_strategy
-from mpcshare.control.bundle_inputs import BundleLayout, check_bundle, mode_figures, rule_settings, shoulder_map
+from mpcshare.control.bundle_inputs import (
+    BundleLayout,
+    bundle_task,
+    check_bundle,
+    mode_figures,
+    rule_settings,
+    shoulder_map,
+)
 from mpcshare.control.fastpath import FastPath
 from mpcshare.control.forecast import ForecastTrack, TipTrajectory
 from mpcshare.control.frontend import StreamingFrontEnd
@@ -140,6 +147,8 @@ def build_parts(bundle: ModelBundle, *, robot: RobotDescription | None = None, s
     check_strategy(strategy, scheduled=schedule is not None)
     beta_user = check_beta(beta)
     cfg = config or ControllerConfig()
+    if cfg.keepout is not None and cfg.keepout.body is None:  # the body zones of the bundle's task
+        cfg = replace(cfg, keepout=replace(cfg.keepout, body=bundle_task(bundle).body))
     layout = check_bundle(bundle, tip_channels, fork_channels)
     shoulder = shoulder_map(bundle, shoulder)
     arm = as_description(robot)  # TypeError naming the choices for anything else

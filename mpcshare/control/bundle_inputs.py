@@ -18,7 +18,7 @@ from mpcshare.control.strategies import REGISTRY
 from mpcshare.control.strategies.base import ModeFigures
 from mpcshare.errors import ControllerSetupError
 from robot.shoulder import ShoulderMap
-from sim.task import recorded_task
+from sim.task import Task, recorded_task
 
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
@@ -104,6 +104,15 @@ def check_bundle(bundle: ModelBundle, tip_channels: Sequence[str] | None = None,
                         np.asarray(pre.act.scale_, dtype=float))
 
 
+def bundle_task(bundle: ModelBundle) -> Task:
+    """The task the bundle was trained for (:func:`sim.task.recorded_task` of ``bundle.config``; none recorded:
+    the default task). Raises ControllerSetupError naming the task that cannot be found."""
+    try:
+        return recorded_task(getattr(bundle, "config", None))
+    except ValueError as exc:
+        raise ControllerSetupError(f"the bundle's task: {exc}") from None
+
+
 def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> ShoulderMap:
     """The shoulder map of the bundle's voluntary channels (``vol_names``): ``shoulder`` when given (its
     channels must match), else the map of the names of the task the bundle was trained for
@@ -115,10 +124,7 @@ def shoulder_map(bundle: ModelBundle, shoulder: ShoulderMap | None = None) -> Sh
             raise ControllerSetupError(f"the shoulder map reads {shoulder.n_channels} angle(s), the bundle's "
                                        f"vol_names {vol} are {len(vol)}")
         return shoulder
-    try:
-        task = recorded_task(getattr(bundle, "config", None))
-    except ValueError as exc:
-        raise ControllerSetupError(f"the bundle's task: {exc}") from None
+    task = bundle_task(bundle)
     try:
         return task.shoulder_map(vol)
     except ValueError as exc:

@@ -30,7 +30,6 @@ import numpy as np
 from robot.keepout import BLADE_LENGTH, KeepOutConfig, KeepOutLimit, retreat
 from robot.qp import QPController, QPResult, QPStatus
 from robot.wearer_body import BODY_PARTS, WearerBody, body_zones
-from sim.task import EATING
 
 __all__ = ["FORK_POSE_CHANNELS", "KeepOut", "KeepOutSettings"]
 
@@ -39,13 +38,14 @@ FORK_POSE_CHANNELS = ("fork_x", "fork_y", "fork_z", "fork_roll", "fork_pitch", "
 
 @dataclass(frozen=True)
 class KeepOutSettings:
-    """The controller's keep-out: the body, the rows' settings, the knife's heel offset in the
+    """The controller's keep-out: the body (None: the body zones of the task the bundle was trained for, set by
+    :func:`mpcshare.control.builder.build_parts`), the rows' settings, the knife's heel offset in the
     tool frame [m] (the SuperLimb's blade: 9 cm back along the tool x axis), the parts kept out,
     and ``driven_speed`` [m/s]: a knife inside a margin moving toward the zone faster than this
     was driven in; ``mpc_zones``: the MPC (when on) also holds the zones
     over its horizon, moving with the hand's forecast (:class:`robot.mpc.keepout_mpc.KeepOutTipMPC`)."""
 
-    body: WearerBody = field(default_factory=lambda: EATING.body)
+    body: WearerBody | None = None
     limit: KeepOutConfig = field(default_factory=KeepOutConfig)
     heel_offset: tuple[float, float, float] = (-BLADE_LENGTH, 0.0, 0.0)
     parts: tuple[str, ...] = BODY_PARTS
@@ -64,6 +64,9 @@ class KeepOut:
     """Zones per step and the check after the QP (module docstring)."""
 
     def __init__(self, settings: KeepOutSettings, limit: KeepOutLimit) -> None:
+        if settings.body is None:
+            raise ValueError("KeepOut needs KeepOutSettings.body (the controller's builder sets the body of the "
+                             "bundle's task)")
         self.settings, self.limit = settings, limit
         self._cols: np.ndarray | None = None
         self.reset()

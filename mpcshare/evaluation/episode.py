@@ -62,7 +62,8 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
     """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
     its metrics: :func:`sim.metrics.episode_metrics`, the figures of ``task`` (:meth:`sim.task.Task.episode_metrics`)
     and the keep-out figures of :mod:`sim.keepout_metrics`. ``scene``: the world and its arm (default
-    ``SceneConfig()``, the SuperLimb); the controller is given the scene's arm (``robot=``).
+    ``SceneConfig()``, the SuperLimb), with ``task``'s body zones; the controller is given the scene's arm
+    (``robot=``) and keeps out the body zones of its bundle's task.
     ``scenario``: a :class:`mpcshare.conflicts.Scenario` that transforms the trial (and the bundle's
     predictor) first."""
     make_controller = make_controller or _from_bundle
@@ -81,7 +82,7 @@ def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: Strate
     with threadpool_limits(limits=1, user_api="blas"):
         episode = run_episode(controller, trial, scene=scene, duration_s=duration_s, seed=seed, wearer=wearer,
                               obs_names=list(demos.obs_names), act_names=list(demos.act_names),
-                              fork_truth=fork_truth)
+                              fork_truth=fork_truth, task=task)
     m = episode_metrics(episode)
     true_mode = trial.mode[:len(episode.t)] if trial.mode is not None else None
     m.update(task.episode_metrics(episode.tip, episode.tip_intent, float(np.median(np.diff(episode.t))),

@@ -350,8 +350,10 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
                 strategy: str = "gate", use_mpc: bool = False, seed: int = 0, beta: float = DEFAULT_BETA,
                 make_controller: Callable[..., Any] | None = None, wearer: WearerConfig | None = None,
                 scene: SceneConfig | None = None, scenario: Any = None,
-                controller_options: dict[str, Any] | None = None) -> tuple[str | None, str | None]:
-    """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL).
+                controller_options: dict[str, Any] | None = None,
+                task: Task = EATING) -> tuple[str | None, str | None]:
+    """Render the first ``seconds`` of ``strategy`` (with or without MPC) on one trial (offscreen OpenGL), in
+    ``scene`` with ``task``'s body zones.
 
     Returns ``(video_path, message)``: the file written (an .mp4, or a .gif beside it
     when no MP4 encoder is installed) or None, and why not.
@@ -373,5 +375,5 @@ def render_clip(bundle: ModelBundle, demos: Demonstrations, trial_id: int, path:
         warnings.filterwarnings("ignore", message="no video", category=RuntimeWarning)
         episode = run_episode(controller, trial, scene=scene, duration_s=seconds, seed=seed, render=path,
                               record=False, wearer=wearer, obs_names=list(demos.obs_names),
-                              act_names=list(demos.act_names), fork_truth=fork_truth)
+                              act_names=list(demos.act_names), fork_truth=fork_truth, task=task)
     return episode.info.get("video"), episode.info.get("render_message")

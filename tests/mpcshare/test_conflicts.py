@@ -46,6 +46,19 @@ def test_sweep_brings_the_hand_to_the_knife_at_0_4_m_s(data):
     assert np.array_equal(st.trial.obs[:, sc.fork_cols], st.fork_truth)  # the controller sees it
 
 
+def test_the_hand_and_the_head_are_the_tasks(data):
+    import dataclasses
+
+    from sim.scene import SceneConfig
+
+    demos, _ = data
+    big = dataclasses.replace(EATING.body, hand_radius=0.1, head_center=(0.0, 0.1, 0.5))
+    task = type("BigHands", (), {"body": big})()
+    sc = Scenario("sweep", demos.obs_names, demos.act_names, task=task)
+    assert sc.body is big and _scenario("sweep", demos).body is EATING.body
+    assert np.allclose(sc.head_plate, np.asarray(big.head_center) - SceneConfig().plate_position)
+
+
 def test_marker_lost_hides_the_fork_for_a_second(data):
     demos, _ = data
     sc = _scenario("marker_lost", demos)

@@ -196,3 +196,18 @@ def test_fork_pose_rows_make_a_level_fork_without_angles_and_name_what_is_missin
         fork_pose_rows(obs, ["fork_roll", "fork_x", "fork_y", "fork_z"])
     with pytest.raises(ValueError, match="fork_z"):
         fork_pose_rows(obs, ["a", "fork_x", "fork_y", "b"])
+
+
+def test_the_scene_holds_the_tasks_body_zones(trial):
+    import dataclasses
+    import json
+
+    from sim.scene import SceneConfig
+    from sim.task import EATING
+    from tests.sim.task.test_protocol import Pouring
+
+    zones = [json.loads(run_episode(IdleController(), trial, duration_s=0.1, scene=scene, task=task).info["body_zones"])
+             for scene, task in ((None, Pouring()), (SceneConfig(), Pouring()), (None, EATING))]
+    assert zones[0]["head_speed_cap"] == zones[1]["head_speed_cap"] == 0.03  # the task's, also over a given scene
+    assert zones[2] == json.loads(json.dumps({**EATING.body.to_dict(), "blade_length": SceneConfig().blade_length}))
+    assert EATING.body.head_speed_cap != 0.03 and dataclasses.replace(EATING.body, head_speed_cap=0.03) == Pouring.body

@@ -9,10 +9,11 @@ from mpcshare.evaluation.keepout_replay import RecordedKeepOut
 from robot.keepout import KeepOutLimit
 from robot.superlimb import superlimb_description
 from sim.demonstrator import OBS_NAMES
+from sim.task import EATING
 
 
 def _keepout() -> KeepOut:
-    arm, settings = superlimb_description(), KeepOutSettings()
+    arm, settings = superlimb_description(), KeepOutSettings(body=EATING.body)
     ko = KeepOut(settings, KeepOutLimit(arm.model, arm.tip_frame, settings.heel_offset, settings.limit))
     ko.bind(OBS_NAMES)
     return ko
