@@ -101,8 +101,8 @@ class _Loop:
 
     def __init__(self, controller: Controller, trial: Trial, sc: SceneConfig, person: Wearer,
                  servo: ServoConfig | None, seed: int, n_ctrl: int, fork: np.ndarray, record: bool,
-                 fork_truth: np.ndarray | None = None) -> None:
-        self.controller, self.trial, self.sc, self.person = controller, trial, sc, person
+                 fork_truth: np.ndarray | None = None, task: Task = EATING) -> None:
+        self.controller, self.trial, self.sc, self.person, self.task = controller, trial, sc, person, task
         self.fork_truth = fork if fork_truth is None else fork_truth
         self.n_ctrl, self.record = n_ctrl, record
         self.drawn: Callable[[int], bool] = lambda k: False  # whether step k is a video frame
@@ -168,7 +168,8 @@ class _Loop:
         self.out["tip"][k], self.out["voluntary"][k], self.base_poses[k] = tip, theta, base
 
     def caption(self, k: int) -> Any:
-        """What the video shows on control step ``k``'s frame: time, who leads (α), the demonstration's task mode."""
+        """What the video shows on control step ``k``'s frame: time, who leads (α), the demonstration's task mode
+        (its name and colour in the task's ``mode_names`` and ``mode_colours``)."""
         from sim.render import Caption
 
         a = self.alpha[k]
@@ -178,9 +179,9 @@ class _Loop:
         label = int(self.trial.mode[k]) if self.trial.mode is not None and k < len(self.trial.mode) else -1
         if label < 0:
             return Caption(parts)
-        names = EATING.mode_names
+        names = self.task.mode_names
         name = names[label] if label < len(names) else f"mode {label}"
-        return Caption(parts + [name], EATING.mode_colours.get(name))
+        return Caption(parts + [name], self.task.mode_colours.get(name))
 
     def _log_command(self, k: int, cmd: Any) -> None:
         self.alpha[k], self.beta[k] = _scalar(getattr(cmd, "alpha", np.nan)), _scalar(getattr(cmd, "beta", np.nan))
@@ -238,6 +239,8 @@ class _Loop:
             **self.person.info(),
             "video": None, "render_message": None,
             "body_zones": json.dumps({**sc.body.to_dict(), "blade_length": sc.blade_length}),
+            "shoulder_roles": json.dumps(list(self.task.shoulder_channels)),
+            "shoulder_layout": json.dumps(np.asarray(self.task.shoulder_to_plate, dtype=float).tolist()),
         }
 
     def episode(self, info: dict[str, Any]) -> Episode:
@@ -306,7 +309,8 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
             what the controller reads in ``trial.obs`` (a lost or faulty marker); default: the
             trial's fork channels.
         task: the task (:class:`sim.task.Task`): the wearer's body zones in the scene (they replace
-            ``scene.body``).
+            ``scene.body``), the names and colours of the modes in the video's caption, and the roles of the
+            shoulder channels the episode records (``info["shoulder_roles"]``, ``info["shoulder_layout"]``).
     """
     from sim.demonstrator import ACT_NAMES, OBS_NAMES
 
@@ -321,7 +325,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         if fork_truth.shape != (len(trial), 6):
             raise ValueError(f"fork_truth must have shape ({len(trial)}, 6), got {fork_truth.shape}")
     person = make_wearer(DEFAULT_WEARER if wearer is None else wearer, intent_raw, 1.0 / sc.control_period, seed)
-    loop = _Loop(controller, trial, sc, person, servo, seed, n_ctrl, fork, record, fork_truth)
+    loop = _Loop(controller, trial, sc, person, servo, seed, n_ctrl, fork, record, fork_truth, task)
     if callable(getattr(controller, "reset", None)):
         controller.reset()
     renderer = bar = None

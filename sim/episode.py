@@ -55,7 +55,8 @@ class Episode:
     frame; the knife body is the segment tip–heel); None in older run files.
     ``info``: scalars — limit_violations (physics steps with any limit exceeded),
     the largest excesses, servo counters, wall_time_s, shoulder gain/deadband, the
-    trial id, render result, ``body_zones`` (JSON: the wearer's body zones, ``robot.wearer_body``).
+    trial id, render result, ``body_zones`` (JSON: the wearer's body zones, ``robot.wearer_body``),
+    ``shoulder_roles`` and ``shoulder_layout`` (JSON: the task's shoulder roles and layout; older run files: none).
     """
 
     t_physics: np.ndarray
@@ -81,16 +82,18 @@ class Episode:
     @property
     def shoulder_names(self) -> list[str]:
         """The names of the ``voluntary`` columns: each column's role in the wearer's shoulder map
-        (``info["shoulder_matrix"]``; absent: the three of the task's
-        :data:`sim.task.eating.SHOULDER_CHANNELS`),
-        ``shoulder_<j>`` for a column of no role."""
+        (``info["shoulder_matrix"]``; absent: eating's P, as :mod:`sim.wearer_protocol` records it), by the column
+        of the task's layout it equals (the roles and layout the episode recorded, ``info["shoulder_roles"]`` and
+        ``info["shoulder_layout"]``; a run file without them: eating's); ``shoulder_<j>`` for a column of no role."""
+        recorded = self.info.get("shoulder_roles")
+        roles = tuple(json.loads(recorded)) if recorded else EATING.shoulder_channels
+        layout = np.array(json.loads(self.info["shoulder_layout"]), dtype=float) if recorded else \
+            np.asarray(EATING.shoulder_to_plate, dtype=float)
         matrix = self.info.get("shoulder_matrix")
-        if not matrix:
-            return list(EATING.shoulder_channels)
+        P = np.array(json.loads(matrix), dtype=float) if matrix else np.asarray(EATING.shoulder_to_plate, dtype=float)
         names = []
-        for j, col in enumerate(np.array(json.loads(matrix), dtype=float).T):
-            roles = EATING.shoulder_channels
-            role = [r for r in range(len(roles)) if np.array_equal(col, EATING.shoulder_to_plate[:, r])]
+        for j, col in enumerate(P.T):
+            role = [r for r in range(len(roles)) if np.array_equal(col, layout[:, r])]
             names.append(roles[role[0]] if role else f"shoulder_{j}")
         return names
 

@@ -34,7 +34,6 @@ from learning.atomic import atomic_open
 from learning.data import Trial
 
 from .closed_loop import FORK_CHANNELS, Episode, fork_pose_rows
-from .task import EATING
 
 __all__ = ["JOINT_NAMES", "SCHEMAS", "TOPICS", "fork_poses", "mcap_bytes_estimate", "status_log", "step_messages",
            "write_run_mcap"]
@@ -45,7 +44,6 @@ MCAP_BYTES_PER_CONTROL_STEP = 390
 MCAP_BYTES_PER_JOINT_STATE = 125
 
 JOINT_NAMES: tuple[str, ...] = ("joint_1", "joint_2", "joint_3")
-SHOULDER_NAMES: tuple[str, ...] = EATING.shoulder_channels
 PLATE_FRAME = "plate"
 
 

@@ -1,5 +1,8 @@
 """Short closed loops with controllers written here: limits in the physics, sane metrics, the run file."""
 
+import dataclasses
+import json
+
 import numpy as np
 import pytest
 
@@ -199,9 +202,6 @@ def test_fork_pose_rows_make_a_level_fork_without_angles_and_name_what_is_missin
 
 
 def test_the_scene_holds_the_tasks_body_zones(trial):
-    import dataclasses
-    import json
-
     from sim.scene import SceneConfig
     from sim.task import EATING
     from tests.sim.task.test_protocol import Pouring
@@ -211,3 +211,48 @@ def test_the_scene_holds_the_tasks_body_zones(trial):
     assert zones[0]["head_speed_cap"] == zones[1]["head_speed_cap"] == 0.03  # the task's, also over a given scene
     assert zones[2] == json.loads(json.dumps({**EATING.body.to_dict(), "blade_length": SceneConfig().blade_length}))
     assert EATING.body.head_speed_cap != 0.03 and dataclasses.replace(EATING.body, head_speed_cap=0.03) == Pouring.body
+
+
+class _Tidying:
+    """The task parts the closed loop reads: its body (eating's), mode names and colours, shoulder roles."""
+
+    def __init__(self):
+        from sim.task import EATING
+
+        self.body = EATING.body
+        self.mode_names = ("sweep", "carry", "gather", "drop")
+        self.mode_colours = {"sweep": "#010203", "carry": "#040506", "gather": "#070809", "drop": "#0a0b0c"}
+        self.shoulder_channels = ("lift",)
+        self.shoulder_to_plate = np.array([[0.0], [0.0], [1.0]])
+
+
+def test_the_caption_names_the_tasks_modes_and_the_episode_its_shoulder_roles(trial, monkeypatch):
+    import sim.render
+
+    captions = []
+
+    class Recorder:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def wants(self, k):
+            return True
+
+        def maybe_capture(self, data, k, caption):
+            captions.append(caption)
+
+        def close(self):
+            return None, None
+
+    monkeypatch.setattr(sim.render, "VideoRecorder", Recorder)
+    task = _Tidying()
+    ep = run_episode(IdleController(), trial, duration_s=0.2, render="unused.mp4", record=False, task=task)
+    label = int(trial.mode[0])
+    assert captions[0].parts[-1] == task.mode_names[label]
+    assert captions[0].patch_colour == task.mode_colours[task.mode_names[label]]
+    assert json.loads(ep.info["shoulder_roles"]) == ["lift"]
+    lifted = dataclasses.replace(ep, info={**ep.info, "shoulder_matrix": "[[0.0], [0.0], [1.0]]"})
+    assert lifted.shoulder_names == ["lift"]  # the wearer's column is the task's role "lift"
+    old = {k: v for k, v in ep.info.items() if k not in ("shoulder_roles", "shoulder_layout")}  # an older run file
+    assert dataclasses.replace(ep, info=old).shoulder_names == ["shoulder_elevation", "shoulder_protraction",
+                                                                "shoulder_abduction"]
