@@ -4,8 +4,7 @@
 ``GaussianHMM`` (``_accumulate_sufficient_statistics``, ``_compute_log_likelihood``,
 ``_do_mstep``, ``_needs_sufficient_statistics_for_covars``) and reads its private
 ``_covars_``; it was written against hmmlearn 0.3.3, and pyproject caps hmmlearn
-below 0.4 for that reason (``tests/learning/test_modes.py`` checks the EM step
-against plain hmmlearn).
+below 0.4 for that reason. With the floor off (``reg_covar = 0``), its EM step equals plain hmmlearn's.
 """
 
 from __future__ import annotations

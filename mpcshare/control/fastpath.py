@@ -4,7 +4,7 @@ Every control step, on the front end's Kalman state of the fork (no anti-aliasin
 10 Hz hold in front of it), the mode posterior and the LSTM forecast of the last model tick
 (interpolated to the step's time), :class:`FastPath` gives the knife tip's forecast over the
 horizon, ``F[h]`` at ``t + h·Δ_m`` (plate frame, m). Its inputs equal what
-:func:`mpcshare.training.fast.fast_rows` builds offline (tests/mpcshare/control/test_fast_path.py).
+:func:`mpcshare.training.fast.fast_rows` builds offline, step by step.
 
 :meth:`FastPath.preview_until` says how far the forecast may be used for the MPC's preview: up to
 the last horizon, counted from the first, whose skill against the hold (validation trials, the

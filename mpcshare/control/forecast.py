@@ -80,7 +80,7 @@ class _UniformSpline(_Spline):
     M_{k−1} + 4·M_k + M_{k+1} = 6·(y_{k−1} − 2·y_k + y_{k+1})/h² (the inverse is cached per n);
     on [t_k, t_{k+1}], a = t_{k+1} − t, u = t − t_k:
     S = (M_k·a³ + M_{k+1}·u³)/(6h) + (y_k/h − M_k·h/6)·a + (y_{k+1}/h − M_{k+1}·h/6)·u.
-    Equal to scipy's ``CubicSpline(..., bc_type="natural")`` (tests/mpcshare/control/test_forecast_track.py).
+    Equal to scipy's ``CubicSpline(..., bc_type="natural")``.
     """
 
     def __init__(self, t0: float, h: float, points: np.ndarray) -> None:

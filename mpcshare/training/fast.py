@@ -6,8 +6,8 @@ posterior and the LSTM forecast of the last model tick. :func:`fast_rows` rebuil
 these from recorded trials: the same Kalman filter run over the raw fork (all trials of a side
 at once, one channel block per trial: the channels are independent), the causal mode posteriors
 and the LSTM's forecasts at the ticks (the same samples the online front end ticks on:
-``causal_downsample`` keeps raw indices 0, f, 2f, …). tests/mpcshare/control/test_fast_path.py
-checks them against the controller's own inputs, step by step.
+``causal_downsample`` keeps raw indices 0, f, 2f, …): they equal the controller's own inputs, step by
+step.
 
 Skill (:func:`skill_table`): per horizon h and per HMM mode (the mode the controller acts on:
 the last tick's most probable one), on the knife tip in metres::

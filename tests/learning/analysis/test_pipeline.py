@@ -166,7 +166,7 @@ def test_optional_mode_selection_is_reported():
     assert sel["candidates"] == [3, 4]
     assert len(sel["heldout_loglik"]) == 2 and len(sel["bic"]) == 2
     # The reported choices follow from the reported scores (the numbers of modes that
-    # data sampled from a known HMM support: tests/learning/test_modes.py).
+    # data sampled from a known HMM support: tests/learning/modes/test_selection.py).
     ll, se = sel["heldout_loglik"], sel["heldout_se"]
     assert sel["n_modes_max"] == sel["candidates"][int(np.argmax(ll))]
     assert sel["n_modes_bic"] == sel["candidates"][int(np.argmin(sel["bic"]))]

@@ -1,4 +1,4 @@
-"""The regularised HMM of learning.modes: its EM step equals hmmlearn's (the check learning/modes/_hmm.py cites)."""
+"""The regularised HMM of learning.modes: its EM step equals hmmlearn's."""
 
 from __future__ import annotations
 
