@@ -24,6 +24,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from mpcshare.reports.rule_choice import pruned_why
+
 __all__ = ["beyond_the_wearer_alone", "cutting_effort", "cutting_modes", "mode_costs", "predicted_point",
            "price_order", "prune_sets"]
 
@@ -138,7 +140,8 @@ def prune_sets(costs: dict[str, Any], sets: Sequence[Sequence[int]], voluntary_e
                ) -> tuple[list[list[int]], list[dict[str, Any]]]:
     """(the wearer-mode ``sets`` kept, a record per set left out): with ``prune``, those
     :func:`beyond_the_wearer_alone` are left out, each recorded with its modes, :func:`predicted_point`
-    (effort as a share of ``voluntary_effort`` [rad], RMS [m]) and why in words."""
+    (effort as a share of ``voluntary_effort`` [rad], RMS [m]) and why in words
+    (:func:`mpcshare.reports.rule_choice.pruned_why`)."""
     kept, pruned = [], []
     for modes in sets:
         if prune and beyond_the_wearer_alone(costs, modes):
@@ -146,8 +149,7 @@ def prune_sets(costs: dict[str, Any], sets: Sequence[Sequence[int]], voluntary_e
             share = effort / voluntary_effort
             pruned.append({"wearer_modes": list(modes), "predicted_effort_vs_voluntary": share,
                            "predicted_rmse_m": rms,
-                           "why": f"{share:.2f}x the voluntary effort and {rms * 1e3:.1f} mm before the hand-overs' "
-                                  "cost, no better than the wearer alone on either"})
+                           "why": pruned_why(share, rms)})
         else:
             kept.append(list(modes))
     return kept, pruned

@@ -9,7 +9,7 @@ from typing import Any, Mapping
 
 from sim.task import EATING, Task
 
-__all__ = ["CRITERION", "candidate_line", "criterion_why", "criterion_words", "pruned_line", "ran_line",
+__all__ = ["CRITERION", "candidate_line", "criterion_why", "criterion_words", "pruned_line", "pruned_why", "ran_line",
            "rule_markdown", "skipped_markdown", "why_words"]
 
 
@@ -81,6 +81,13 @@ def candidate_line(row: Mapping[str, Any]) -> str:
             f"{row['wearer_alpha']:g} while the wearer leads, {row['robot_alpha']:g} while it leads): "
             f"RMS {row['tracking_rmse_m'] * 1e3:.1f} mm, effort {row['effort_vs_voluntary']:.2f}x voluntary, "
             f"line ratio {lr}")
+
+
+def pruned_why(effort_vs_voluntary: float, rmse_m: float) -> str:
+    """Why a wearer-mode set was not simulated (:func:`mpcshare.calibration.mode_cost.prune_sets`), from the
+    per-mode costs' prediction of its effort (share of the voluntary effort) and RMS [m]."""
+    return (f"{effort_vs_voluntary:.2f}x the voluntary effort and {rmse_m * 1e3:.1f} mm before the hand-overs' cost, "
+            "no better than the wearer alone on either")
 
 
 def pruned_line(row: Mapping[str, Any]) -> str:

@@ -11,6 +11,7 @@ from mpcshare.reports.rule_choice import (
     candidate_line,
     criterion_words,
     pruned_line,
+    pruned_why,
     ran_line,
     rule_markdown,
     skipped_markdown,
@@ -143,5 +144,7 @@ def test_the_criterion_and_the_progress_lines_read_as_before():
                                    "leads, 0.5 while it leads): RMS 6.1 mm, effort 0.46x voluntary, line ratio n/a")
     assert pruned_line({"wearer_modes": [3], "why": "x"}) == (
         "  gate with wearer modes [3]: not simulated (the per-mode costs: x)")
+    assert pruned_why(1.0573, 0.02257) == ("1.06x the voluntary effort and 22.6 mm before the hand-overs' cost, no "
+                                           "better than the wearer alone on either")
     assert ran_line(7, 12) == ("  7 of the 12 episodes simulated: the others decide as one of them at every step "
                                "(the same episode)")
