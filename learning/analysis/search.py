@@ -139,9 +139,7 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
     # What does not depend on the window, once per number of modes: the time-free
     # reference grouping (a mixture fit) and the HMM's BIC.
     refs = dict(reference_labels or {})
-    for n in config.search_modes:
-        if n not in refs:
-            refs[n] = reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed)
+    refs.update(_reference_fits([n for n in config.search_modes if n not in refs], Z, fitted, config))
     bics = {n: float(fitted[n][0].bic(Z, lengths)) for n in config.search_modes}
     windows, calls = _plan_calls(std, config, fitted, refs, passes, known, known_ref)
     done = run_calls(calls, done=None if bar is None else lambda: bar.update(1))
@@ -168,6 +166,20 @@ def search_candidates(std: Demonstrations, Z: np.ndarray, lengths: np.ndarray, c
         bar.close()
     rows.sort(key=lambda r: -r.gain_beyond_reference_log10)
     return [replace(r, rank=rank) for rank, r in enumerate(rows, 1)]
+
+
+def _reference_fits(modes: list[int], Z: np.ndarray, fitted: dict[int, tuple[TaskModes, np.ndarray]],
+                    config: AnalysisConfig) -> dict[int, np.ndarray]:
+    """The time-free reference grouping (:func:`reference_segmentation`, ``config.seed``) of each number of modes
+    in ``modes``, on the cores side by side (threads: the mixture fits' array work releases the GIL; each fit
+    is seeded on its own, so the labels are those of one fit after another)."""
+    def one(n: int) -> np.ndarray:
+        return reference_segmentation(fitted[n][0].transform(Z), fitted[n][1], config.reference, config.seed)
+
+    if len(modes) < 2 or default_jobs() < 2:
+        return {n: one(n) for n in modes}
+    with ThreadPoolExecutor(max_workers=min(len(modes), default_jobs())) as pool:
+        return dict(zip(modes, pool.map(one, modes)))
 
 
 @dataclass(frozen=True)

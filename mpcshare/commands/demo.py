@@ -200,8 +200,8 @@ def _run_sweep(_bundle: Any, demos: Demonstrations, config: TrainConfig, folder:
 def _start_sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainConfig, out: Path,
                  pool: EpisodePool) -> Callable[[], tuple[dict | None, float | None]]:
     """Stage 5: the trade-off between accuracy and effort as K moves, with workers in one of them beside the
-    training (it needs no bundle), else when its result is asked for. Returns what waits for it and prints
-    it: (rows and conclusion, its seconds), or (None, None) with ``--no-sweep``."""
+    analysis and the training (it needs neither), else when its result is asked for. Returns what waits for it
+    and prints it: (rows and conclusion, its seconds), or (None, None) with ``--no-sweep``."""
     if args.no_sweep:
         def skipped() -> tuple[None, None]:
             _stage(5, "K sweep skipped (--no-sweep)")
@@ -209,7 +209,7 @@ def _start_sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainC
         return skipped
     folder = prepare_output_folder(out / "sweep")
     if pool.workers > 1:
-        print("the K sweep (stage 5) runs in a worker process beside the training", flush=True)
+        print("the K sweep (stage 5) runs in a worker process beside the analysis and the training", flush=True)
         future = pool.call(_run_sweep, None, config, folder, False)
 
     def finish() -> tuple[dict, float]:
@@ -270,22 +270,23 @@ def _demo(args: argparse.Namespace) -> int:
     summary, summary_md = _summarise(demos, out)
     lap("data", t0)
 
-    # the analysis in this process (its search fits the modes' restarts on every core, joblib)
-    t0 = time.perf_counter()
-    _stage(3, "predictability analysis")
-    analysis = run_analysis(demos, analysis_config(args), prepare_output_folder(out / "analysis"),
-                            mode_names=_TASK.mode_names)
-    print_headline(analysis)
-    lap("analysis", t0)
-
-    t0 = time.perf_counter()
-    _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
     config = training_config(args)
     rule_s = args.rule_duration or min(RULE_DURATION_S, 2 * args.sim_duration)  # shorter in short demos
-    # one pool for the K sweep, the rule choice and the comparison; with workers the sweep runs beside the
-    # training and the choice beside the mixture's gates
+    # one pool for the K sweep, the rule choice and the comparison; with workers the sweep (it needs the options,
+    # not the analysis) runs beside the analysis and the training, and the choice beside the mixture's gates
     with EpisodePool(demos, args.workers) as pool:
         finish_sweep = _start_sweep(args, demos, config, out, pool)
+
+        # the analysis in this process (its search fits the modes' restarts on every core, joblib)
+        t0 = time.perf_counter()
+        _stage(3, "predictability analysis")
+        analysis = run_analysis(demos, analysis_config(args), prepare_output_folder(out / "analysis"),
+                                mode_names=_TASK.mode_names)
+        print_headline(analysis)
+        lap("analysis", t0)
+
+        t0 = time.perf_counter()
+        _stage(4, f"training gates and the reactive predictor (K at percentile {args.percentile:g})")
         bundle = _fit(demos, config)
         t_choice = time.perf_counter()
         finish_choice = _start_choice(bundle, demos, args.wearer, rule_s, pool)
@@ -294,10 +295,10 @@ def _demo(args: argparse.Namespace) -> int:
 
         sweep, sweep_s = finish_sweep()
         if sweep_s is not None:
-            timings["sweep" if pool.workers == 1 else "sweep (beside training)"] = sweep_s
+            timings["sweep" if pool.workers == 1 else "sweep (beside analysis and training)"] = sweep_s
         finish_choice()
         if pool.workers > 1:
-            lap("rule choice (beside training and sweep)", t_choice)
+            lap("rule choice (beside training)", t_choice)
         bundle, mode_sources = _save(bundle, mixture, out)
 
         t0 = time.perf_counter()
