@@ -45,7 +45,7 @@ from mpcshare.control.strategies import by_role
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
-from mpcshare.evaluation.distinct import map_distinct
+from mpcshare.evaluation.distinct import map_distinct, trace_key
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
 from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.line_ratio import line_ratio as _line_ratio
@@ -117,12 +117,15 @@ def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
                 seed: int, mode_names: Sequence[str] | None = None,
                 pool: EpisodePool | None = None,
                 seen: dict[int, np.ndarray] | None = None,
-                ran: list[int] | None = None, task: Task = EATING) -> list[tuple[dict[str, float], list[Any]]]:
+                ran: list[int] | None = None, task: Task = EATING,
+                known: dict[Any, tuple[Any, dict[str, Any]]] | None = None) -> list[tuple[dict[str, float], list[Any]]]:
     """:func:`pooled_run` of each (strategy, gate options) in ``specs``, every episode in one batch of
     ``pool`` (default: this process), in the order of ``specs``. With ``seen`` (trial → what its arbitration
     sees, :func:`mpcshare.evaluation.frontend_replay.decisions`) the front end is computed once per process and
     trial and replayed; empty, it is filled; filled, the episodes whose arbitration decides the same on it run
-    once (:func:`~mpcshare.evaluation.distinct.map_distinct`). The figures are the same either way.
+    once (:func:`~mpcshare.evaluation.distinct.map_distinct`), and with ``known`` (filled by the first batch: its
+    episodes by :func:`~mpcshare.evaluation.distinct.trace_key`) a later episode that decides as one of the first
+    batch's at every step is that episode. The figures are the same either way.
     ``ran``: the number of episodes simulated is appended to it. ``task``: whose figures and criterion."""
     jobs = [EpisodeJob(int(tid), StrategyRun(strategy, strategy),
                        {"config": ControllerConfig(strategy_settings=dict(options))} if options else {})
@@ -139,12 +142,21 @@ def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
             if inputs is not None:
                 seen.setdefault(int(job.trial), inputs)
         done = [r[:2] for r in first]
+        for job, (episode, metrics, inputs) in zip(jobs, first) if known is not None else ():
+            key = trace_key(bundle, job, seen, settings["beta"]) if _same(inputs, seen.get(int(job.trial))) else None
+            if key is not None:
+                known.setdefault(key, (episode, metrics))
     else:
-        done, n_run = map_distinct(pool, bundle, jobs, seen, **settings)
+        done, n_run = map_distinct(pool, bundle, jobs, seen, known, **settings)
     if ran is not None:
         ran.append(n_run)
     n = len(trials)
     return [_pooled(done[i * n:(i + 1) * n], task) for i in range(len(specs))]
+
+
+def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    """Whether two recorded decision inputs are present and the same to the bit."""
+    return a is not None and b is not None and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
 def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
@@ -269,10 +281,11 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     t0 = time.perf_counter()
 
     seen: dict[int, np.ndarray] = {}  # what each trial's arbitration sees (the first batch); episodes simulated
+    known: dict[Any, tuple[Any, dict[str, Any]]] = {}  # the first batch's episodes by how they decide
     ran: list[int] = []
     def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
         return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran,
-                           task=task)
+                           task=task, known=known)
 
     _check_mixes(mixes)
     (vol, vol_eps), (rea, rea_eps), *mixed = run([("voluntary", None), ("reactive", None), *((m, None) for m in mixes)])

@@ -18,7 +18,7 @@ import numpy as np
 
 from mpcshare.evaluation.frontend_replay import FrontEndDiverged, simulate_cached
 
-__all__ = ["decision_trace", "map_distinct"]
+__all__ = ["decision_trace", "map_distinct", "trace_key"]
 
 
 class _Unknown:
@@ -57,36 +57,45 @@ def decision_trace(arbiter: Any, inputs: np.ndarray) -> bytes | None:
     return np.asarray(out, dtype=float).tobytes()
 
 
+def trace_key(bundle: Any, job: Any, inputs: dict[int, np.ndarray], beta: float) -> Any:
+    """(trial, :func:`decision_trace`) of ``job`` on its trial's ``inputs``: the key under which episodes that
+    decide alike are one episode; None where the trace is not predictable (no inputs for the trial, the MPC, an
+    oracle or a schedule, or a strategy that reads the closed loop)."""
+    from mpcshare.control.controller import SharedController
+
+    seen = inputs.get(int(job.trial))
+    if seen is None or job.run.use_mpc or job.run.oracle or job.run.schedule is not None:
+        return None
+    c = SharedController.from_bundle(bundle, strategy=job.run.strategy, beta=beta, use_mpc=False, **job.options)
+    trace = decision_trace(c.arbiter, seen)
+    return None if trace is None else (int(job.trial), trace)
+
+
 def map_distinct(pool: Any, bundle: Any, jobs: Sequence[Any], inputs: dict[int, np.ndarray],
+                 known: dict[Any, tuple[Any, dict[str, Any]]] | None = None,
                  **settings: Any) -> tuple[list[tuple[Any, dict[str, Any]]], int]:
     """``pool.map`` of :func:`simulate_cached` over ``jobs`` (:class:`~mpcshare.evaluation.episode_pool.EpisodeJob`
     with the same settings and options but the strategy and its ``config.strategy_settings``), where the jobs
     whose arbitration gives the same :func:`decision_trace` for their trial's :func:`decisions` (``inputs``:
     trial → those of an earlier episode) run once and share the result: the rest of the controller and the
     world do not depend on the strategy. That holds where the episode run saw those decisions (its arbitration's
-    inputs are the observations'); where it did not, the others run too. Returns (episode, metrics) per job, in
-    order, and the number of episodes run."""
-    from mpcshare.control.controller import SharedController
-
-    keys: list[Any] = []
-    for i, job in enumerate(jobs):
-        seen = inputs.get(int(job.trial))
-        key: Any = ("run", i)
-        if seen is not None and not job.run.use_mpc and not job.run.oracle and job.run.schedule is None:
-            c = SharedController.from_bundle(bundle, strategy=job.run.strategy, beta=settings["beta"],
-                                             use_mpc=False, **job.options)
-            trace = decision_trace(c.arbiter, seen)
-            if trace is not None:
-                key = (int(job.trial), trace)
-        keys.append(key)
+    inputs are the observations'); where it did not, the others run too. ``known``: :func:`trace_key` →
+    (episode, metrics) of episodes already run that saw exactly ``inputs`` (e.g. an earlier batch's); a job with
+    such a key takes that result and does not run. Returns (episode, metrics) per job, in order, and the number
+    of episodes run."""
+    known = known or {}
+    keys = [trace_key(bundle, job, inputs, settings["beta"]) or ("run", i) for i, job in enumerate(jobs)]
     first: dict[Any, int] = {}
     for i, key in enumerate(keys):
-        first.setdefault(key, i)
+        if key not in known:
+            first.setdefault(key, i)
     unique = sorted(set(first.values()))
     done = dict(zip(unique, pool.map(simulate_cached, bundle, [jobs[i] for i in unique], **settings)))
-    again = [i for i, key in enumerate(keys) if i not in done and not _saw(done[first[key]][2], inputs, jobs[i])]
+    again = [i for i, key in enumerate(keys)
+             if i not in done and key not in known and not _saw(done[first[key]][2], inputs, jobs[i])]
     done.update(zip(again, pool.map(simulate_cached, bundle, [jobs[i] for i in again], **settings)))
-    return [done[i][:2] if i in done else done[first[key]][:2] for i, key in enumerate(keys)], len(unique) + len(again)
+    return [done[i][:2] if i in done else known[key] if key in known else done[first[key]][:2]
+            for i, key in enumerate(keys)], len(unique) + len(again)
 
 
 def _saw(seen: np.ndarray | None, inputs: dict[int, np.ndarray], job: Any) -> bool:

@@ -156,6 +156,26 @@ def test_the_comparison_and_the_rule_choice_are_the_same_replayed_and_deduplicat
     assert counts[0] < counts[1]  # some candidates decide as another at every step: run once
 
 
+def test_a_candidate_that_decides_as_an_earlier_batchs_episode_is_that_episode(trained):
+    """A gate whose wearer leads every mode at share 0 decides as ``voluntary`` at every step: with the first
+    batch's episodes ``known``, it runs no episode and has the figures of simulating it live."""
+    demos, bundle = trained
+    trials = [bundle.heldout_trials[0]]
+    everything = {"wearer_modes": list(range(bundle.n_modes)), "wearer_alpha": 0.0, "share_on": 0.0,
+                  "share_off": 0.0}
+    seen, known, ran = {}, {}, []
+    args = (bundle, demos, trials)
+    common = {"duration_s": 0.6, "wearer": None, "seed": 0, "mode_names": MODE_NAMES, "seen": seen, "ran": ran,
+              "known": known}
+    (vol, _), = rule_choice.pooled_runs(*args, [("voluntary", None)], **common)
+    assert known and seen
+    (gate, _), = rule_choice.pooled_runs(*args, [("gate", everything)], **common)
+    assert ran == [1, 0]
+    (live, _), = rule_choice.pooled_runs(*args, [("gate", everything)], 0.6, None, 0, MODE_NAMES)
+    assert gate == vol
+    assert {k: v for k, v in live.items() if k not in TIMING} == {k: v for k, v in gate.items() if k not in TIMING}
+
+
 def test_a_replayed_episode_with_its_zones_is_the_live_one(trained, monkeypatch):
     """The keep-out's zones given back (the recording's seed) or run live (another seed's sway): every array
     and metric of the episode is the live one's."""
