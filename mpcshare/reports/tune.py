@@ -82,8 +82,8 @@ def chance_sentences(result: dict[str, Any]) -> list[str]:
             p = "no test (no pair differs)" if v["p_value"] is None else f"p = {v['p_value']:.3g}{holm}"
             if v["p_value"] is not None and v["n_pairs"] and v["p_value"] <= 0.5 ** v["n_pairs"] * (1 + 1e-9):
                 p += f" (the smallest p that {v['n_pairs']} pairs allow: a claim needs more trials or --seeds)"
-            forced = (f" In {v['n_forced']} of its {v['n_pairs']} episodes it handed over at most once, so the "
-                      "matched random schedule was its own and those pairs cannot differ."
+            forced = (f" In {v['n_forced']} more episodes it handed over at most once: the matched random "
+                      "schedule was its own, so those pairs are left out of the test."
                       if v.get("n_forced") else "")
             eff = v["effect_m"]
             how = "–" if eff is None else f"{_mm(abs(eff))} mm {'worse' if eff > 0 else 'better'}"

@@ -9,9 +9,10 @@
   tracking RMS [m] against the setting's matched ``random_handover``, e_random the *mean over the pair's
   draws*; one-sided Wilcoxon signed-rank test of H1: d > 0 (exact for small n), the effect mean(d) [m] with its
   bootstrap CI, and the relative effect mean(d) / mean(e_random). ``n_forced``: the setting's episodes with at
-  most one hand-over (the matched schedule is its own). **Holm's correction** across the m settings tested:
-  ``p_holm`` = max over the settings ranked at or before this one of min(1, (m − rank + 1)·p) (ranks by
-  ascending p, from 1); ``beats_random`` uses ``p_holm``.
+  most one hand-over, left out of the test: the matched schedule (same steps on, hand-overs and first state) is
+  then the setting's own, replayed, so the pair says nothing of its timing. **Holm's correction** across the
+  m settings tested: ``p_holm`` = max over the settings ranked at or before this one of
+  min(1, (m − rank + 1)·p) (ranks by ascending p, from 1); ``beats_random`` uses ``p_holm``.
 * **Pareto set**: among the realisable settings (the registry's user strategies: not the upper bound
   ``oracle_preview`` nor the placebo), those no other beats on both mean tracking RMS and mean voluntary effort.
 * **Recommended** (:data:`CRITERION`).
@@ -108,10 +109,13 @@ def holm(p_values: Sequence[float | None]) -> list[float | None]:
 
 def _pairs(rows: Sequence[dict[str, Any]], name: str,
            placebo: dict[tuple, list[float]]) -> tuple[np.ndarray, np.ndarray, int]:
-    """(e_random: the mean over each pair's draws, e_setting, n_forced) of setting ``name``."""
+    """(e_random: the mean over each pair's draws, e_setting, n_forced) of setting ``name``; the pairs whose
+    setting handed over at most once are only counted (module docstring)."""
     pairs, forced = [], 0
     for r in (r for r in rows if r["strategy"] in TUNABLE and setting_name(r) == name):
-        forced += int((r.get("handovers") or 0) <= 1)
+        if (r.get("handovers") or 0) <= 1:
+            forced += 1
+            continue
         p = placebo.get((r["strategy"], r["percentile"], r["beta"], r["trial"], r["seed"]))
         if p and r.get("tracking_rmse_m") is not None:
             pairs.append((float(np.mean(p)), float(r["tracking_rmse_m"])))

@@ -23,7 +23,10 @@ def test_tiny_sweep_writes_the_three_files_with_the_documented_keys(swept):
     assert {"rows", "summary", "tests", "recommended", "pareto"} <= set(result)
     # 2 seeds x 1 trial x (voluntary + 2 reactive + 2x2 gate + 2x2x2 random_handover draws): what the tests need
     assert len(result["rows"]) == 2 * (1 + 2 + 4 + 8)
-    assert result["multiple_testing"]["method"] == "Holm" and result["multiple_testing"]["m"] >= 1
+    assert result["multiple_testing"]["method"] == "Holm"
+    # the settings tested: those with a pair where they handed over more than once (else its placebo is its own)
+    assert result["multiple_testing"]["m"] == sum(t["vs_random_handover"]["p_value"] is not None
+                                                  for t in result["tests"].values())
     assert result["summary"]["voluntary"]["line_ratio"] == pytest.approx(1.0)
     assert all(result["summary"][n]["line_ratio"] is not None for n in result["tests"])
     for r in result["rows"]:
@@ -34,7 +37,7 @@ def test_tiny_sweep_writes_the_three_files_with_the_documented_keys(swept):
     for t in result["tests"].values():
         (key,) = t
         assert "random" in key and {"p_value", "effect_m", "effect_ci95_m"} <= set(t[key])
-        assert t[key]["n_pairs"] == 2 and t[key]["draws_per_pair"] == [2] and "p_holm" in t[key]
+        assert t[key]["n_pairs"] + t[key]["n_forced"] == 2 and t[key]["draws_per_pair"] == [2] and "p_holm" in t[key]
     assert "criterion" in result["recommended"] and result["recommended"]["setting"] in result["tests"]
     assert result["summary"]["voluntary"]["tracking_rmse_m"]["ci95"] is not None
     md = (swept / "tune.md").read_text()

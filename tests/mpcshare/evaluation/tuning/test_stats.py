@@ -22,7 +22,7 @@ def test_gate_against_random_is_a_paired_one_sided_test():
     test = gate_vs_random(rows)["gate p90 b0.5"]["vs_random_handover"]
     expected = st.wilcoxon(rand_err - gate_err, alternative="greater")
     assert test["p_value"] == pytest.approx(expected.pvalue) and test["n_pairs"] == 8
-    assert test["n_forced"] == 4  # the seed-0 episodes handed over once: their placebo is forced
+    assert test["n_forced"] == 0
     assert test["p_value"] < 0.05 and test["beats_random"]
     assert test["effect_m"] == pytest.approx(np.mean(rand_err - gate_err))
     lo, hi = test["effect_ci95_m"]
@@ -35,6 +35,23 @@ def test_gate_against_random_is_a_paired_one_sided_test():
     assert t2["p_value"] > 0.5 and not t2["beats_random"]
     rec = recommend(summarise(worse), gate_vs_random(worse))
     assert rec["setting"] == "gate p90 b0.5" and rec["beats_random"] is False and "criterion" in rec
+
+
+def test_pairs_whose_setting_handed_over_at_most_once_are_left_out_of_the_test():
+    """Their matched random schedule is the setting's own (same steps on, hand-overs and first state): a replay a
+    hair apart, which must not make a claim however consistently it leans."""
+    rng = np.random.default_rng(3)
+    gate_err = rng.uniform(0.01, 0.03, 12)
+    rows = []
+    for i, g in enumerate(gate_err):  # 10 forced pairs a hair apart, all leaning the gate's way; 2 informative
+        forced = i < 10
+        rows += [_row("gate", i % 2, i // 2, g, handovers=i % 2 if forced else 4),
+                 _row("random_handover", i % 2, i // 2, g + (1e-12 if forced else 2e-3), "gate")]
+    t = gate_vs_random(rows)["gate p90 b0.5"]["vs_random_handover"]
+    assert t["n_forced"] == 10 and t["n_pairs"] == 2
+    assert t["p_value"] == pytest.approx(0.25) and not t["beats_random"]  # two pairs allow p = 1/4 at best
+    with_them = st.wilcoxon(np.r_[np.full(10, 1e-12), np.full(2, 2e-3)], alternative="greater").pvalue
+    assert with_them < 0.01  # what counting them would have claimed
 
 
 def test_holm_and_the_placebo_as_the_mean_of_its_draws():
