@@ -23,7 +23,7 @@ def trained(tmp_path_factory):
     save(generate_demonstrations(2, 4.0, seed=2), data)
     model = root / "model"
     assert main(["train", str(data), "--out", str(model), "--epochs", "5", "--quiet",
-                 "--rule-duration", "10"]) == 0
+                 "--rule-duration", "3"]) == 0
     assert "skill vs hold" in (model / "training.md").read_text()  # the forecast's skill table
     return data, model
 

@@ -24,7 +24,7 @@ def test_cli_trains_a_bundle_with_mixture_modes_and_the_filter_runs_them(tmp_pat
     save(demos, path)
     out = tmp_path / "model"
     argv = ["train", str(path), "--out", str(out), "--modes", "3", "--modes-from", "mixture",
-            "--epochs", "2", "--hmm-restarts", "1", "--quiet", "--rule-duration", "10"]
+            "--epochs", "2", "--hmm-restarts", "1", "--quiet", "--rule-duration", "3"]
     assert main(argv, commands=(TRAIN_COMMAND,)) == 0
     assert "gate: accuracy" in capsys.readouterr().out
     b = load_bundle(out, expect_obs_names=demos.obs_names, expect_act_names=demos.act_names)
