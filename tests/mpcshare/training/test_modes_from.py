@@ -18,6 +18,7 @@ def test_modes_from_is_checked_and_names_the_choices():
         TrainConfig(modes_from="gmm")
 
 
+@pytest.mark.usefixtures("rule_choice_in_process")
 def test_cli_trains_a_bundle_with_mixture_modes_and_the_filter_runs_them(tmp_path, capsys):
     demos = generate_demonstrations(2, 1.5, seed=1, config=GeneratorConfig(trial_minutes=0.5))
     path = tmp_path / "d.npz"
