@@ -13,9 +13,9 @@ def test_demo_refuses_an_output_path_that_is_a_file(tmp_path, capsys):
 
 def test_demo_runs_every_stage_into_one_report(tmp_path, capsys):
     out = tmp_path / "demo"
-    code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "3", "--n-random", "2",
+    code = main(["demo", "--out", str(out), "--subjects", "2", "--minutes", "4", "--n-random", "2",
                  "--no-search", "--no-sweep", "--sim-trials", "1", "--sim-duration", "3", "--no-video",
-                 "--rule-duration", "3", "--modes", "3", "--window", "0.8", "--wearer", "unimpaired"])
+                 "--modes", "3", "--window", "0.8", "--wearer", "unimpaired"])
     assert code == 0
     # the analysis options reach the training too (they were once read by the analysis only)
     bundle = json.loads((out / "model" / "bundle.json").read_text())
