@@ -11,6 +11,7 @@ each rule is shown to fail on a planted file.
 from __future__ import annotations
 
 import ast
+import functools
 import sys
 from pathlib import Path
 
@@ -50,7 +51,14 @@ ACYCLIC = (*FIRST_PARTY, "research")
 
 def _imports(path: Path, with_names: bool = False) -> list[tuple[int, str]]:
     """(line, absolute module name) of every import in ``path``; relative ones resolved. ``with_names``: also
-    ``a.b`` for each ``from a import b`` (``b`` may be a module)."""
+    ``a.b`` for each ``from a import b`` (``b`` may be a module). Parsed once per file version (its modification
+    time and size), as every rule reads every file."""
+    stat = path.stat()
+    return list(_parsed_imports(path, with_names, stat.st_mtime_ns, stat.st_size))
+
+
+@functools.lru_cache(maxsize=None)
+def _parsed_imports(path: Path, with_names: bool, _mtime_ns: int, _size: int) -> tuple[tuple[int, str], ...]:
     package = list(path.relative_to(ROOT).with_suffix("").parts[:-1])
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
@@ -65,7 +73,7 @@ def _imports(path: Path, with_names: bool = False) -> list[tuple[int, str]]:
             found.append((node.lineno, name))
             if with_names:
                 found += [(node.lineno, f"{name}.{a.name}") for a in node.names if a.name != "*"]
-    return found
+    return tuple(found)
 
 
 def _sources(package: str) -> list[Path]:

@@ -16,3 +16,11 @@ def ros_model(tmp_path_factory):
     folder = tmp_path_factory.mktemp("ros_model") / "model"
     save_bundle(bundle, folder)
     return folder, demos
+
+
+@pytest.fixture
+def rule_choice_in_process(monkeypatch):
+    """`mpcshare train`'s rule choice without worker processes, for one test (:mod:`tests.mpcshare.in_process`)."""
+    from tests.mpcshare.in_process import choose_rules_in_process
+
+    choose_rules_in_process(monkeypatch)

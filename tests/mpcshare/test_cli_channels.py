@@ -35,6 +35,7 @@ def _one_line(err: str, command: str) -> str:
     return err
 
 
+@pytest.mark.usefixtures("rule_choice_in_process")
 def test_renamed_channels_and_a_two_angle_shoulder_from_import_to_sim(bags, tmp_path, capsys):
     data = tmp_path / "renamed.npz"
     bag_paths = [str(p) for p in sorted(bags.glob("s*"))]

@@ -181,6 +181,8 @@ def test_modes_help_is_claimed_at_12_trials_in_at_least_2_of_3_seeds():
     # whose modes explain the confounding; with 12 trials the smallest p is 2.4e-4
     made = []
     for seed in range(3):
+        if sum(made) >= 2 or sum(made) + 3 - seed < 2:  # decided by the seeds so far
+            break
         demos = generate_demonstrations(3, 4, seed=seed, config=GeneratorConfig(trial_minutes=1.0))
         t = analyze(demos, AnalysisConfig(**FAST, hmm_restarts=2)).report["segmentation_test"]
         assert t["n_trials"] == 12

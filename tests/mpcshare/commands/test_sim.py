@@ -14,6 +14,7 @@ from mpcshare.evaluation import METRIC_KEYS, pool_metrics
 from mpcshare.reports.html import markdown_to_html
 from sim.demonstrator import generate_demonstrations
 from sim.episode import Episode
+from tests.mpcshare.in_process import choose_rules_in_process
 
 
 @pytest.fixture(scope="module")
@@ -22,8 +23,10 @@ def trained(tmp_path_factory):
     data = root / "demos.npz"
     save(generate_demonstrations(2, 4.0, seed=2), data)
     model = root / "model"
-    assert main(["train", str(data), "--out", str(model), "--epochs", "5", "--quiet",
-                 "--rule-duration", "10"]) == 0
+    with pytest.MonkeyPatch.context() as patch:
+        choose_rules_in_process(patch)
+        assert main(["train", str(data), "--out", str(model), "--epochs", "5", "--quiet",
+                     "--rule-duration", "3"]) == 0
     assert "skill vs hold" in (model / "training.md").read_text()  # the forecast's skill table
     return data, model
 

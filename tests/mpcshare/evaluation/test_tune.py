@@ -64,9 +64,10 @@ def test_one_and_two_workers_give_the_same_rows_and_a_rerun_resumes(data, swept,
     from mpcshare.training.config import TrainConfig
 
     cfg = TrainConfig(max_epochs=3)
+    for run in ("a", "b"):  # the sweep's bundles: only the episodes run
+        (tmp_path / run).mkdir()
+        (tmp_path / run / "bundles").symlink_to(swept / "bundles")
     one = run_tune(data, tmp_path / "a", workers=1, config=cfg, **kwargs)
-    (tmp_path / "b").mkdir()
-    (tmp_path / "b" / "bundles").symlink_to(tmp_path / "a" / "bundles")  # the same bundles
     two = run_tune(data, tmp_path / "b", workers=2, config=cfg, **kwargs)
     assert _comparable(one["rows"]) == _comparable(two["rows"])
     lines = (tmp_path / "a" / "episodes.jsonl").read_text().splitlines()

@@ -18,13 +18,14 @@ def test_modes_from_is_checked_and_names_the_choices():
         TrainConfig(modes_from="gmm")
 
 
+@pytest.mark.usefixtures("rule_choice_in_process")
 def test_cli_trains_a_bundle_with_mixture_modes_and_the_filter_runs_them(tmp_path, capsys):
     demos = generate_demonstrations(2, 1.5, seed=1, config=GeneratorConfig(trial_minutes=0.5))
     path = tmp_path / "d.npz"
     save(demos, path)
     out = tmp_path / "model"
     argv = ["train", str(path), "--out", str(out), "--modes", "3", "--modes-from", "mixture",
-            "--epochs", "2", "--hmm-restarts", "1", "--quiet", "--rule-duration", "10"]
+            "--epochs", "2", "--hmm-restarts", "1", "--quiet", "--rule-duration", "3"]
     assert main(argv, commands=(TRAIN_COMMAND,)) == 0
     assert "gate: accuracy" in capsys.readouterr().out
     b = load_bundle(out, expect_obs_names=demos.obs_names, expect_act_names=demos.act_names)

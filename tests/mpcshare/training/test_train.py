@@ -74,6 +74,7 @@ def data_file(demos, tmp_path_factory):
     return path
 
 
+@pytest.mark.usefixtures("rule_choice_in_process")
 def test_cli_trains_a_bundle_and_prints_the_metrics(data_file, demos, tmp_path, capsys):
     out = tmp_path / "model"
     argv = ["train", str(data_file), "--percentile", "70", "--out", str(out), "--modes", "3",
