@@ -35,6 +35,7 @@ from mpcshare.commands.base import (
 )
 from mpcshare.commands.data import DATA_HELP
 from mpcshare.commands.task_option import add_task_argument, chosen_task
+from mpcshare.evaluation.episode_pool import MAX_DEFAULT_WORKERS, default_workers
 from mpcshare.training.config import DEFAULT_PERCENTILES, MODES_FROM, RULE_DURATION_S, TrainConfig
 from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS
 
@@ -95,6 +96,9 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"the simulated wearer of the choice (default {DEFAULT_WEARER_PRESET})")
     r.add_argument("--no-rule-choice", action="store_true",
                    help="keep the rule's default settings (no closed-loop choice)")
+    r.add_argument("--workers", type=positive_int, default=default_workers(),
+                   help=f"processes that run the choice's closed-loop episodes (default {default_workers()}: the "
+                        f"CPU count, at most {MAX_DEFAULT_WORKERS}; 1: this process); the choice is the same with any")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
 
 
@@ -209,7 +213,7 @@ def _calibrate(bundle, demos, args: argparse.Namespace) -> dict | None:
 
     return choose_for_bundle(bundle, demos, n_trials=args.rule_trials, duration_s=args.rule_duration,
                              wearer_name=args.rule_wearer, mode_names=task.mode_names, task=task,
-                             log=None if args.quiet else print)
+                             log=None if args.quiet else print, workers=args.workers)
 
 
 TRAIN_COMMAND = Command("train", "train gates and the reactive predictor into a model bundle, "

@@ -1,4 +1,4 @@
-"""`mpcshare train`: what it writes to a pipe."""
+"""`mpcshare train`: what it writes to a pipe, and where its rule choice runs."""
 
 from mpcshare.cli import main
 
@@ -9,3 +9,20 @@ def test_train_output_captured_to_a_pipe_holds_lines_not_progress_bars(data_file
                  "--no-rule-choice"]) == 0
     said = capsys.readouterr()
     assert said.out.strip() and "\r" not in said.out + said.err and "\x1b" not in said.out + said.err
+
+
+def test_train_workers_1_chooses_the_rule_in_this_process(data_file, tmp_path, monkeypatch):
+    """`--workers 1`: the closed-loop choice runs its episodes here, starting no process."""
+    import json
+
+    from mpcshare.evaluation import episode_pool
+
+    def no_pool(*args, **kwargs):
+        raise AssertionError("a worker process was started")
+
+    monkeypatch.setattr(episode_pool, "ProcessPoolExecutor", no_pool)
+    out = tmp_path / "model"
+    assert main(["train", str(data_file), "--out", str(out), "--epochs", "2", "--rule-duration", "2",
+                 "--workers", "1", "--quiet"]) == 0
+    rule = json.loads((out / "rule.json").read_text())["rule"]
+    assert rule["choice"]["episodes_run"] > 0 and rule["choice"]["duration_s"] == 2.0
