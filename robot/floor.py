@@ -71,7 +71,7 @@ class FloorLimit:
     def set_plane(self, normal: Sequence[float], offset: float) -> None:
         """The floor n·p ≥ ``offset`` [m] (model frame); ``normal`` (3,) is normalised."""
         n = np.asarray(normal, dtype=float)
-        norm = float(np.linalg.norm(n)) if n.shape == (3,) else 0.0
+        norm = math.sqrt(float(n.dot(n))) if n.shape == (3,) else 0.0  # np.linalg.norm's own sum, one call
         if not (norm > 1e-9 and math.isfinite(norm) and math.isfinite(float(offset))):
             raise ControllerConfigError(f"floor plane needs a finite non-zero (3,) normal and a finite offset, "
                                         f"got {normal!r}, {offset!r}")
