@@ -79,7 +79,7 @@ class FloorLimit:
 
     def compute_qp_inequalities(self, state: ControlState) -> Constraint:
         cfg, dt = self.config, state.dt
-        G, h = np.zeros((2, state.q.size)), np.full(2, 1e6)
+        G, h = np.zeros((2, state.q.size)), np.array([1e6, 1e6])
         n = self.normal
         if n is not None:
             for i, pt in enumerate(self.blade.knife(state.q, state.v)):

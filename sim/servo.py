@@ -133,7 +133,7 @@ class JointServo:
         q_c, v_c, a_c, t_end = self._seg_l
         r = max(t_end - data_time, 0.0)
         kp, kd = self.kp, self.kd
-        a_l, lo_l, hi_l, ad_l = [], [], [], []
+        a_l, box = [], []  # box: (a_des, lo, hi) per joint, read only where the torque limit binds
         active = False
         for qi, vi, qc, vc, ac, (q_lo, q_hi, vm, A, free) in zip(q, v, q_c, v_c, a_c, self._joints):
             ad = ac + kp * (qc - vc * r + 0.5 * ac * r * r - qi) + kd * (vc - ac * r - vi)
@@ -143,9 +143,7 @@ class JointServo:
             if v_lo > v_up:  # only beyond a position limit: head back at the speed limit
                 v_lo = v_up = vm if qi < q_lo else -vm
             lo_i, hi_i = (v_lo - vi) / h, (v_up - vi) / h
-            lo_l.append(lo_i)
-            hi_l.append(hi_i)
-            ad_l.append(ad)
+            box.append((ad, lo_i, hi_i))
             if ad < lo_i:
                 ad, active = lo_i, True
             elif ad > hi_i:
@@ -161,6 +159,7 @@ class JointServo:
         if fits:
             return tau
         mujoco.mj_fullM(self.model, d, self._M)
+        ad_l, lo_l, hi_l = zip(*box)
         tau[:] = self._constrained(self._M.copy(), d.qfrc_bias.copy(), np.array(ad_l), np.array(lo_l),
                                    np.array(hi_l))
         return tau
