@@ -206,12 +206,12 @@ class SimulatedWearer:
             else np.zeros(3)
         self._errors.append(err_now)
         e = self._errors[0] if len(self._errors) > self.delay_steps else np.zeros(3)  # perceived d ago
-        norm = float(np.sqrt(e @ e))
+        norm = math.sqrt(float(e @ e))
         w = min(max((norm - c.deadband_m) / c.deadband_m, 0.0), 1.0) if c.deadband_m > 0 else float(norm > 0)
         u_c = w * c.feedback_gain_per_s * e
         u_r = self.plan_velocity[k] if (c.feedforward and self.wearer_leads) else np.zeros(3)
         u = u_r + u_c
-        speed = float(np.sqrt(u @ u))
+        speed = math.sqrt(float(u @ u))
         if speed > c.max_speed_mps:
             scale = c.max_speed_mps / speed
             u, u_r, u_c = u * scale, u_r * scale, u_c * scale
