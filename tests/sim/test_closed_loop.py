@@ -196,3 +196,16 @@ def test_fork_pose_rows_make_a_level_fork_without_angles_and_name_what_is_missin
         fork_pose_rows(obs, ["fork_roll", "fork_x", "fork_y", "fork_z"])
     with pytest.raises(ValueError, match="fork_z"):
         fork_pose_rows(obs, ["a", "fork_x", "fork_y", "b"])
+
+
+def test_a_recorded_episode_counts_the_limits_as_an_unrecorded_one(trial, monkeypatch):
+    """The recording is checked once at its end, an unrecorded run per period: the same count and worst excesses."""
+    import sim.closed_loop as closed_loop
+
+    monkeypatch.setattr(closed_loop, "LIMIT_TOL", -0.01)  # limits drawn 0.01 inside: the arm crosses them
+    monkeypatch.setattr(closed_loop, "TORQUE_TOL", -0.01)
+    keys = ("limit_violations", "max_q_excess_rad", "max_v_excess_rad_s", "max_tau_excess_nm")
+    recorded = run_episode(AggressiveController(), trial, duration_s=2.0, record=True).info
+    unrecorded = run_episode(AggressiveController(), trial, duration_s=2.0, record=False).info
+    assert recorded["limit_violations"] > 0 and recorded["max_v_excess_rad_s"] > 0.0
+    assert [recorded[k] for k in keys] == [unrecorded[k] for k in keys]
