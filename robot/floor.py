@@ -71,7 +71,7 @@ class FloorLimit:
     def set_plane(self, normal: Sequence[float], offset: float) -> None:
         """The floor n·p ≥ ``offset`` [m] (model frame); ``normal`` (3,) is normalised."""
         n = np.asarray(normal, dtype=float)
-        norm = float(np.linalg.norm(n)) if n.shape == (3,) else 0.0
+        norm = math.sqrt(float(n.dot(n))) if n.shape == (3,) else 0.0  # np.linalg.norm's own sum, one call
         if not (norm > 1e-9 and math.isfinite(norm) and math.isfinite(float(offset))):
             raise ControllerConfigError(f"floor plane needs a finite non-zero (3,) normal and a finite offset, "
                                         f"got {normal!r}, {offset!r}")
@@ -79,7 +79,7 @@ class FloorLimit:
 
     def compute_qp_inequalities(self, state: ControlState) -> Constraint:
         cfg, dt = self.config, state.dt
-        G, h = np.zeros((2, state.q.size)), np.full(2, 1e6)
+        G, h = np.zeros((2, state.q.size)), np.array([1e6, 1e6])
         n = self.normal
         if n is not None:
             for i, pt in enumerate(self.blade.knife(state.q, state.v)):

@@ -73,10 +73,6 @@ class ZoneClearance(NamedTuple):
     zone_point: np.ndarray
 
 
-def _dot(x: tuple[float, float, float], y: tuple[float, float, float]) -> float:
-    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
-
-
 def closest_segment_points(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray
                            ) -> tuple[float, float]:
     """Parameters (s, t) ∈ [0, 1]² of the closest points p0 + s·(p1 − p0), q0 + t·(q1 − q0)
@@ -88,20 +84,22 @@ def closest_segment_points(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: n
 
 
 def _closest(P0: list[float], P1: list[float], Q0: list[float], Q1: list[float]) -> tuple[float, float]:
-    """:func:`closest_segment_points` on plain lists."""
-    d1 = (P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2])
-    d2 = (Q1[0] - Q0[0], Q1[1] - Q0[1], Q1[2] - Q0[2])
-    r = (P0[0] - Q0[0], P0[1] - Q0[1], P0[2] - Q0[2])
-    a, e, f = _dot(d1, d1), _dot(d2, d2), _dot(d2, r)
+    """:func:`closest_segment_points` on plain lists; each x·y written out as x0·y0 + x1·y1 + x2·y2."""
+    p0, p1, p2 = P0
+    q0, q1, q2 = Q0
+    x0, x1, x2 = P1[0] - p0, P1[1] - p1, P1[2] - p2  # d1
+    y0, y1, y2 = Q1[0] - q0, Q1[1] - q1, Q1[2] - q2  # d2
+    r0, r1, r2 = p0 - q0, p1 - q1, p2 - q2
+    a, e, f = x0 * x0 + x1 * x1 + x2 * x2, y0 * y0 + y1 * y1 + y2 * y2, y0 * r0 + y1 * r1 + y2 * r2
     eps = 1e-18
     if a <= eps and e <= eps:
         return 0.0, 0.0
     if a <= eps:
         return 0.0, min(max(f / e, 0.0), 1.0)
-    c = _dot(d1, r)
+    c = x0 * r0 + x1 * r1 + x2 * r2
     if e <= eps:
         return min(max(-c / a, 0.0), 1.0), 0.0
-    b = _dot(d1, d2)
+    b = x0 * y0 + x1 * y1 + x2 * y2
     denom = a * e - b * b
     s = min(max((b * f - c * e) / denom, 0.0), 1.0) if denom > eps else 0.0
     t = (b * s + f) / e
@@ -121,12 +119,13 @@ def _clearance(tip: np.ndarray, heel: np.ndarray, T: list[float], H: list[float]
     """:func:`segment_zone_clearance` with the blade also as lists ``T``, ``H``."""
     A, B = zone.a.tolist(), zone.b.tolist()
     s, t = _closest(T, H, A, B)
-    pb = [x + s * (y - x) for x, y in zip(T, H)]  # elementwise as numpy's: the same floats
-    pz = [x + t * (y - x) for x, y in zip(A, B)]
-    diff = [x - y for x, y in zip(pb, pz)]
-    dist = math.sqrt(_dot(diff, diff))
+    (t0, t1, t2), (h0, h1, h2), (a0, a1, a2), (b0, b1, b2) = T, H, A, B
+    pb = [t0 + s * (h0 - t0), t1 + s * (h1 - t1), t2 + s * (h2 - t2)]  # elementwise as numpy's: the same floats
+    pz = [a0 + t * (b0 - a0), a1 + t * (b1 - a1), a2 + t * (b2 - a2)]
+    e0, e1, e2 = pb[0] - pz[0], pb[1] - pz[1], pb[2] - pz[2]
+    dist = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
     if dist > 1e-12:
-        normal = np.array([x / dist for x in diff])
+        normal = np.array((e0 / dist, e1 / dist, e2 / dist))
     else:  # on the axis: push along the blade's perpendicular nearest to world up
         axis = heel - tip
         normal = np.cross(axis, np.cross(np.array([0.0, 0.0, 1.0]), axis))
@@ -167,7 +166,7 @@ def segment_zone_clearances(tip: np.ndarray, heel: np.ndarray, a: np.ndarray, b:
 
 
 def _dots(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Row-wise x·y of (N, 3) arrays in :func:`_dot`'s order of operations."""
+    """Row-wise x·y of (N, 3) arrays in :func:`_closest`'s order of operations (x0·y0 + x1·y1 + x2·y2)."""
     return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
 
 

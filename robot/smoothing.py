@@ -143,8 +143,9 @@ class ReferenceSmoother:
             if not self._initialized:
                 self.reset(p)
             if v is not self._zeros or a is not self._zeros:
-                v_c = np.clip(v, -self.v_max, self.v_max).tolist()
-                a_c = np.clip(a, -self.a_max, self.a_max).tolist()
+                # np.clip's min(max(x, −m), m) in plain floats (the same values, cheaper on a few entries)
+                v_c = [min(max(x, -m), m) for x, m in zip(v, self.v_max.tolist())]
+                a_c = [min(max(x, -m), m) for x, m in zip(a, self.a_max.tolist())]
                 if v_c != v or a_c != a:
                     status = SmoothingStatus.CLIPPED
                     reasons.append("target velocity/acceleration clipped to the limits")

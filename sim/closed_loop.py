@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import time
 import warnings
 from pathlib import Path
@@ -82,7 +83,13 @@ def _vec(x: Any, n: int = 3) -> np.ndarray | None:
         a = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
         return None
-    return a if a.shape == (n,) and np.isfinite(a).all() else None
+    return a if a.shape == (n,) and _all_finite(a) else None
+
+
+def _all_finite(a: np.ndarray) -> bool:
+    """Whether every entry of the 1-D float array ``a`` is finite (plain floats: on a few entries, several
+    times cheaper than ``np.isfinite(a).all()``)."""
+    return all(map(math.isfinite, a.tolist()))
 
 
 def _scalar(x: Any) -> float:
@@ -190,7 +197,7 @@ class _Loop:
         if ref is not None:
             self.out["tip_reference"][k] = ref
         proba = np.asarray(getattr(cmd, "mode_proba", ()), dtype=float).reshape(-1)
-        if proba.size and np.isfinite(proba).all():
+        if proba.size and _all_finite(proba):
             self.mode[k] = int(np.argmax(proba))
 
     def physics_period(self, k: int) -> None:
@@ -203,20 +210,27 @@ class _Loop:
         else:
             bt, bq, bv, bf = self._buf
         qpos, qvel, force, ctrl = d.qpos, d.qvel, d.actuator_force, d.ctrl  # views into MuJoCo's state
-        set_time, torque, step1, step2, h = world.set_time, self.servo.torque, mujoco.mj_step1, mujoco.mj_step2, \
-            sc.timestep
+        set_time, torque_into, step1, step2, h = world.set_time, self.servo.torque_into, mujoco.mj_step1, \
+            mujoco.mj_step2, sc.timestep
         for j in range(n_sub):
             if j:  # the first sub-step's kinematics were computed by control_step
                 set_time(t_k + j * h)
                 step1(m, d)
-            ctrl[:] = torque()
+            torque_into(ctrl)
             step2(m, d)
             bt[j] = d.time
             bq[j], bv[j], bf[j] = qpos, qvel, force  # the arm is the whole state
-        self._check_limits(bq, bv, bf)
+        if not self.record:  # a recorded episode is checked once, at its end (check_recording)
+            self._check_limits(bq, bv, bf, n_sub)
 
-    def _check_limits(self, bq: np.ndarray, bv: np.ndarray, bf: np.ndarray) -> None:
-        """Count the physics steps of the period with any limit exceeded (vectorised once per period)."""
+    def check_recording(self) -> None:
+        """Count the recorded episode's limit violations, as :meth:`physics_period` does per period unrecorded."""
+        if self.record:
+            self._check_limits(self.rec_q, self.rec_v, self.rec_tau, self.sc.substeps)
+
+    def _check_limits(self, bq: np.ndarray, bv: np.ndarray, bf: np.ndarray, n_sub: int) -> None:
+        """Count the physics steps (rows of ``bq``, ``bv``, ``bf``) with any limit exceeded; ``worst`` takes each
+        period's (``n_sub`` rows') largest excesses where the period has a violation (vectorised over periods)."""
         eq = np.maximum(self.q_lo - bq, bq - self.q_hi).max(axis=1)
         ev = (np.abs(bv) - self.v_lim).max(axis=1)
         et = (np.abs(bf) - self.tau_lim).max(axis=1)
@@ -224,8 +238,10 @@ class _Loop:
         if bad.any():
             self.violations += int(bad.sum())
             w = self.worst
-            w["q"], w["v"], w["tau"] = max(w["q"], float(eq.max())), max(w["v"], float(ev.max())), \
-                max(w["tau"], float(et.max()))
+            periods = bad.reshape(-1, n_sub).any(axis=1)
+            for e, key in ((eq, "q"), (ev, "v"), (et, "tau")):
+                for peak in e.reshape(-1, n_sub).max(axis=1)[periods].tolist():
+                    w[key] = max(w[key], peak)
 
     def info(self, seed: int, wall: float, cpu: float) -> dict[str, Any]:
         sc, srv, w = self.sc, self.servo, self.worst
@@ -347,6 +363,7 @@ def run_episode(controller: Controller, trial: Trial, *, scene: SceneConfig | No
         loop.physics_period(k)
         if bar is not None:
             bar.update(1)
+    loop.check_recording()
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     if bar is not None:
         bar.close()

@@ -38,9 +38,12 @@ from sim.task import EATING
 __all__ = ["EatingScene", "SceneConfig", "build_scene_xml", "pose_matrix"]
 
 
+_EYE4 = np.eye(4)
+
+
 def pose_matrix(R: np.ndarray, p: np.ndarray) -> np.ndarray:
     """4×4 homogeneous transform [[R, p], [0, 1]]."""
-    T = np.eye(4)
+    T = _EYE4.copy()
     T[:3, :3] = R
     T[:3, 3] = p
     return T
@@ -259,10 +262,13 @@ class EatingScene:
         the pose shown.
         """
         pose = np.asarray(pose, dtype=float)
-        if pose.shape != (6,) or not np.isfinite(pose).all():
+        if pose.shape != (6,):
+            return
+        values = pose.tolist()
+        if not all(map(math.isfinite, values)):
             return
         self.fork_pose = pose.copy()
-        mujoco.mju_mat2Quat(self._quat, rpy_to_matrix(pose[3:]).reshape(-1))
+        mujoco.mju_mat2Quat(self._quat, rpy_to_matrix(values[3:]).reshape(-1))
         self.data.mocap_pos[self.fork_mocap] = pose[:3] + self.plate_p
         self.data.mocap_quat[self.fork_mocap] = self._quat
         if t is not None:

@@ -97,7 +97,7 @@ class JointServo:
         # per-step scratch arrays (no allocation on the fast path)
         self._a = np.zeros(n)
         self._qpos, self._qvel, self._bias = data.qpos, data.qvel, data.qfrc_bias  # views into MuJoCo's state
-        self._tau, self._tau_brake, self._a_brake = np.zeros(n), np.zeros(n), np.zeros(n)
+        self._tau_brake, self._a_brake = np.zeros(n), np.zeros(n)
         # beyond this distance to a limit the viable bound exceeds v_max: v_max²/(2A) + v_max·h [rad]
         self._free_gap = [vm * vm / (2.0 * a) + vm * self.h for vm, a in zip(self.v_max, self.A)]
         self._joints = list(zip(self.q_min, self.q_max, self.v_max, self.A, self._free_gap))  # per joint, in order
@@ -108,15 +108,19 @@ class JointServo:
 
     def set_segment(self, q_cmd: np.ndarray, v_cmd: np.ndarray, a_cmd: np.ndarray, t_end: float) -> None:
         """The commanded segment ending at t_end [s] in state (q_cmd, v_cmd) with acceleration a_cmd."""
-        self._seg_l = ([float(x) for x in q_cmd], [float(x) for x in v_cmd], [float(x) for x in a_cmd],
-                       float(t_end))
+        self._seg_l = (np.asarray(q_cmd, dtype=float).tolist(), np.asarray(v_cmd, dtype=float).tolist(),
+                       np.asarray(a_cmd, dtype=float).tolist(), float(t_end))
 
     def hold(self) -> None:
         """Stop and hold the current position (used when a command is not usable)."""
         self._seg_l = (self.data.qpos[:self.n].tolist(), [0.0] * self.n, [0.0] * self.n, float(self.data.time))
 
     def torque(self) -> np.ndarray:
-        """τ (n,) [N·m] for the state in ``data`` (after ``mj_step1``); within ±τ_max always.
+        """τ (n,) [N·m] for the state in ``data`` (after ``mj_step1``); within ±τ_max always (:meth:`torque_into`)."""
+        return self.torque_into(np.empty(self.n))
+
+    def torque_into(self, tau: np.ndarray) -> np.ndarray:
+        """:meth:`torque` written into ``tau`` (n,) (e.g. ``data.ctrl``, sparing a copy per physics step); returns it.
 
         Plain-float arithmetic on the fast path: for a handful of joints at 1 kHz, numpy's
         per-call overhead would cost more than the physics step itself.  Far from
@@ -129,7 +133,7 @@ class JointServo:
         q_c, v_c, a_c, t_end = self._seg_l
         r = max(t_end - data_time, 0.0)
         kp, kd = self.kp, self.kd
-        a_l, lo_l, hi_l, ad_l = [], [], [], []
+        a_l, box = [], []  # box: (a_des, lo, hi) per joint, read only where the torque limit binds
         active = False
         for qi, vi, qc, vc, ac, (q_lo, q_hi, vm, A, free) in zip(q, v, q_c, v_c, a_c, self._joints):
             ad = ac + kp * (qc - vc * r + 0.5 * ac * r * r - qi) + kd * (vc - ac * r - vi)
@@ -139,15 +143,13 @@ class JointServo:
             if v_lo > v_up:  # only beyond a position limit: head back at the speed limit
                 v_lo = v_up = vm if qi < q_lo else -vm
             lo_i, hi_i = (v_lo - vi) / h, (v_up - vi) / h
-            lo_l.append(lo_i)
-            hi_l.append(hi_i)
-            ad_l.append(ad)
+            box.append((ad, lo_i, hi_i))
             if ad < lo_i:
                 ad, active = lo_i, True
             elif ad > hi_i:
                 ad, active = hi_i, True
             a_l.append(ad)
-        a, tau = self._a, self._tau
+        a = self._a
         a[:] = a_l
         mujoco.mj_mulM(self.model, d, tau, a)  # M(q)·a from MuJoCo's own (sparse) inertia incl. armature
         tau += self._bias
@@ -155,9 +157,12 @@ class JointServo:
         if active or not fits:
             self._check_brake(v)
         if fits:
-            return tau.copy()
+            return tau
         mujoco.mj_fullM(self.model, d, self._M)
-        return self._constrained(self._M.copy(), d.qfrc_bias.copy(), np.array(ad_l), np.array(lo_l), np.array(hi_l))
+        ad_l, lo_l, hi_l = zip(*box)
+        tau[:] = self._constrained(self._M.copy(), d.qfrc_bias.copy(), np.array(ad_l), np.array(lo_l),
+                                   np.array(hi_l))
+        return tau
 
     def _check_brake(self, v: list[float]) -> None:
         """Count the step if braking a_b = clip(−v/h, ±A) would need more than τ_max."""

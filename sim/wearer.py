@@ -202,15 +202,16 @@ class SimulatedWearer:
         k = min(max(int(k), 0), self.intent.shape[0] - 1)
         self._perceive_cue(alpha_cue)
         tip = np.asarray(tip, dtype=float)
-        err_now = self.intent[k] - tip if tip.shape == (3,) and np.isfinite(tip).all() else np.zeros(3)
+        err_now = self.intent[k] - tip if tip.shape == (3,) and all(map(math.isfinite, tip.tolist())) \
+            else np.zeros(3)
         self._errors.append(err_now)
         e = self._errors[0] if len(self._errors) > self.delay_steps else np.zeros(3)  # perceived d ago
-        norm = float(np.sqrt(e @ e))
+        norm = math.sqrt(float(e @ e))
         w = min(max((norm - c.deadband_m) / c.deadband_m, 0.0), 1.0) if c.deadband_m > 0 else float(norm > 0)
         u_c = w * c.feedback_gain_per_s * e
         u_r = self.plan_velocity[k] if (c.feedforward and self.wearer_leads) else np.zeros(3)
         u = u_r + u_c
-        speed = float(np.sqrt(u @ u))
+        speed = math.sqrt(float(u @ u))
         if speed > c.max_speed_mps:
             scale = c.max_speed_mps / speed
             u, u_r, u_c = u * scale, u_r * scale, u_c * scale
@@ -221,7 +222,8 @@ class SimulatedWearer:
         self._s2 = a * self._s2 + (1.0 - a) * self._s1
         z = self._s2 + self._to_z @ u_r
         eps = _DEADZONE_RAMP * c.shoulder.deadband_rad
-        theta = z + (c.shoulder.deadband_rad * np.clip(z / eps, -1.0, 1.0) if eps > 0 else 0.0)
+        # np.clip(z / ε, −1, 1) as its two ufuncs (the same values, without np.clip's dispatch)
+        theta = z + (c.shoulder.deadband_rad * np.minimum(np.maximum(z / eps, -1.0), 1.0) if eps > 0 else 0.0)
         if c.noise_rad > 0 or c.noise_signal_dependent > 0:
             d = theta.size
             n = self._rng.standard_normal(2 * d)

@@ -77,7 +77,7 @@ def sense(t: float, obs: Any, faults: list[tuple[str, str]], *, frontend: Any, d
     if o is not None and o.shape != (d_o,):
         faults.append(("invalid_observation_shape", f"obs has shape {o.shape}, expected ({d_o},)"))
         o = None
-    elif o is None or not math.isfinite(o.sum()):
+    elif o is None or not all(map(math.isfinite, o.tolist())):
         faults.append(("missing_observation", "fork sample missing or NaN: Kalman prediction substituted"))
     try:
         fe = frontend.step(t, o)

@@ -85,7 +85,8 @@ def project_box_shell(p: np.ndarray, lower: np.ndarray, upper: np.ndarray, cente
     not find it).
     """
     b = np.minimum(np.maximum(p, lower), upper)
-    if r_min <= float(np.linalg.norm(b - center)) <= r_max:
+    d = b - center
+    if r_min <= math.sqrt(float(d.dot(d))) <= r_max:  # ‖b − c‖ as np.linalg.norm sums it, one call
         return b, True
     best, best_d = b, math.inf
     for face in _FACES:
@@ -127,9 +128,10 @@ def check_base_pose(T: object) -> np.ndarray:
     a = np.asarray(T, dtype=float)
     if a.shape != (4, 4):
         raise ValueError(f"base_pose must be a (4, 4) homogeneous transform, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
+    flat = a.ravel().tolist()
+    if not all(map(math.isfinite, flat)):
         raise ValueError("base_pose has non-finite entries")
-    (r00, r01, r02, _), (r10, r11, r12, _), (r20, r21, r22, _), (l0, l1, l2, l3) = a.tolist()
+    r00, r01, r02, _, r10, r11, r12, _, r20, r21, r22, _, l0, l1, l2, l3 = flat
     # RᵀR − I and det R in plain floats: it runs at every control step
     gram = max(abs(r00 * r00 + r10 * r10 + r20 * r20 - 1.0), abs(r01 * r01 + r11 * r11 + r21 * r21 - 1.0),
                abs(r02 * r02 + r12 * r12 + r22 * r22 - 1.0), abs(r00 * r01 + r10 * r11 + r20 * r21),

@@ -256,3 +256,16 @@ def test_the_caption_names_the_tasks_modes_and_the_episode_its_shoulder_roles(tr
     old = {k: v for k, v in ep.info.items() if k not in ("shoulder_roles", "shoulder_layout")}  # an older run file
     assert dataclasses.replace(ep, info=old).shoulder_names == ["shoulder_elevation", "shoulder_protraction",
                                                                 "shoulder_abduction"]
+
+
+def test_a_recorded_episode_counts_the_limits_as_an_unrecorded_one(trial, monkeypatch):
+    """The recording is checked once at its end, an unrecorded run per period: the same count and worst excesses."""
+    import sim.closed_loop as closed_loop
+
+    monkeypatch.setattr(closed_loop, "LIMIT_TOL", -0.01)  # limits drawn 0.01 inside: the arm crosses them
+    monkeypatch.setattr(closed_loop, "TORQUE_TOL", -0.01)
+    keys = ("limit_violations", "max_q_excess_rad", "max_v_excess_rad_s", "max_tau_excess_nm")
+    recorded = run_episode(AggressiveController(), trial, duration_s=2.0, record=True).info
+    unrecorded = run_episode(AggressiveController(), trial, duration_s=2.0, record=False).info
+    assert recorded["limit_violations"] > 0 and recorded["max_v_excess_rad_s"] > 0.0
+    assert [recorded[k] for k in keys] == [unrecorded[k] for k in keys]

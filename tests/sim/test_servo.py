@@ -147,3 +147,18 @@ def test_braking_that_needs_more_than_the_torque_limit_is_counted():
     with_default = _run_servo([0.0, p.upper[1] - 0.2, 0.5], [0.0, 1.9, 0.0], [0.0, p.upper[1] + 0.5, 0.5],
                               [0.0, 1.9, 0.0], np.zeros(3), 300)[3]
     assert with_default.brake_infeasible == 0
+
+
+def test_torque_into_writes_the_torque_into_the_given_array():
+    p = SuperLimbParams()
+    s = EatingScene()
+    m, d = s.model, s.data
+    s.set_state(np.array([0.0, p.upper[1] - 0.02, 0.3]), np.array([0.0, 0.9 * p.velocity_limit[1], 0.0]), 0.0)
+    srv = JointServo(m, d)
+    for target in (np.zeros(3), np.array([0.0, p.upper[1] + 0.5, 0.5])):  # free, then at the limits
+        srv.set_segment(target, np.zeros(3), np.zeros(3), 0.0)
+        mujoco.mj_step1(m, d)
+        out = np.full(3, np.nan)
+        assert srv.torque_into(out) is out
+        assert np.array_equal(out, srv.torque())
+        assert np.all(np.abs(out) <= p.torque_limit + 1e-9)
