@@ -271,7 +271,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     None, or the cutting modes whose lead costs more than ``max_effort``), "why" (the reason in words:
     :func:`mpcshare.reports.rule_choice.why_words`), "criterion", "predicted", "cross_validated", "candidates",
     "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
-    "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "trials", "duration_s",
+    "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "robot_alphas" (the
+    shares tried), "trials", "duration_s",
     "episodes_run" (simulated: an episode that decides as another at every step is that episode), "seconds"}``. Raises
     ValueError when the bundle has no mode model or no trial is given. ``task``: whose figures and criterion.
     """
@@ -326,7 +327,8 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
             "cross_validated": cross_validated(rows, vol, rea, max_effort, task),
             "cutting_effort_vs_voluntary": task_effort, "max_effort": max_effort, "candidates": rows,
             "mixes": mix_rows, "voluntary": vol, "reactive": rea, "mode_costs": costs, "price_order": order,
-            "cutting_modes": cutting, "pruned": pruned, "trials": [int(t) for t in trials], "duration_s": duration_s,
+            "cutting_modes": cutting, "pruned": pruned, "robot_alphas": [float(a) for a in robot_alphas],
+            "trials": [int(t) for t in trials], "duration_s": duration_s,
             "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}
 
 
@@ -343,10 +345,11 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
                       mode_names: Sequence[str] | None = None,
                       log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
                       workers: int | None = None, task: Task = EATING,
-                      mixes: Sequence[str] = MIXES) -> dict[str, Any]:
+                      mixes: Sequence[str] = MIXES, robot_alphas: Sequence[float] = ROBOT_ALPHAS) -> dict[str, Any]:
     """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
     1 to 2) with the wearer preset ``wearer_name`` (default the default preset), the demonstrations'
-    ``mode_names`` (for ``task``'s stroke modes) and the comparators ``mixes`` (:func:`choose_rule`), recorded as
+    ``mode_names`` (for ``task``'s stroke modes), the comparators ``mixes`` and the robot's shares ``robot_alphas``
+    (:func:`choose_rule`), recorded as
     the bundle's rule (``bundle.rule``, a :class:`~mpcshare.bundle.rule.CalibratedRule` for ``gate``) so that the
     saved bundle's ``gate`` uses it;
     returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
@@ -358,7 +361,8 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     trials = choice_trials(bundle.heldout_trials, n_trials)
     with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
         choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
-                             mode_names=mode_names, pool=episodes, task=task, mixes=mixes)
+                             mode_names=mode_names, pool=episodes, task=task, mixes=mixes,
+                             robot_alphas=robot_alphas)
     choice["wearer"] = name
     bundle.rule = CalibratedRule("gate", choice["settings"], choice)
     return choice

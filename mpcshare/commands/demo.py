@@ -112,16 +112,19 @@ def _start_choice(bundle: Any, demos: Demonstrations, wearer_name: str, rule_dur
     """The bundle's hand-over rule chosen in the closed loop as ``mpcshare train`` chooses it (on the last
     held-out trials, ``rule_duration_s`` each, beside the wearer ``wearer_name``; recorded as
     ``bundle.rule``) but without the constant mixtures as comparators (the comparison runs them on the
-    evaluation trials; a sixth of the choice's episodes), its episodes in ``pool``: with workers, in a thread that
+    evaluation trials; a sixth of the choice's episodes) and without the second stage (the robot's share 0.5
+    while it leads, on the first stage's best two and the empty set: a quarter of its episodes; the robot at
+    full share while it leads, as the first stage), its episodes in ``pool``: with workers, in a thread that
     waits for them while this process goes on (its lines printed at the end); else at once. Returns what ends it
     and prints it."""
-    from mpcshare.calibration.rule_choice import choose_for_bundle
+    from mpcshare.calibration.rule_choice import ROBOT_ALPHAS, choose_for_bundle
 
     lines: list[str] = []
     choose = partial(choose_for_bundle, bundle, demos, duration_s=rule_duration_s, wearer_name=wearer_name,
-                     mode_names=_TASK.mode_names, pool=pool, task=_TASK, mixes=())
-    print("the demo's rule choice leaves out the constant mixtures beside its candidates (`mpcshare train` runs "
-          "them; the closed loop below runs them on the evaluation trials)", flush=True)
+                     mode_names=_TASK.mode_names, pool=pool, task=_TASK, mixes=(), robot_alphas=ROBOT_ALPHAS[:1])
+    print("the demo's rule choice leaves out the constant mixtures beside its candidates and its second stage "
+          f"(the robot's share {', '.join(f'{a:g}' for a in ROBOT_ALPHAS[1:])} while it leads): `mpcshare train` "
+          "runs both; the closed loop below runs the mixtures on the evaluation trials", flush=True)
     if pool.workers > 1:
         print(f"choosing the hand-over rule in the closed loop on held-out trials ({pool.workers} workers, "
               "beside the training and the K sweep)", flush=True)

@@ -173,9 +173,12 @@ def write_demo_report(out: str | Path, *, data_summary_md: str, analysis: dict[s
         parts += ["The hand-over rule's choice did not simulate: " + "; ".join(
             f"the wearer leading modes {r['wearer_modes']} (the per-mode costs: {r['why']})" for r in pruned) + ".", ""]
     if choice and not choice.get("mixes"):  # the demo leaves its comparators out (commands/demo.py)
-        parts += ["The demo's rule choice ran without the constant mixtures beside its candidates, to fit three "
-                  "minutes: `mpcshare train` runs them on its choice trials, and the closed loop above runs them on "
-                  "the evaluation trials.", ""]
+        shares = choice.get("robot_alphas") or []
+        second = (f" and without its second stage (the robot's share only {shares[0]:g} while it leads)"
+                  if len(shares) == 1 else "")
+        parts += [f"The demo's rule choice ran without the constant mixtures beside its candidates{second}, to fit "
+                  "three minutes: `mpcshare train` runs them on its choice trials, and the closed loop above runs the "
+                  "mixtures on the evaluation trials.", ""]
     md = "\n".join(parts) + "\n"
     with atomic_open(out / "report.md", "w") as f:
         f.write(md)

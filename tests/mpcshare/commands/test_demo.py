@@ -42,7 +42,11 @@ def test_demo_runs_every_stage_into_one_report(tmp_path, capsys):
     # the demo's choice leaves its mixture comparators to the closed loop, and says so in its log and report
     choice = json.loads((out / "model" / "rule.json").read_text())["rule"]["choice"]
     assert choice["mixes"] == [] and "leaves out the constant mixtures" in said
-    assert "ran without the constant mixtures beside its candidates" in (out / "report.md").read_text()
+    # and its second stage (the robot's share 0.5 while it leads), said in both too
+    assert choice["robot_alphas"] == [1.0] and {c["robot_alpha"] for c in choice["candidates"]} == {1.0}
+    assert "and its second stage" in said
+    assert ("ran without the constant mixtures beside its candidates and without its second stage"
+            in (out / "report.md").read_text())
     assert all(m["limit_violations"] == 0 for m in comparison["strategies"].values())
     assert comparison["wearer"]["preset"] == "unimpaired"  # --wearer reaches the closed loop
     gate = comparison["strategies"]["gate"]  # the task figures: lag, sawing while cutting, RMS per mode
