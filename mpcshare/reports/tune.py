@@ -75,7 +75,10 @@ def chance_sentences(result: dict[str, Any]) -> list[str]:
         ci_txt = f" (95 % CI {_mm(ci[0])} to {_mm(ci[1])} mm)" if ci else ""
         holm = "" if v.get("p_holm") is None else f" (Holm-corrected across {v.get('m_settings')} settings: " \
             f"{v['p_holm']:.3g})"
-        if v["beats_random"]:
+        if not v["n_pairs"] and v.get("n_forced"):
+            out.append(f"{name}: no test against random hand-overs: in each of its {v['n_forced']} episodes it handed "
+                       "over at most once, so the matched random schedule was its own.")
+        elif v["beats_random"]:
             out.append(f"{name} beats random hand-overs at the same share and count: {_mm(v['effect_m'])} mm lower "
                        f"tracking RMS{ci_txt}, p = {v['p_value']:.3g}{holm} over {v['n_pairs']} trial x seed pairs.")
         else:

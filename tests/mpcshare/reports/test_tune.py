@@ -18,6 +18,17 @@ def test_chance_sentence_says_when_the_pairs_cannot_reach_significance():
     assert "smallest p" not in chance_sentences(result(0.2, 4))[0]
 
 
+def test_chance_sentence_says_why_a_setting_that_never_handed_over_twice_has_no_test():
+    from mpcshare.reports.tune import chance_sentences
+
+    forced = {"tests": {"gate p100 b0": {"vs_random_handover": {
+        "effect_ci95_m": None, "beats_random": False, "p_value": None, "n_pairs": 0, "effect_m": None,
+        "n_forced": 10}}}}
+    (line,) = chance_sentences(forced)
+    assert line.startswith("gate p100 b0: no test against random hand-overs") and "each of its 10 episodes" in line
+    assert "0 pairs" not in line
+
+
 def test_the_recommendation_says_when_it_loses_to_the_wearer_alone():
     from mpcshare.reports.tune import build_result, recommendation_line, tune_markdown
 
