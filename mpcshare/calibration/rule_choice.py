@@ -247,6 +247,12 @@ def _task_effort(task_effort: float | None, cutting: Sequence[int], best: dict[s
             "max_effort": float(max_effort)}
 
 
+def _log_ran(log: Callable[[str], None] | None, ran: int, planned: int) -> None:
+    """Say how many of the choice's episodes were simulated, where some were not (they repeat one)."""
+    if log is not None and ran < planned:
+        log(ran_line(ran, planned))
+
+
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
                 duration_s: float | None = RULE_DURATION_S,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
@@ -264,26 +270,25 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
     stage's episodes are one batch); ``prune``: leave out the wearer-mode sets the per-mode costs put at no
     less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
-    ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; their rows
-    under ``"mixes"``, and the why says so where one would win the criterion: the gate's rule cannot be one).
+    ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; rows under
+    ``"mixes"``; the why says so where one would win the criterion).
     Returns ``{"settings", "wearer_modes", "reason" (``criterion``: :func:`~mpcshare.calibration.choice_criterion.
     criterion`'s record; ``mixture``: :func:`~mpcshare.calibration.choice_criterion.mix_winner`'s; ``task_effort``:
     None, or the cutting modes whose lead costs more than ``max_effort``), "why" (the reason in words:
     :func:`mpcshare.reports.rule_choice.why_words`), "criterion", "predicted", "cross_validated", "candidates",
     "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "robot_alphas" (the
-    shares tried), "trials", "duration_s",
-    "episodes_run" (simulated: an episode that decides as another at every step is that episode), "seconds"}``. Raises
-    ValueError when the bundle has no mode model or no trial is given. ``task``: whose figures and criterion.
+    shares tried), "trials", "duration_s", "episodes_run" (an episode that decides as another at every step is that
+    episode), "seconds"}``. ValueError without a mode model or a trial. ``task``: whose figures and criterion.
     """
     if not len(trials):
         raise ValueError("choose_rule needs at least one held-out trial")
     n_modes = _n_modes(bundle)
     t0 = time.perf_counter()
 
-    seen: dict[int, np.ndarray] = {}  # what each trial's arbitration sees (the first batch); episodes simulated
+    seen: dict[int, np.ndarray] = {}  # what each trial's arbitration sees (the first batch)
     known: dict[Any, tuple[Any, dict[str, Any]]] = {}  # the first batch's episodes by how they decide
-    ran: list[int] = []
+    ran: list[int] = []  # episodes simulated
     def run(specs: list[tuple[str, dict | None]]) -> list[tuple[dict[str, float], list[Any]]]:
         return pooled_runs(bundle, demos, trials, specs, duration_s, wearer, seed, mode_names, pool, seen=seen, ran=ran,
                            task=task, known=known)
@@ -316,20 +321,18 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
     evaluate([(r["wearer_modes"], r["timing"], r["wearer_alpha"], float(a_r))
               for r in second_stage(rows, vol, rea, max_effort, SECOND_STAGE_TOP, task) for a_r in robot_alphas[1:]])
     best, by_criterion = criterion(rows, vol, rea, max_effort, task)
-    if log is not None and sum(ran) < (planned := len(trials) * (2 + len(mixes) + len(rows))):
-        log(ran_line(sum(ran), planned))
+    _log_ran(log, sum(ran), len(trials) * (2 + len(mixes) + len(rows)))
     task_effort = cutting_effort(costs, cutting)
     reason = {"criterion": by_criterion, "mixture": mix_winner(best, mix_rows, vol, rea, max_effort, task),
               "task_effort": _task_effort(task_effort, cutting, best, vol, max_effort, task)}
     return {"settings": best["settings"], "wearer_modes": best["wearer_modes"], "reason": reason,
-            "why": why_words(reason),
-            "criterion": criterion_words(task), "predicted": predicted(best, vol, task),
+            "why": why_words(reason), "criterion": criterion_words(task), "predicted": predicted(best, vol, task),
             "cross_validated": cross_validated(rows, vol, rea, max_effort, task),
             "cutting_effort_vs_voluntary": task_effort, "max_effort": max_effort, "candidates": rows,
             "mixes": mix_rows, "voluntary": vol, "reactive": rea, "mode_costs": costs, "price_order": order,
             "cutting_modes": cutting, "pruned": pruned, "robot_alphas": [float(a) for a in robot_alphas],
-            "trials": [int(t) for t in trials], "duration_s": duration_s,
-            "episodes_run": sum(ran), "seconds": round(time.perf_counter() - t0, 1)}
+            "trials": [int(t) for t in trials], "duration_s": duration_s, "episodes_run": sum(ran),
+            "seconds": round(time.perf_counter() - t0, 1)}
 
 
 def choice_trials(heldout: Sequence[int], n_trials: int | None = None) -> list[int]:
