@@ -1,6 +1,6 @@
 """The project's errors: :class:`MpcshareError`, the root of mpcshare's, and :data:`PROJECT_ERRORS`.
 
-The layering (tests/test_layering.py) lets no module be imported by all four packages:
+The layering (docs/design.md, checked by a test) lets no module be imported by all four packages:
 ``learning`` and ``robot`` import nothing of the project, ``sim`` never imports
 ``mpcshare``. So each package has its own root, and every error class of the project
 derives from exactly one of them (and from the built-in class callers already catch):

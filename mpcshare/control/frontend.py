@@ -16,8 +16,7 @@ Per control step (one raw fork sample, ``rate_hz``):
 
 The Kalman state (``FrontEndOutput.fork_position``, ``fork_velocity``) is the control-rate forecast's
 input (:mod:`mpcshare.control.fastpath`); :func:`kalman_batch` runs the same filter over a recorded trial.
-Streamed sample by sample, a trial gives the offline windows, posteriors and novelty to 1e-9
-(tests/mpcshare/control/test_frontend.py).
+Streamed sample by sample, a trial gives the offline windows, posteriors and novelty to 1e-9.
 """
 
 from __future__ import annotations
@@ -49,7 +48,7 @@ class ForkKalman:
 
     The channels are independent (block-diagonal F, Q, R), so the filter is d 2-state filters,
     vectorised over channels; the update is filterpy's (Joseph form), equal to filterpy's
-    ``KalmanFilter`` per channel to 1e-12 (tests/mpcshare/control/test_frontend.py).
+    ``KalmanFilter`` per channel to 1e-12.
     """
 
     def __init__(self, n_channels: int, dt: float, accel_std: np.ndarray, meas_std: np.ndarray) -> None:
@@ -153,7 +152,7 @@ def kalman_batch(kf: ForkKalman, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     For offline use on recorded trials: every sample measured (a NaN row, e.g. padding after
     a trial's end, turns the rest of that channel into NaN). The same arithmetic as ``step``
     (its covariance recursion gives the gains; once they reach a fixed point they are reused),
-    so the result equals stepping the filter (tests/mpcshare/control/test_frontend.py).
+    so the result equals stepping the filter.
     """
     Z = np.asarray(Z, dtype=float)
     T, dt, r, q = Z.shape[0], kf.dt, kf.meas_var, kf.accel_var

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from mpcshare.control.controller import STATUSES, SharedController
+from mpcshare.control.strategies import user_strategies
 from robot.superlimb import SuperLimbParams
 from tests.mpcshare.control.controller_doubles import MOUNT, demos_and_bundle, real_model_bundle
 
@@ -302,7 +303,7 @@ def test_from_a_saved_bundle_folder(tmp_path):
 
 def test_construction_misuse():
     _, bundle = demos_and_bundle(0)
-    with pytest.raises(ValueError, match="valid choices: voluntary, reactive, mix25, mix50, mix75, gate, paper_gate"):
+    with pytest.raises(ValueError, match="valid choices: " + ", ".join(user_strategies())):
         SharedController.from_bundle(bundle, strategy="nope", use_mpc=False)
     with pytest.raises(ValueError, match="beta must be in"):
         SharedController.from_bundle(bundle, beta=1.2, use_mpc=False)

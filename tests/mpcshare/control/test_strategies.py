@@ -9,11 +9,19 @@ from mpcshare.control.arbitration import STRATEGIES, Arbiter, check_strategy
 from mpcshare.control.strategies import DEFAULT_STRATEGY, REGISTRY, ROLES, StrategySpec, by_role, user_strategies
 
 
+def _in_order(names: tuple[str, ...] | list[str], within: tuple[str, ...] | list[str]) -> bool:
+    """Whether ``names`` appear in ``within`` in this order (others may come between: a new strategy is one
+    module, no test names every strategy)."""
+    rest = iter(within)
+    return all(n in rest for n in names)
+
+
 def test_the_registry_holds_the_named_strategies_in_order():
-    assert list(REGISTRY) == ["voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "paper_gate", "blend",
-                              "qp_blend", "schedule"]
+    assert _in_order(["voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "paper_gate", "blend",
+                      "qp_blend", "schedule"], list(REGISTRY))
+    assert not _in_order(["gate", "voluntary"], list(REGISTRY))
     assert DEFAULT_STRATEGY == "gate" and STRATEGIES == user_strategies() == tuple(list(REGISTRY)[:-1])
-    assert {n for n, s in REGISTRY.items() if s.tunable} == {"gate", "paper_gate", "blend"}
+    assert {"gate", "paper_gate", "blend"} <= {n for n, s in REGISTRY.items() if s.tunable}
     for name, spec in REGISTRY.items():
         assert isinstance(spec, StrategySpec) and spec.name == name
         assert spec.description.endswith(".") and spec.description.count(". ") == 0, spec.description
@@ -24,9 +32,10 @@ def test_the_registry_holds_the_named_strategies_in_order():
 
 
 def test_each_strategy_declares_its_role_and_the_shared_ones_come_in_todays_order():
-    assert by_role("shared") == ("gate", "paper_gate", "blend", "qp_blend")  # the headline names the first present
-    assert by_role("baseline") == ("voluntary", "reactive")
-    assert by_role("mix") == ("mix25", "mix50", "mix75") and by_role("replay") == ("schedule",)
+    assert by_role("shared")[0] == "gate"  # the headline names the first present
+    assert _in_order(("gate", "paper_gate", "blend", "qp_blend"), by_role("shared"))
+    assert _in_order(("voluntary", "reactive"), by_role("baseline"))
+    assert _in_order(("mix25", "mix50", "mix75"), by_role("mix")) and "schedule" in by_role("replay")
     assert sorted(n for r in ROLES for n in by_role(r)) == sorted(REGISTRY)
     with pytest.raises(ValueError, match="role 'helper' is not one of shared, baseline, mix, replay"):
         by_role("helper")
