@@ -2,9 +2,13 @@
 
 The choice (:mod:`mpcshare.calibration.rule_choice`) records in the bundle's rule (``rule.choice["predicted"]``)
 the chosen candidate's figures on its own trials: line ratio, effort (× the wearer alone), tracking RMS [m],
-mean stroke correlation while cutting and whether it saws. :func:`choice_check` sets them beside the pooled
-figures of the evaluation's run of the rule's strategy, and flags the line ratio when
-|realised − predicted| > :data:`LINE_RATIO_TOLERANCE`. Pure: no simulation.
+mean stroke correlation while cutting and whether it saws; and, with two choice trials or more, its line ratio
+left one trial out (``rule.choice["cross_validated"]``: the rule chosen on the other trials, scored on the one
+left out). :func:`choice_check` sets them beside the pooled figures of the evaluation's run of the rule's
+strategy, and flags the line ratio when |realised − predicted| > :data:`LINE_RATIO_TOLERANCE`, where the
+predicted line ratio is the one left one trial out when there is one (the figure on the trials the rule was
+chosen on is the least of many candidates' on them, so it is biased low), else the one on the choice trials.
+Pure: no simulation.
 """
 
 from __future__ import annotations
@@ -33,14 +37,16 @@ def rule_run(strategy: str, runs: Sequence[Mapping[str, Any]]) -> str | None:
 
 def choice_check(rule: Any, strategies: Mapping[str, Mapping[str, Any]],
                  runs: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
-    """``{"run", "strategy", "predicted", "realised", "cross_validated_line_ratio", "line_ratio_gap", "differs"}``
+    """``{"run", "strategy", "predicted", "realised", "cross_validated_line_ratio", "basis", "line_ratio_gap",
+    "differs"}``
     for the bundle's ``rule`` (a :class:`~mpcshare.bundle.rule.CalibratedRule` or None) against the evaluation's
     pooled ``strategies`` (run name → metrics, with ``line_ratio``) and its ``runs``. ``predicted`` and
     ``realised`` hold ``line_ratio``, ``effort_vs_voluntary``, ``tracking_rmse_m`` and ``saw_correlation`` (None
-    where undefined); ``line_ratio_gap`` = realised − predicted (None where either is undefined); ``differs``:
-    the gap's size exceeds :data:`LINE_RATIO_TOLERANCE`; ``cross_validated_line_ratio``: the choice's
-    leave-one-trial-out prediction (``rule.choice["cross_validated"]``; None where it has none). None without a
-    rule, a recorded prediction or a run of its strategy."""
+    where undefined; ``predicted``: on the choice trials); ``cross_validated_line_ratio``: the choice's
+    leave-one-trial-out prediction (``rule.choice["cross_validated"]``; None where it has none); ``basis``:
+    ``"left one trial out"`` where there is one, else ``"choice trials"``; ``line_ratio_gap`` = realised − the
+    line ratio of ``basis`` (None where either is undefined); ``differs``: the gap's size exceeds
+    :data:`LINE_RATIO_TOLERANCE`. None without a rule, a recorded prediction or a run of its strategy."""
     predicted = None if rule is None else (getattr(rule, "choice", None) or {}).get("predicted")
     name = None if not predicted else rule_run(rule.strategy, runs)
     if name is None or name not in strategies:
@@ -55,9 +61,10 @@ def choice_check(rule: Any, strategies: Mapping[str, Mapping[str, Any]],
     keys = ("line_ratio", "effort_vs_voluntary", "tracking_rmse_m", "saw_correlation")
     realised = {k: float(realised[k]) if _finite(realised[k]) else None for k in keys}
     guess = {k: float(predicted[k]) if _finite(predicted.get(k)) else None for k in keys}
-    gap = (realised["line_ratio"] - guess["line_ratio"]
-           if realised["line_ratio"] is not None and guess["line_ratio"] is not None else None)
     cv = (rule.choice.get("cross_validated") or {}).get("line_ratio")
+    cv = float(cv) if _finite(cv) else None
+    basis, line = ("left one trial out", cv) if cv is not None else ("choice trials", guess["line_ratio"])
+    gap = realised["line_ratio"] - line if realised["line_ratio"] is not None and line is not None else None
     return {"run": name, "strategy": rule.strategy, "predicted": guess, "realised": realised,
-            "cross_validated_line_ratio": float(cv) if _finite(cv) else None,
+            "cross_validated_line_ratio": cv, "basis": basis,
             "line_ratio_gap": gap, "differs": gap is not None and abs(gap) > LINE_RATIO_TOLERANCE}

@@ -11,8 +11,9 @@
 3. **Effort** — how much of the wearer's effort did it save (against ``voluntary``)?
 4. **Keep-out** — did the knife stay out of the wearer's body zones?
 5. **The choice** (with ``rule_check``, :func:`mpcshare.evaluation.choice_check.choice_check`) — the rule's
-   predicted line ratio, effort and stroke correlation beside the realised ones; do the line ratios differ
-   by more than :data:`~mpcshare.evaluation.choice_check.LINE_RATIO_TOLERANCE`?
+   predicted line ratio (left one choice trial out where there is one), effort and stroke correlation beside
+   the realised ones; do the line ratios differ by more than
+   :data:`~mpcshare.evaluation.choice_check.LINE_RATIO_TOLERANCE`?
 
 Read from ``comparison.json``'s ``strategies`` (name → metrics); newer keys are used when present:
 ``line_ratio`` (else computed here, the same definition), the clearance figures (keys with ``clearance``, in
@@ -284,10 +285,11 @@ def _choice(check: dict[str, Any]) -> Headline:
     tail = ("" if gap is None else f"; the realised line ratio differs from the predicted one by {gap:+.2f}"
             + (f", more than {LINE_RATIO_TOLERANCE:g}" if check.get("differs") else ""))
     cv = check.get("cross_validated_line_ratio")
-    loto = "" if cv is None else f" (left one choice trial out: line ratio {cv:.2f})"
-    return Headline("The choice", verdict, f"the hand-over rule chosen in training predicted, on its choice trials, "
-                    f"{_figures(check['predicted'])}{loto}; `{check['run']}` realised {_figures(check['realised'])} "
-                    f"here{tail}.")
+    said = (f"on its choice trials, {_figures(check['predicted'])}" if cv is None else
+            f"line ratio {cv:.2f} left one choice trial out (on the trials it was chosen on: "
+            f"{_figures(check['predicted'])}, the least of its candidates' there)")
+    return Headline("The choice", verdict, f"the hand-over rule chosen in training predicted {said}; "
+                    f"`{check['run']}` realised {_figures(check['realised'])} here{tail}.")
 
 
 def trials_words(trials: list[int], duration_s: float | None) -> str:

@@ -32,10 +32,24 @@ def test_the_check_sets_the_prediction_beside_the_realised_figures_and_flags_a_g
     assert not close["differs"] and "yes, within 0.1" in headline_lines(_STRATEGIES, rule_check=close)[-1]
     assert len(headline_lines(_STRATEGIES)) == len(headline_lines(_STRATEGIES, rule_check=check)) - 1
     assert check["cross_validated_line_ratio"] is None and "left one" not in line
-    rule = CalibratedRule("gate", {}, {"predicted": _PREDICTED, "cross_validated": {"line_ratio": 0.8}})
+    assert check["basis"] == "choice trials"
+
+
+def test_the_check_judges_the_prediction_left_one_trial_out_where_there_is_one():
+    """The least of many candidates' figures on the trials it was chosen on is biased low; the figure of the
+    rule chosen on the other choice trials, on the one left out, is the prediction the check judges."""
+    rule = CalibratedRule("gate", {}, {"predicted": _PREDICTED, "cross_validated": {"line_ratio": 0.758}})
     check = choice_check(rule, _STRATEGIES, _RUNS)
-    assert check["cross_validated_line_ratio"] == 0.8
-    assert "(left one choice trial out: line ratio 0.80)" in headline_lines(_STRATEGIES, rule_check=check)[-1]
+    assert check["cross_validated_line_ratio"] == 0.758 and check["basis"] == "left one trial out"
+    assert check["line_ratio_gap"] == pytest.approx(0.79 - 0.758) and not check["differs"]
+    assert check["predicted"]["line_ratio"] == pytest.approx(0.663)  # the in-sample figures stay beside it
+    line = headline_lines(_STRATEGIES, markdown=False, rule_check=check)[-1]
+    assert line.startswith("The choice: yes, within 0.1.") and "line ratio 0.76 left one choice trial out" in line
+    assert "(on the trials it was chosen on: line ratio 0.66" in line
+    assert "differs from the predicted one by +0.03" in line
+    far = choice_check(CalibratedRule("gate", {}, {"predicted": {**_PREDICTED, "line_ratio": 0.78},
+                                                   "cross_validated": {"line_ratio": 0.6}}), _STRATEGIES, _RUNS)
+    assert far["differs"] and far["line_ratio_gap"] == pytest.approx(0.19)  # close in sample, far left out
 
 
 def test_no_check_without_a_prediction_or_a_run_of_the_rules_strategy():
