@@ -11,7 +11,8 @@ an upper bound); with ``--oracle-line`` also ``oracle_line`` (the effort-aware h
 line ratio a schedule that knows the future reaches within 0.75x the wearer's effort, replayed).
 Per world it prints one JSON line (``"world"``): per run the tracking RMS [mm],
 the effort [rad], the line ratio (:mod:`mpcshare.line_ratio`), the stroke-band correlation while
-cutting, the robot's share and the limit violations; ``best_mix`` (the constant α with the lowest
+cutting, the robot's share, the limit violations, the knife's lag behind the intent [s] (negative: ahead) and
+its least clearance to a body zone [mm]; ``best_mix`` (the constant α with the lowest
 line ratio); one-sided paired Wilcoxon p-values over (trial, seed) pairs of ``gate`` against
 ``random_handover``, ``paper_gate`` and the best mixture; and what the oracle guarantees. At the
 end one JSON object: every world, and the distribution over the family's worlds and over all
@@ -55,7 +56,8 @@ RUNS = ("voluntary", "reactive", *MIXES, "paper_gate", "gate", "blend", "random_
 FIGURES = {"tracking_rmse_m": ("rms_mm", 1e3), "voluntary_effort": ("effort_rad", 1.0),
            "line_ratio": ("line_ratio", 1.0), "saw_correlation": ("stroke_correlation", 1.0),
            "reactive_share": ("robot_share", 1.0), "limit_violations": ("limit_violations", 1),
-           "pickup_rms_m": ("pickup_rms_mm", 1e3), "pickup_error_share": ("pickup_error_share", 1.0)}
+           "pickup_rms_m": ("pickup_rms_mm", 1e3), "pickup_error_share": ("pickup_error_share", 1.0),
+           "lag_s": ("lag_s", 1.0), "keepout_min_clearance_m": ("clearance_mm", 1e3)}
 
 
 def _one_sided(a: list[float], b: list[float]) -> dict[str, Any]:
