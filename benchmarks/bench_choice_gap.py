@@ -10,7 +10,7 @@ seconds, and the rule the criterion would have chosen on the pooled sawing figur
 the criterion before sawing was required per cutting episode; its realised line ratio where it differs).
 
 Usage: ``python benchmarks/bench_choice_gap.py [--worlds family:0 family:1 default] [--quick]
-[--choice-trials N]``.
+[--choice-trials N] [--trial-order]``.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ def _pooled_sawing_choice(choice: dict[str, Any]) -> dict[str, Any]:
     return choice["candidates"][strip.index(best)]
 
 
-def run_world(world: str, quick: bool, choice_trials: int | None) -> dict[str, Any]:
+def run_world(world: str, quick: bool, choice_trials: int | None, by_subject: bool = True) -> dict[str, Any]:
     """Train, choose, evaluate (module docstring); the world's JSON row."""
     import torch
 
@@ -51,7 +51,8 @@ def run_world(world: str, quick: bool, choice_trials: int | None) -> dict[str, A
     demos, mode_names, _ = world_data(world, quick)
     bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
     c0 = time.process_time()
-    choice = choose_for_bundle(bundle, demos, n_trials=choice_trials, mode_names=mode_names, log=None, workers=1)
+    choice = choose_for_bundle(bundle, demos, n_trials=choice_trials, mode_names=mode_names, log=None, workers=1,
+                               by_subject=by_subject)
     choice_cpu = time.process_time() - c0
     rest = [t for t in bundle.heldout_trials if t not in choice["trials"]]
     trials = list(rest[:2] if quick else rest)
@@ -88,9 +89,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--worlds", nargs="+", default=["default", "family:0", "family:1"])
     p.add_argument("--quick", action="store_true", help="quick world sizes, at most 20 epochs, 2 trials x 30 s")
     p.add_argument("--choice-trials", type=int, default=None, help="held-out trials the choice runs on")
+    p.add_argument("--trial-order", action="store_true",
+                   help="the choice on the last held-out trials (before 2026-12-01), not dealt round the subjects")
     a = p.parse_args(argv)
     for world in a.worlds:
-        print(json.dumps(run_world(world, a.quick, a.choice_trials), default=float), flush=True)
+        print(json.dumps(run_world(world, a.quick, a.choice_trials, not a.trial_order), default=float), flush=True)
     return 0
 
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import time
 from contextlib import nullcontext
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -55,8 +55,9 @@ from sim.task import EATING, Task
 from sim.wearer import WearerConfig
 
 __all__ = ["EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "MIXES", "ROBOT_ALPHAS",
-           "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule", "line_ratio",
-           "pooled_run", "pooled_runs", "predicted", "saws", "saws_where_the_wearer_saws", "wearer_saws"]
+           "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule",
+           "evaluation_trials", "line_ratio", "pooled_run", "pooled_runs", "predicted", "saws",
+           "saws_where_the_wearer_saws", "wearer_saws"]
 
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GateSettings().lead_s,
@@ -335,12 +336,36 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
             "seconds": round(time.perf_counter() - t0, 1)}
 
 
-def choice_trials(heldout: Sequence[int], n_trials: int | None = None) -> list[int]:
-    """The held-out trials the choice runs on: the last ``n_trials`` (default: half of them, 1 to 2). The
-    others are left for evaluating the chosen rule."""
-    held = [int(t) for t in heldout]
+def choice_trials(heldout: Sequence[int], n_trials: int | None = None,
+                  subjects: Mapping[int, Any] | None = None) -> list[int]:
+    """The held-out trials the choice runs on: ``n_trials`` of them (default: half, 1 to 2); the others are left
+    for evaluating the chosen rule (:func:`evaluation_trials`). The held-out trials are dealt round the subjects
+    (``subjects``: trial → subject; None or one subject: the trials' order), each subject's in order, and the
+    choice takes the last ``n_trials`` of that order: so the choice and the evaluation draw on the same subjects
+    where the held-out trials allow it, not the choice on one subject and the evaluation on another."""
+    held = _dealt([int(t) for t in heldout], subjects)
     n = n_trials or min(2, max(1, len(held) // 2))
     return held[-n:]
+
+
+def evaluation_trials(heldout: Sequence[int], chosen_on: Sequence[int]) -> list[int]:
+    """The held-out trials to evaluate a chosen rule on: those the choice did not run on (``chosen_on``), in the
+    held-out order, then the choice's own (an evaluation that asks for more trials gets them last)."""
+    held = [int(t) for t in heldout]
+    used = {int(t) for t in chosen_on}
+    return [t for t in held if t not in used] + [t for t in held if t in used]
+
+
+def _dealt(held: list[int], subjects: Mapping[int, Any] | None) -> list[int]:
+    """``held`` dealt round the subjects: every subject's first trial (subjects in order of first appearance),
+    then every subject's second, and so on."""
+    if not subjects:
+        return held
+    groups: dict[Any, list[int]] = {}
+    for t in held:
+        groups.setdefault(subjects.get(t), []).append(t)
+    rounds = max(len(g) for g in groups.values())
+    return [g[k] for k in range(rounds) for g in groups.values() if k < len(g)]
 
 
 def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
@@ -348,20 +373,22 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
                       mode_names: Sequence[str] | None = None,
                       log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
                       workers: int | None = None, task: Task = EATING,
-                      mixes: Sequence[str] = MIXES, robot_alphas: Sequence[float] = ROBOT_ALPHAS) -> dict[str, Any]:
-    """:func:`choose_rule` on the last ``n_trials`` held-out trials of ``bundle`` (default: half of them,
-    1 to 2) with the wearer preset ``wearer_name`` (default the default preset), the demonstrations'
-    ``mode_names`` (for ``task``'s stroke modes), the comparators ``mixes`` and the robot's shares ``robot_alphas``
-    (:func:`choose_rule`), recorded as
-    the bundle's rule (``bundle.rule``, a :class:`~mpcshare.bundle.rule.CalibratedRule` for ``gate``) so that the
-    saved bundle's ``gate`` uses it;
-    returns the choice. The episodes run in ``pool``, else in a pool of ``workers`` processes (default
-    :func:`mpcshare.evaluation.episode_pool.default_workers`) closed afterwards; the choice is the same
+                      mixes: Sequence[str] = MIXES, robot_alphas: Sequence[float] = ROBOT_ALPHAS,
+                      by_subject: bool = True) -> dict[str, Any]:
+    """:func:`choose_rule` on ``n_trials`` held-out trials of ``bundle`` (:func:`choice_trials`: default half of
+    them, 1 to 2, dealt round the demonstrations' subjects; ``by_subject`` False: the last ones) with the wearer
+    preset ``wearer_name`` (default the default preset), the demonstrations' ``mode_names`` (for ``task``'s
+    stroke modes), the comparators ``mixes`` and the robot's shares ``robot_alphas`` (:func:`choose_rule`),
+    recorded as the bundle's rule (``bundle.rule``, a :class:`~mpcshare.bundle.rule.CalibratedRule` for
+    ``gate``) so that the saved bundle's ``gate`` uses it; returns the choice. The episodes run in ``pool``,
+    else in a pool of ``workers`` processes (default :func:`mpcshare.evaluation.episode_pool.default_workers`)
+    closed afterwards; the choice is the same
     whatever the number. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
     from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
 
     name = wearer_name or DEFAULT_WEARER_PRESET
-    trials = choice_trials(bundle.heldout_trials, n_trials)
+    subjects = {int(tr.trial_id): tr.subject for tr in demos.trials} if by_subject else None
+    trials = choice_trials(bundle.heldout_trials, n_trials, subjects)
     with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
         choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
                              mode_names=mode_names, pool=episodes, task=task, mixes=mixes,

@@ -7,6 +7,7 @@ import pytest
 
 from learning.data import Demonstrations, Trial, save
 from mpcshare.bundle import RULE_VERSION, load_bundle
+from mpcshare.calibration.rule_choice import choice_trials
 from mpcshare.cli import main
 from mpcshare.commands.train import TRAIN_COMMAND
 from mpcshare.training import TrainingError, train_bundle
@@ -84,11 +85,12 @@ def test_cli_trains_a_bundle_and_prints_the_metrics(data_file, demos, tmp_path, 
     assert "K = " in text and "percentile 70" in text and "gate: accuracy" in text and str(out) in text
     b = load_bundle(out, expect_obs_names=demos.obs_names, expect_act_names=demos.act_names)
     assert b.percentile == 70 and b.n_modes == 3 and b.config["max_epochs"] == 2
-    # the hand-over rule chosen in the closed loop on the last held-out trial, recorded with why
+    # the hand-over rule chosen in the closed loop on a held-out trial (dealt round the subjects), recorded with why
     choice = b.rule.choice
     assert b.rule.strategy == "gate" and b.rule.version == RULE_VERSION
     assert dict(b.rule.settings) == {k: tuple(v) if isinstance(v, list) else v for k, v in choice["settings"].items()}
-    assert choice["trials"] == b.heldout_trials[-1:] and "rule_settings" not in b.metrics
+    subjects = {tr.trial_id: tr.subject for tr in demos.trials}
+    assert choice["trials"] == choice_trials(b.heldout_trials, subjects=subjects) and "rule_settings" not in b.metrics
     assert "hand-over rule: the wearer leads modes" in text and choice["why"] in text
     assert choice["why"] in (out / "training.md").read_text()
 
