@@ -143,7 +143,8 @@ def run_world(world: str, replay: bool = False, n_rounds: int = 0, bounds: bool 
     import torch
 
     torch.set_num_threads(1)
-    from mpcshare.calibration.rule_choice import choice_trials, pooled_run
+    from mpcshare.calibration.rule_choice import pooled_run
+    from mpcshare.calibration.trials import choice_trials
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
     from research.splice_bound import best_line_ratio, splice_front

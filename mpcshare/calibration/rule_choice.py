@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import time
 from contextlib import nullcontext
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -41,6 +41,7 @@ from mpcshare.calibration.choice_criterion import (
     wearer_saws,
 )
 from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
+from mpcshare.calibration.trials import choice_trials
 from mpcshare.control.strategies import by_role
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
@@ -55,9 +56,8 @@ from sim.task import EATING, Task
 from sim.wearer import WearerConfig
 
 __all__ = ["EARLY_HANDOVER_SETTINGS", "HANDOVER_SETTINGS", "HANDOVER_TIMINGS", "MIXES", "ROBOT_ALPHAS",
-           "SECOND_STAGE_TOP", "candidate_sets", "choice_trials", "choose_for_bundle", "choose_rule",
-           "evaluation_trials", "line_ratio", "pooled_run", "pooled_runs", "predicted", "saws",
-           "saws_where_the_wearer_saws", "wearer_saws"]
+           "SECOND_STAGE_TOP", "candidate_sets", "choose_for_bundle", "choose_rule", "line_ratio", "pooled_run",
+           "pooled_runs", "predicted", "saws", "saws_where_the_wearer_saws", "wearer_saws"]
 
 #: the gate's thresholds on s = the forecast probability of a wearer mode within lead_s (with hysteresis)
 HANDOVER_SETTINGS = {"share_on": 0.5, "share_off": 0.3, "lead_s": GateSettings().lead_s,
@@ -334,38 +334,6 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
             "cutting_modes": cutting, "pruned": pruned, "robot_alphas": [float(a) for a in robot_alphas],
             "trials": [int(t) for t in trials], "duration_s": duration_s, "episodes_run": sum(ran),
             "seconds": round(time.perf_counter() - t0, 1)}
-
-
-def choice_trials(heldout: Sequence[int], n_trials: int | None = None,
-                  subjects: Mapping[int, Any] | None = None) -> list[int]:
-    """The held-out trials the choice runs on: ``n_trials`` of them (default: half, 1 to 2); the others are left
-    for evaluating the chosen rule (:func:`evaluation_trials`). The held-out trials are dealt round the subjects
-    (``subjects``: trial → subject; None or one subject: the trials' order), each subject's in order, and the
-    choice takes the last ``n_trials`` of that order: so the choice and the evaluation draw on the same subjects
-    where the held-out trials allow it, not the choice on one subject and the evaluation on another."""
-    held = _dealt([int(t) for t in heldout], subjects)
-    n = n_trials or min(2, max(1, len(held) // 2))
-    return held[-n:]
-
-
-def evaluation_trials(heldout: Sequence[int], chosen_on: Sequence[int]) -> list[int]:
-    """The held-out trials to evaluate a chosen rule on: those the choice did not run on (``chosen_on``), in the
-    held-out order, then the choice's own (an evaluation that asks for more trials gets them last)."""
-    held = [int(t) for t in heldout]
-    used = {int(t) for t in chosen_on}
-    return [t for t in held if t not in used] + [t for t in held if t in used]
-
-
-def _dealt(held: list[int], subjects: Mapping[int, Any] | None) -> list[int]:
-    """``held`` dealt round the subjects: every subject's first trial (subjects in order of first appearance),
-    then every subject's second, and so on."""
-    if not subjects:
-        return held
-    groups: dict[Any, list[int]] = {}
-    for t in held:
-        groups.setdefault(subjects.get(t), []).append(t)
-    rounds = max(len(g) for g in groups.values())
-    return [g[k] for k in range(rounds) for g in groups.values() if k < len(g)]
 
 
 def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,

@@ -226,13 +226,12 @@ def _start_sweep(args: argparse.Namespace, demos: Demonstrations, config: TrainC
 def _closed_loop(args: argparse.Namespace, bundle: Any, demos: Demonstrations, out: Path, pool: EpisodePool) -> dict:
     """Stage 6: every run of the run table on the held-out trials (episodes in ``pool``), the video,
     ``sim/comparison.*``."""
-    from mpcshare.calibration.rule_choice import evaluation_trials
+    from mpcshare.calibration.trials import bundle_evaluation_trials
     from mpcshare.evaluation import DEFAULT_RUNS, compare_strategies, output_size, render_clip
     from mpcshare.reports.comparison import write_comparison
     from sim.wearer_presets import wearer_preset
 
-    chosen_on = [] if bundle.rule is None else list((bundle.rule.choice or {}).get("trials") or [])
-    ids = evaluation_trials(bundle.heldout_trials, chosen_on)[:args.sim_trials]  # those the choice did not see
+    ids = bundle_evaluation_trials(bundle)[:args.sim_trials]  # those the choice did not see first
     _stage(6, f"closed loop in MuJoCo: {len(DEFAULT_RUNS)} strategies x {len(ids)} held-out trial(s) "
               f"x {args.sim_duration:g} s")
     sim_out = prepare_output_folder(out / "sim")

@@ -242,10 +242,9 @@ def _run(args: argparse.Namespace) -> int:
     ids = set(demos.trial_ids)
     # the bundle's held-out trials, those its rule's choice did not run on first; other data (--data) without
     # them: all of its trials
-    from mpcshare.calibration.rule_choice import evaluation_trials
+    from mpcshare.calibration.trials import bundle_evaluation_trials
 
-    chosen_on = [] if bundle.rule is None else list((bundle.rule.choice or {}).get("trials") or [])
-    trial_ids = [t for t in evaluation_trials(bundle.heldout_trials, chosen_on) if t in ids]
+    trial_ids = [t for t in bundle_evaluation_trials(bundle) if t in ids]
     if not trial_ids and args.data is not None:
         trial_ids = sorted(ids)
     if not trial_ids:

@@ -6,13 +6,7 @@ import numpy as np
 import pytest
 
 from mpcshare.calibration import rule_choice
-from mpcshare.calibration.rule_choice import (
-    candidate_sets,
-    choice_trials,
-    choose_rule,
-    evaluation_trials,
-    line_ratio,
-)
+from mpcshare.calibration.rule_choice import candidate_sets, choose_rule, line_ratio
 from mpcshare.control.strategies.gate import GateSettings, wearer_indicator
 from mpcshare.reports.rule_choice import rule_markdown
 
@@ -239,28 +233,6 @@ def test_sawing_needs_both_the_correlation_and_the_amplitude():
     assert rule_choice.saws({"saw_correlation": 0.7, "saw_amplitude_ratio": 0.6})
     assert not rule_choice.saws({"saw_correlation": 0.95, "saw_amplitude_ratio": 0.5})  # too small a stroke
     assert not rule_choice.saws({"saw_correlation": None, "saw_amplitude_ratio": None})  # no cutting seen
-
-
-def test_the_choice_runs_on_the_last_held_out_trials_and_leaves_the_rest():
-    assert choice_trials([2, 3]) == [3]  # half of them, 1 to 2
-    assert choice_trials([2, 7, 9, 11]) == [9, 11]
-    assert choice_trials([2, 7, 9, 11, 12, 13]) == [12, 13]
-    assert choice_trials([5]) == [5]
-    assert choice_trials([2, 7, 9], n_trials=1) == [9]
-    assert choice_trials([2, 7, 9, 11], subjects={2: 0, 7: 0, 9: 0, 11: 0}) == [9, 11]  # one subject: the order
-
-
-def test_the_choice_and_the_evaluation_draw_on_the_same_subjects():
-    """The demo's split: held-out trials 2, 3 of subject 0 and 10, 11 of subject 2. The last two would give the
-    choice subject 2 alone and the evaluation subject 0 alone; dealt round the subjects, each gets one of each."""
-    subjects = {2: 0, 3: 0, 10: 2, 11: 2}
-    chosen = choice_trials([2, 3, 10, 11], subjects=subjects)
-    assert chosen == [3, 11] and evaluation_trials([2, 3, 10, 11], chosen) == [2, 10, 3, 11]
-    assert {subjects[t] for t in chosen} == {subjects[t] for t in evaluation_trials([2, 3, 10, 11], chosen)[:2]}
-    # uneven subjects: every subject's first trial, then the seconds; the choice takes the last of that order
-    assert choice_trials([1, 2, 3, 8, 9], subjects={1: "a", 2: "a", 3: "a", 8: "b", 9: "c"}) == [2, 3]
-    assert choice_trials([1, 8], subjects={1: "a", 8: "b"}) == [8]
-    assert evaluation_trials([4, 5, 6], []) == [4, 5, 6] and evaluation_trials([4, 5, 6], [6, 4]) == [5, 4, 6]
 
 
 def _with_episodes(fake_many, by_trial):

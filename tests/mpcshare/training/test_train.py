@@ -7,7 +7,7 @@ import pytest
 
 from learning.data import Demonstrations, Trial, save
 from mpcshare.bundle import RULE_VERSION, load_bundle
-from mpcshare.calibration.rule_choice import choice_trials
+from mpcshare.calibration.trials import choice_trials
 from mpcshare.cli import main
 from mpcshare.commands.train import TRAIN_COMMAND
 from mpcshare.training import TrainingError, train_bundle

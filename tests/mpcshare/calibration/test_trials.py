@@ -1,0 +1,33 @@
+"""The held-out trials of the rule choice and of the evaluation (mpcshare.calibration.trials)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+from mpcshare.calibration.trials import bundle_evaluation_trials, choice_trials, evaluation_trials
+
+
+def test_the_choice_runs_on_the_last_held_out_trials_and_leaves_the_rest():
+    assert choice_trials([2, 3]) == [3]  # half of them, 1 to 2
+    assert choice_trials([2, 7, 9, 11]) == [9, 11]
+    assert choice_trials([2, 7, 9, 11, 12, 13]) == [12, 13]
+    assert choice_trials([5]) == [5]
+    assert choice_trials([2, 7, 9], n_trials=1) == [9]
+    assert choice_trials([2, 7, 9, 11], subjects={2: 0, 7: 0, 9: 0, 11: 0}) == [9, 11]  # one subject: the order
+
+
+def test_the_choice_and_the_evaluation_draw_on_the_same_subjects():
+    """The demo's split: held-out trials 2, 3 of subject 0 and 10, 11 of subject 2. The last two would give the
+    choice subject 2 alone and the evaluation subject 0 alone; dealt round the subjects, each gets one of each."""
+    subjects = {2: 0, 3: 0, 10: 2, 11: 2}
+    chosen = choice_trials([2, 3, 10, 11], subjects=subjects)
+    assert chosen == [3, 11] and evaluation_trials([2, 3, 10, 11], chosen) == [2, 10, 3, 11]
+    assert {subjects[t] for t in chosen} == {subjects[t] for t in evaluation_trials([2, 3, 10, 11], chosen)[:2]}
+    # uneven subjects: every subject's first trial, then the seconds; the choice takes the last of that order
+    assert choice_trials([1, 2, 3, 8, 9], subjects={1: "a", 2: "a", 3: "a", 8: "b", 9: "c"}) == [2, 3]
+    assert choice_trials([1, 8], subjects={1: "a", 8: "b"}) == [8]
+    assert evaluation_trials([4, 5, 6], []) == [4, 5, 6] and evaluation_trials([4, 5, 6], [6, 4]) == [5, 4, 6]
+    rule = SimpleNamespace(choice={"trials": [3, 11]})
+    assert bundle_evaluation_trials(SimpleNamespace(heldout_trials=[2, 3, 10, 11], rule=rule)) == [2, 10, 3, 11]
+    assert bundle_evaluation_trials(SimpleNamespace(heldout_trials=[2, 3], rule=None)) == [2, 3]
+    assert bundle_evaluation_trials(SimpleNamespace(heldout_trials=[2, 3])) == [2, 3]  # no rule at all
