@@ -350,8 +350,8 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     recorded as the bundle's rule (``bundle.rule``, a :class:`~mpcshare.bundle.rule.CalibratedRule` for
     ``gate``) so that the saved bundle's ``gate`` uses it; returns the choice. The episodes run in ``pool``,
     else in a pool of ``workers`` processes (default :func:`mpcshare.evaluation.episode_pool.default_workers`)
-    closed afterwards; the choice is the same
-    whatever the number. What ``mpcshare train``, ``mpcshare demo`` and the benchmarks call."""
+    closed afterwards; the choice is the same whatever the number. What ``mpcshare train``, ``mpcshare demo``
+    and the benchmarks call."""
     from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
 
     name = wearer_name or DEFAULT_WEARER_PRESET
