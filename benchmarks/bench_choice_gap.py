@@ -43,6 +43,7 @@ def run_world(world: str, quick: bool, choice_trials: int | None, by_subject: bo
 
     torch.set_num_threads(1)
     from mpcshare.calibration.rule_choice import choose_for_bundle
+    from mpcshare.calibration.trials import unseen_trials
     from mpcshare.evaluation import compare_strategies
     from mpcshare.run_table import StrategyRun
     from mpcshare.training import train_bundle
@@ -54,7 +55,7 @@ def run_world(world: str, quick: bool, choice_trials: int | None, by_subject: bo
     choice = choose_for_bundle(bundle, demos, n_trials=choice_trials, mode_names=mode_names, log=None, workers=1,
                                by_subject=by_subject)
     choice_cpu = time.process_time() - c0
-    rest = [t for t in bundle.heldout_trials if t not in choice["trials"]]
+    rest = unseen_trials(bundle.heldout_trials, choice["trials"])
     trials = list(rest[:2] if quick else rest)
     runs = [StrategyRun(s, s) for s in ("voluntary", "reactive", "gate")]
     span = 30.0 if quick else None

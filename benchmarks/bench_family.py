@@ -93,6 +93,7 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
 
     torch.set_num_threads(1)
     from mpcshare.calibration.rule_choice import choose_for_bundle
+    from mpcshare.calibration.trials import unseen_trials
     from mpcshare.evaluation import compare_strategies
     from mpcshare.run_table import DEFAULT_RUNS
     from mpcshare.training import train_bundle
@@ -109,7 +110,7 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     info["rule_choice"] = {k: choice[k] for k in ("wearer_modes", "settings", "why", "trials", "mode_costs",
                                                   "price_order", "cutting_modes", "seconds")}
     t_train = time.perf_counter() - t0
-    rest = [t for t in bundle.heldout_trials if t not in choice["trials"]]
+    rest = unseen_trials(bundle.heldout_trials, choice["trials"])
     trials = list(rest[:2] if quick else rest)
     names = RUNS + (("oracle_line",) if oracle_line else ())
     runs = [r for r in DEFAULT_RUNS + BOUND_RUNS if r.name in names]

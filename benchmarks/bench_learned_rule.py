@@ -89,6 +89,7 @@ def run_world(world: str, n_fit: int, rounds: int, dagger: int, root: Path, seco
     from scipy import stats as st
 
     torch.set_num_threads(1)
+    from mpcshare.calibration.trials import unseen_trials
     from mpcshare.evaluation.handover import random_schedules_from, schedule_record
     from research.coming_error.record import world_data
     from research.learned_rule.fit import fit_rule
@@ -109,7 +110,7 @@ def run_world(world: str, n_fit: int, rounds: int, dagger: int, root: Path, seco
     bundle, choice = _bundle_and_choice(world, root, demos, mode_names)
     w = World(bundle, demos, {t.trial_id: t for t in list(demos.trials) + extra}, tuple(mode_names), seconds)
     fit_trials = [t.trial_id for t in extra]
-    eval_trials = [int(t) for t in bundle.heldout_trials if int(t) not in choice["trials"]][:2]
+    eval_trials = unseen_trials(bundle.heldout_trials, choice["trials"])[:2]
     K = bundle.n_modes
 
     # the teacher on the fit trials

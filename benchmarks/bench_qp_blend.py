@@ -31,6 +31,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # research/ is not installed
 
+from mpcshare.calibration.trials import unseen_trials  # noqa: E402
+
 CACHE = Path("/tmp/coming-error")  # bundles and gate choices of bench_coming_error.py, read if present
 RUNS = ("voluntary", "reactive", "mix25", "mix50", "mix75", "gate", "qp_blend")
 RULED = ("gate", "qp_blend")  # the runs given the chosen rule's settings
@@ -69,7 +71,7 @@ def run_world(world: str, n_trials: int, seconds: float, root: Path, offset_m: f
     t0 = time.perf_counter()
     bundle, demos, mode_names, choice = _bundle_and_choice(world, root)
     w = World(bundle, demos, {t.trial_id: t for t in demos.trials}, tuple(mode_names), seconds)
-    trials = [int(t) for t in bundle.heldout_trials if int(t) not in choice["trials"]][:n_trials]
+    trials = unseen_trials(bundle.heldout_trials, choice["trials"])[:n_trials]
     config = {"gate": ControllerConfig(strategy_settings=dict(choice["settings"])),
               "qp_blend": ControllerConfig(strategy_settings={**choice["settings"], **(
                   {} if offset_m is None else {"wearer_offset_m": offset_m})})}
@@ -105,7 +107,7 @@ def identity_check(world: str, seconds: float, root: Path) -> dict[str, Any]:
 
     bundle, demos, mode_names, choice = _bundle_and_choice(world, root)
     w = World(bundle, demos, {t.trial_id: t for t in demos.trials}, tuple(mode_names), seconds)
-    trial = [int(t) for t in bundle.heldout_trials if int(t) not in choice["trials"]][0]
+    trial = unseen_trials(bundle.heldout_trials, choice["trials"])[0]
     seen = {"steps": 0, "bound": 0, "max_diff": 0.0, "max_diff_bound": 0.0}
 
     def make(b: Any, **options: Any) -> Any:

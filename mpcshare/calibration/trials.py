@@ -2,15 +2,16 @@
 
 :func:`choice_trials`: half of the held-out trials (1 to 2) by default, dealt round the subjects (every subject's
 first held-out trial, then every subject's second, …; the choice takes the last ``n`` of that order), so that the
-choice and the evaluation draw on the same subjects where the split allows. :func:`evaluation_trials`: the
-held-out trials the choice did not run on, then its own. Pure: trial ids in, trial ids out.
+choice and the evaluation draw on the same subjects where the split allows. :func:`unseen_trials`: the held-out
+trials the choice did not run on; :func:`evaluation_trials`: those, then the choice's own. Pure: trial ids in,
+trial ids out.
 """
 
 from __future__ import annotations
 
 from typing import Any, Mapping, Sequence
 
-__all__ = ["bundle_evaluation_trials", "choice_trials", "evaluation_trials"]
+__all__ = ["bundle_evaluation_trials", "choice_trials", "evaluation_trials", "unseen_trials"]
 
 
 def choice_trials(heldout: Sequence[int], n_trials: int | None = None,
@@ -25,12 +26,18 @@ def choice_trials(heldout: Sequence[int], n_trials: int | None = None,
     return held[-n:]
 
 
-def evaluation_trials(heldout: Sequence[int], chosen_on: Sequence[int]) -> list[int]:
-    """The held-out trials to evaluate a chosen rule on: those the choice did not run on (``chosen_on``), in the
-    held-out order, then the choice's own (an evaluation that asks for more trials gets them last)."""
-    held = [int(t) for t in heldout]
+def unseen_trials(heldout: Sequence[int], chosen_on: Sequence[int]) -> list[int]:
+    """The held-out trials the choice did not run on (``chosen_on``), in the held-out order: the only trials on
+    which a chosen rule's figure is not biased by its choice."""
     used = {int(t) for t in chosen_on}
-    return [t for t in held if t not in used] + [t for t in held if t in used]
+    return [int(t) for t in heldout if int(t) not in used]
+
+
+def evaluation_trials(heldout: Sequence[int], chosen_on: Sequence[int]) -> list[int]:
+    """The held-out trials to evaluate a chosen rule on: :func:`unseen_trials`, then the choice's own (an
+    evaluation that asks for more trials gets them last)."""
+    used = {int(t) for t in chosen_on}
+    return unseen_trials(heldout, chosen_on) + [int(t) for t in heldout if int(t) in used]
 
 
 def bundle_evaluation_trials(bundle: Any) -> list[int]:

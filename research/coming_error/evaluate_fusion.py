@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from mpcshare.bundle import CalibratedRule
+from mpcshare.calibration.trials import unseen_trials
 from research.coming_error.fusion import fit_fusion, fusion_controller
 from research.coming_error.record import ROOT, world_bundle, world_data, world_dir
 
@@ -67,7 +68,7 @@ def evaluate_world(world: str, duration_s: float = 30.0, n_eval: int = 2, root: 
     else:
         choice = choose_for_bundle(bundle, demos, mode_names=mode_names, log=None, workers=1)
         cache.write_text(json.dumps({k: choice[k] for k in ("settings", "trials", "wearer_modes")}, default=float))
-    trials = [t for t in bundle.heldout_trials if t not in choice["trials"] and t not in fit_trials][:n_eval]
+    trials = [t for t in unseen_trials(bundle.heldout_trials, choice["trials"]) if t not in fit_trials][:n_eval]
     by_id = {t.trial_id: t for t in list(demos.trials) + extra}
     kw = dict(beta=0.5, duration_s=duration_s, seed=0, wearer=None, mode_names=mode_names)
     out: dict[str, Any] = {}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from mpcshare.calibration.trials import bundle_evaluation_trials, choice_trials, evaluation_trials
+from mpcshare.calibration.trials import bundle_evaluation_trials, choice_trials, evaluation_trials, unseen_trials
 
 
 def test_the_choice_runs_on_the_last_held_out_trials_and_leaves_the_rest():
@@ -27,6 +27,8 @@ def test_the_choice_and_the_evaluation_draw_on_the_same_subjects():
     assert choice_trials([1, 2, 3, 8, 9], subjects={1: "a", 2: "a", 3: "a", 8: "b", 9: "c"}) == [2, 3]
     assert choice_trials([1, 8], subjects={1: "a", 8: "b"}) == [8]
     assert evaluation_trials([4, 5, 6], []) == [4, 5, 6] and evaluation_trials([4, 5, 6], [6, 4]) == [5, 4, 6]
+    assert unseen_trials([4, 5, 6], [6, 4]) == [5] and unseen_trials([4, 5], [5, 4]) == []  # never the choice's own
+    assert unseen_trials([4, 5, 6], [7]) == [4, 5, 6]
     rule = SimpleNamespace(choice={"trials": [3, 11]})
     assert bundle_evaluation_trials(SimpleNamespace(heldout_trials=[2, 3, 10, 11], rule=rule)) == [2, 10, 3, 11]
     assert bundle_evaluation_trials(SimpleNamespace(heldout_trials=[2, 3], rule=None)) == [2, 3]
