@@ -4,7 +4,8 @@ For each world — ``family:<seed>`` (:mod:`sim.world_family`) and the data kind
 ``benchmarks/bench_task.py`` (``default``, ``other_seed``, ``other_structure``) — train a bundle
 with the defaults a user gets (:class:`mpcshare.training.config.TrainConfig`; ``--quick``: at most
 20 LSTM epochs), then simulate on its held-out *whole* trials (``--quick``: the first 30 s of 2)
-with the default wearer, for each of ``--seeds`` sim seeds: ``voluntary``, ``reactive``, the
+with the default wearer (``--wearer``: another preset of :mod:`sim.wearer_presets`, for the choice and every
+run), for each of ``--seeds`` sim seeds: ``voluntary``, ``reactive``, the
 constant mixtures ``mix25``/``mix50``/``mix75``, ``paper_gate``, ``gate``, ``blend``,
 ``random_handover`` (matched to ``gate``, mean of 5 draws) and ``oracle_handover`` (best replay,
 an upper bound); with ``--oracle-line`` also ``oracle_line`` (the effort-aware hand-over oracle: the lowest
@@ -28,7 +29,7 @@ oracle's up to 4 replays); the full default (13 worlds, 3 whole trials of 60 s, 
 of CPU, ``--quick`` (3 family worlds, 2 trials × 30 s, 1 seed) about 35 min on 2 busy cores.
 
 Usage: ``python benchmarks/bench_family.py [--worlds 0 1 2 ...] [--kinds default other_seed
-other_structure] [--workers 2] [--seeds 4] [--quick]``; ``--worlds`` with no value and
+other_structure] [--workers 2] [--seeds 4] [--quick] [--wearer PRESET]``; ``--worlds`` with no value and
 ``--kinds`` with no value leave that part out.
 """
 
@@ -51,6 +52,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from worlds import world_data  # noqa: E402
 
+from sim.wearer_presets import DEFAULT_WEARER_PRESET, WEARER_PRESETS  # noqa: E402
+
 MIXES = ("mix25", "mix50", "mix75")
 RUNS = ("voluntary", "reactive", *MIXES, "paper_gate", "gate", "blend", "random_handover", "oracle_handover")
 FIGURES = {"tracking_rmse_m": ("rms_mm", 1e3), "voluntary_effort": ("effort_rad", 1.0),
@@ -68,7 +71,8 @@ def _one_sided(a: list[float], b: list[float]) -> dict[str, Any]:
 
 
 def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict[str, Any],
-                        pooled: dict[str, dict[str, Any]], mode_names: Any, quick: bool) -> list[dict[str, Any]]:
+                        pooled: dict[str, dict[str, Any]], mode_names: Any, quick: bool,
+                        wearer: Any = None) -> list[dict[str, Any]]:
     """Every candidate of the rule's choice run on the *evaluation* trials (sim seed 0): which wearer-mode
     set would have been best had the choice known the future (an upper bound on the choice, not a rule)."""
     from mpcshare.calibration.rule_choice import line_ratio, pooled_run, saws
@@ -76,7 +80,8 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
     vol, rea = pooled["voluntary"], pooled["reactive"]
     rows = []
     for c in choice["candidates"]:
-        m, _ = pooled_run(bundle, demos, trials, "gate", c["settings"], 30.0 if quick else None, None, 0, mode_names)
+        m, _ = pooled_run(bundle, demos, trials, "gate", c["settings"], 30.0 if quick else None, wearer, 0,
+                          mode_names)
         rows.append({"wearer_modes": c["wearer_modes"], "timing": c.get("timing"),
                      "wearer_alpha": c.get("wearer_alpha", 0.0),
                      "rms_mm": 1e3 * m["tracking_rmse_m"],
@@ -87,8 +92,9 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
 
 
 def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
-              oracle_line: bool = False) -> dict[str, Any]:
-    """Train on the world, simulate every run on its held-out trials, summarise (module docstring)."""
+              oracle_line: bool = False, wearer: str | None = None) -> dict[str, Any]:
+    """Train on the world, simulate every run on its held-out trials, summarise (module docstring); ``wearer``:
+    the simulated wearer's preset of the rule's choice and of every run (None: the default preset)."""
     import torch
 
     torch.set_num_threads(1)
@@ -99,14 +105,16 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     from mpcshare.training import train_bundle
     from mpcshare.training.config import TrainConfig
     from research.bound_runs import BOUND_RUNS
+    from sim.wearer_presets import DEFAULT_WEARER_PRESET, wearer_preset
 
+    wearer = wearer or DEFAULT_WEARER_PRESET
     t0 = time.perf_counter()
     demos, mode_names, info = world_data(world, quick)
     bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
     # the gate's rule chosen in the closed loop as `mpcshare train` does, on the last held-out trials;
     # the runs below are evaluated on the other held-out trials only
     choice = choose_for_bundle(bundle, demos, mode_names=mode_names, log=None,  # as `mpcshare train`: 60 s a trial
-                               workers=1)  # one process per world: the worlds run in parallel
+                               workers=1, wearer_name=wearer)  # one process per world: the worlds run in parallel
     info["rule_choice"] = {k: choice[k] for k in ("wearer_modes", "settings", "why", "trials", "mode_costs",
                                                   "price_order", "cutting_modes", "seconds")}
     t_train = time.perf_counter() - t0
@@ -118,7 +126,7 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     pooled: dict[str, dict[str, Any]] = {}
     for seed in range(seeds):
         comp = compare_strategies(bundle, demos, trials, runs=runs, duration_s=30.0 if quick else None, seed=seed,
-                                  log=None, mode_names=mode_names)
+                                  log=None, mode_names=mode_names, wearer=wearer_preset(wearer))
         for name in names:
             per_pair[name] += [comp.per_trial[name][str(t)]["tracking_rmse_m"] for t in trials]
         if seed == 0:
@@ -128,14 +136,16 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
     best_mix = min(MIXES, key=lambda m: (pooled[m]["line_ratio"] is None, pooled[m]["line_ratio"] or 0.0,
                                          pooled[m]["tracking_rmse_m"]))
     better = min(pooled["voluntary"]["tracking_rmse_m"], pooled["reactive"]["tracking_rmse_m"])
-    return {"world": world, "data": info, "trials": trials, "seeds": seeds, "quick": quick, "runs": out,
+    return {"world": world, "wearer": wearer, "data": info, "trials": trials, "seeds": seeds, "quick": quick,
+            "runs": out,
             "best_mix": best_mix, "p_values": {
                 "gate_below_random_handover": _one_sided(per_pair["gate"], per_pair["random_handover"]),
                 "gate_below_paper_gate": _one_sided(per_pair["gate"], per_pair["paper_gate"]),
                 "gate_below_best_mix": _one_sided(per_pair["gate"], per_pair[best_mix])},
             "oracle_over_better_party": pooled["oracle_handover"]["tracking_rmse_m"] / better,
             "gate_effort_over_voluntary": pooled["gate"]["voluntary_effort"] / pooled["voluntary"]["voluntary_effort"],
-            "candidates_on_eval": _candidates_on_eval(bundle, demos, trials, choice, pooled, mode_names, quick)
+            "candidates_on_eval": _candidates_on_eval(bundle, demos, trials, choice, pooled, mode_names, quick,
+                                                      wearer_preset(wearer))
             if all_candidates else None,
             "train_s": t_train, "seconds": time.perf_counter() - t0,
             "figures_of": "seed 0 pooled over the trials; p-values over (trial, seed) pairs"}
@@ -170,6 +180,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="sim seeds per trial, pairs = held-out trials x seeds (default 4: 3 x 4 = 12 pairs, so that "
                         "p < 0.01 is reachable; --quick 1)")
     p.add_argument("--quick", action="store_true", help="smaller worlds, at most 20 epochs, 2 trials x 30 s")
+    p.add_argument("--wearer", choices=list(WEARER_PRESETS), default=DEFAULT_WEARER_PRESET,
+                   help=f"the simulated wearer's preset, of the rule's choice and of every run (default "
+                        f"{DEFAULT_WEARER_PRESET})")
     p.add_argument("--out", help="also write the final JSON object to this file")
     p.add_argument("--all-candidates", action="store_true",
                    help="also run every candidate of the rule's choice on the evaluation trials (the best set in "
@@ -184,7 +197,8 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     ctx = multiprocessing.get_context("spawn")  # torch and fork do not mix
     with ProcessPoolExecutor(max_workers=max(1, a.workers), mp_context=ctx) as pool:
-        futures = {pool.submit(run_world, w, a.quick, a.seeds, a.all_candidates, a.oracle_line): w for w in worlds}
+        futures = {pool.submit(run_world, w, a.quick, a.seeds, a.all_candidates, a.oracle_line, a.wearer): w
+                   for w in worlds}
         for fut in as_completed(futures):
             r = fut.result()
             results.append(r)
@@ -192,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
     results.sort(key=lambda r: worlds.index(r["world"]))
     family = [r for r in results if r["world"].startswith("family:")]
     final = {"worlds": results, "distribution": {"family": distribution(family), "all": distribution(results)},
-             "settings": {"quick": a.quick, "seeds": a.seeds, "workers": a.workers,
+             "settings": {"quick": a.quick, "seeds": a.seeds, "workers": a.workers, "wearer": a.wearer,
                           "train": "TrainConfig() defaults" + (", max_epochs 20" if a.quick else ""),
                           "sim": "2 held-out trials x 30 s" if a.quick else "every held-out trial, whole"},
              "seconds": time.perf_counter() - t0}
