@@ -3,14 +3,16 @@
 Per world (``family:<seed>`` of :mod:`sim.world_family` or a data kind of ``benchmarks/bench_task.py``, via
 ``benchmarks/worlds.py``): train a bundle (``--quick``: at most 20 LSTM epochs, the quick world sizes), choose
 the gate's rule as ``mpcshare train`` does (:func:`mpcshare.calibration.rule_choice.choose_for_bundle`, 60 s a
-trial, ``--choice-trials``), then simulate ``voluntary``, ``reactive`` and ``gate`` on the other held-out trials
+trial or longer where one shows less than 3 s of the stroke; ``--no-stroke-window``: 60 s whatever they show;
+``--choice-trials``), then simulate ``voluntary``, ``reactive`` and ``gate`` on the other held-out trials
 (``--quick``: the first 30 s of 2). Prints one JSON line per world: the choice's predicted line ratio (and left
-one trial out), the realised one, the gap realised − predicted, the episodes the choice simulated and its CPU
-seconds, and the rule the criterion would have chosen on the pooled sawing figures (``pooled_sawing_choice``:
+one trial out), the realised one, the gap realised − predicted, the gate's and the wearer alone's figures per
+evaluation trial (RMS, effort, stroke correlation), the choice's seconds a trial, the episodes it simulated and its
+CPU seconds, and the rule the criterion would have chosen on the pooled sawing figures (``pooled_sawing_choice``:
 the criterion before sawing was required per cutting episode; its realised line ratio where it differs).
 
 Usage: ``python benchmarks/bench_choice_gap.py [--worlds family:0 family:1 default] [--quick]
-[--choice-trials N] [--trial-order]``.
+[--choice-trials N] [--trial-order] [--no-stroke-window]``.
 """
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ def _pooled_sawing_choice(choice: dict[str, Any]) -> dict[str, Any]:
     return choice["candidates"][strip.index(best)]
 
 
-def run_world(world: str, quick: bool, choice_trials: int | None, by_subject: bool = True) -> dict[str, Any]:
+def run_world(world: str, quick: bool, choice_trials: int | None, by_subject: bool = True,
+              stroke_window: bool = True) -> dict[str, Any]:
     """Train, choose, evaluate (module docstring); the world's JSON row."""
     import torch
 
@@ -53,7 +56,7 @@ def run_world(world: str, quick: bool, choice_trials: int | None, by_subject: bo
     bundle = train_bundle(demos, TrainConfig(max_epochs=20) if quick else TrainConfig(), progress=False)
     c0 = time.process_time()
     choice = choose_for_bundle(bundle, demos, n_trials=choice_trials, mode_names=mode_names, log=None, workers=1,
-                               by_subject=by_subject)
+                               by_subject=by_subject, **({} if stroke_window else {"stroke_seen_s": None}))
     choice_cpu = time.process_time() - c0
     rest = unseen_trials(bundle.heldout_trials, choice["trials"])
     trials = list(rest[:2] if quick else rest)
@@ -79,6 +82,13 @@ def run_world(world: str, quick: bool, choice_trials: int | None, by_subject: bo
             "wearer_modes": choice["wearer_modes"], "predicted": choice["predicted"],
             "cross_validated": choice.get("cross_validated"), "realised": check.get("realised"),
             "gap": check.get("line_ratio_gap"), "episodes_run": choice["episodes_run"], "choice_cpu_s": choice_cpu,
+            "choice_duration_s": choice["duration_s"],
+            "realised_by_trial": {str(t): {k: comp.per_trial["gate"][str(t)].get(k) for k in
+                                           ("tracking_rmse_m", "voluntary_effort", "saw_correlation",
+                                            "saw_amplitude_ratio")} for t in trials},
+            "voluntary_by_trial": {str(t): {k: comp.per_trial["voluntary"][str(t)].get(k) for k in
+                                            ("tracking_rmse_m", "voluntary_effort", "saw_correlation")}
+                                   for t in trials},
             "mixes": [{k: m[k] for k in ("strategy", "line_ratio", "effort_vs_voluntary")} for m in choice["mixes"]],
             "pooled_sawing_choice": {"same": not differs, "line_ratio_predicted": old["line_ratio"],
                                      "line_ratio_realised": old_realised if differs
@@ -92,9 +102,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--choice-trials", type=int, default=None, help="held-out trials the choice runs on")
     p.add_argument("--trial-order", action="store_true",
                    help="the choice on the last held-out trials (before 2026-12-01), not dealt round the subjects")
+    p.add_argument("--no-stroke-window", action="store_true",
+                   help="the choice on the first 60 s of each trial whatever they show of the stroke (before "
+                        "2026-12-02), not longer where a trial shows less than 3 s of it")
     a = p.parse_args(argv)
     for world in a.worlds:
-        print(json.dumps(run_world(world, a.quick, a.choice_trials, not a.trial_order), default=float), flush=True)
+        print(json.dumps(run_world(world, a.quick, a.choice_trials, not a.trial_order, not a.no_stroke_window),
+                         default=float), flush=True)
     return 0
 
 

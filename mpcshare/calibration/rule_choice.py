@@ -41,7 +41,7 @@ from mpcshare.calibration.choice_criterion import (
     wearer_saws,
 )
 from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
-from mpcshare.calibration.trials import choice_trials
+from mpcshare.calibration.trials import STROKE_SEEN_S, choice_duration, choice_trials
 from mpcshare.control.strategies import by_role
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
@@ -342,9 +342,11 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
                       log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
                       workers: int | None = None, task: Task = EATING,
                       mixes: Sequence[str] = MIXES, robot_alphas: Sequence[float] = ROBOT_ALPHAS,
-                      by_subject: bool = True) -> dict[str, Any]:
+                      by_subject: bool = True, stroke_seen_s: float | None = STROKE_SEEN_S) -> dict[str, Any]:
     """:func:`choose_rule` on ``n_trials`` held-out trials of ``bundle`` (:func:`choice_trials`: default half of
-    them, 1 to 2, dealt round the demonstrations' subjects; ``by_subject`` False: the last ones) with the wearer
+    them, 1 to 2, dealt round the demonstrations' subjects; ``by_subject`` False: the last ones), ``duration_s``
+    of each or longer where a trial shows less than ``stroke_seen_s`` of the task's stroke in them
+    (:func:`choice_duration`, logged; None: ``duration_s`` whatever the trials show), with the wearer
     preset ``wearer_name`` (default the default preset), the demonstrations' ``mode_names`` (for ``task``'s
     stroke modes), the comparators ``mixes`` and the robot's shares ``robot_alphas`` (:func:`choose_rule`),
     recorded as the bundle's rule (``bundle.rule``, a :class:`~mpcshare.bundle.rule.CalibratedRule` for
@@ -357,8 +359,15 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     name = wearer_name or DEFAULT_WEARER_PRESET
     subjects = {int(tr.trial_id): tr.subject for tr in demos.trials} if by_subject else None
     trials = choice_trials(bundle.heldout_trials, n_trials, subjects)
+    stroke = list(mode_names).index(task.stroke_mode) if mode_names and task.stroke_mode in mode_names else None
+    by_id = {int(tr.trial_id): tr for tr in demos.trials}
+    seconds = duration_s if stroke_seen_s is None else choice_duration(
+        [by_id[t] for t in trials if t in by_id], duration_s, demos.rate_hz, stroke, stroke_seen_s)
+    if log is not None and seconds != duration_s:
+        log(f"the choice runs {seconds:g} s of each trial, not {duration_s:g}: trial(s) {trials} show less than "
+            f"{stroke_seen_s:g} s of the stroke ({task.stroke_mode}) in their first {duration_s:g} s")
     with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
-        choice = choose_rule(bundle, demos, trials, duration_s=duration_s, log=log, wearer=wearer_preset(name),
+        choice = choose_rule(bundle, demos, trials, duration_s=seconds, log=log, wearer=wearer_preset(name),
                              mode_names=mode_names, pool=episodes, task=task, mixes=mixes,
                              robot_alphas=robot_alphas)
     choice["wearer"] = name

@@ -4,14 +4,25 @@
 first held-out trial, then every subject's second, …; the choice takes the last ``n`` of that order), so that the
 choice and the evaluation draw on the same subjects where the split allows. :func:`unseen_trials`: the held-out
 trials the choice did not run on; :func:`evaluation_trials`: those, then the choice's own. Pure: trial ids in,
-trial ids out.
+trial ids out. :func:`choice_duration`: how long the choice simulates its trials, so that each shows the task's
+stroke where it has one (from the trials' mode labels).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, Mapping, Sequence
 
-__all__ = ["bundle_evaluation_trials", "choice_trials", "evaluation_trials", "unseen_trials"]
+import numpy as np
+
+__all__ = ["STROKE_SEEN_S", "STROKE_STRETCH", "bundle_evaluation_trials", "choice_duration", "choice_trials",
+           "evaluation_trials", "unseen_trials"]
+
+#: seconds of the task's stroke every choice trial must show (or all it has): a few strokes at 0.8–3 Hz, enough
+#: for the stroke-band correlation that says whether a candidate saws
+STROKE_SEEN_S = 3.0
+#: the choice runs at most this many times the seconds it was given, to show the stroke
+STROKE_STRETCH = 2.0
 
 
 def choice_trials(heldout: Sequence[int], n_trials: int | None = None,
@@ -46,6 +57,38 @@ def bundle_evaluation_trials(bundle: Any) -> list[int]:
     rule = getattr(bundle, "rule", None)
     chosen_on = [] if rule is None else list((rule.choice or {}).get("trials") or [])
     return evaluation_trials(bundle.heldout_trials, chosen_on)
+
+
+def choice_duration(trials: Sequence[Any], duration_s: float | None, rate_hz: float, stroke_label: int | None,
+                    stroke_seen_s: float = STROKE_SEEN_S, stretch: float = STROKE_STRETCH) -> float | None:
+    """The seconds the choice simulates of each of its ``trials`` (:class:`learning.data.Trial`, sampled at
+    ``rate_hz``): ``duration_s``, or longer where a trial's first ``duration_s`` show less than ``stroke_seen_s``
+    of the stroke (mode label ``stroke_label``) than the trial has: then until every trial has shown that much (or
+    all of its stroke), rounded up to a whole second, at most ``stretch`` × ``duration_s``. A choice trial whose
+    window holds no stroke cannot tell a candidate that saws from one that does not (the sawing criterion skips
+    it). None (whole trials), no stroke label or no labels: ``duration_s`` unchanged. ValueError for a rate or a
+    duration that is not positive, or a stretch below 1."""
+    if not (math.isfinite(rate_hz) and rate_hz > 0):
+        raise ValueError(f"rate_hz must be a positive number, got {rate_hz!r}")
+    if duration_s is None or stroke_label is None:
+        return duration_s
+    if not duration_s > 0:
+        raise ValueError(f"duration_s must be > 0 or None, got {duration_s!r}")
+    if not stretch >= 1.0:
+        raise ValueError(f"stretch must be >= 1, got {stretch!r}")
+    need = float(duration_s)
+    for trial in trials:
+        if trial.mode is None:
+            continue
+        stroke = np.cumsum(np.asarray(trial.mode) == int(stroke_label))
+        if not stroke.size:
+            continue
+        want = min(stroke_seen_s * rate_hz, float(stroke[-1]))  # samples of stroke the window should hold
+        window = min(int(round(duration_s * rate_hz)), stroke.size)
+        if want > 0 and stroke[window - 1] < want:
+            end = int(np.searchsorted(stroke, want)) + 1  # samples up to the one that completes it
+            need = max(need, float(math.ceil(end / rate_hz)))
+    return min(need, stretch * float(duration_s))
 
 
 def _dealt(held: list[int], subjects: Mapping[int, Any] | None) -> list[int]:

@@ -23,6 +23,7 @@ from typing import Any, Callable
 
 from learning.atomic import atomic_open, write_json
 from learning.data import Demonstrations, save
+from mpcshare.calibration.trials import STROKE_SEEN_S
 from mpcshare.commands.analysis import add_analysis_arguments, analysis_config, print_headline, run_analysis
 from mpcshare.commands.base import (
     Command,
@@ -63,7 +64,8 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-video", action="store_true", help="do not render the video of the gate")
     p.add_argument("--rule-duration", type=positive_float, default=None,
                    help=f"seconds of each held-out trial the hand-over rule is chosen on (default: "
-                        f"{RULE_DURATION_S:g} as `mpcshare train`, at most twice --sim-duration)")
+                        f"{RULE_DURATION_S:g} as `mpcshare train`, at most twice --sim-duration; up to twice that "
+                        f"where a trial shows less than {STROKE_SEEN_S:g} s of the stroke in them)")
     p.add_argument("--workers", type=positive_int, default=default_workers(),
                    help="processes that run the closed-loop episodes of the rule choice and the comparison "
                         f"(default {default_workers()}: the CPU count, at most {MAX_DEFAULT_WORKERS}); the "

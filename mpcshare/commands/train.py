@@ -22,6 +22,7 @@ import argparse
 import math
 from pathlib import Path
 
+from mpcshare.calibration.trials import STROKE_SEEN_S
 from mpcshare.channel_map import apply_map, parse_map, simulator_gaps
 from mpcshare.commands.base import (
     Command,
@@ -89,9 +90,11 @@ def _add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int, default=d.seed, help=f"seed of everything random (default {d.seed})")
     r = p.add_argument_group("hand-over rule (the default gate's settings, chosen in the closed loop)")
     r.add_argument("--rule-trials", type=positive_int, default=None,
-                   help="held-out trials the choice simulates, the last ones (default: half of them, 1 to 2)")
+                   help="held-out trials the choice simulates, dealt round the subjects (default: half of them, 1 "
+                        "to 2)")
     r.add_argument("--rule-duration", type=positive_float, default=RULE_DURATION_S,
-                   help=f"seconds simulated per trial for the choice (default {RULE_DURATION_S:g})")
+                   help=f"seconds simulated per trial for the choice (default {RULE_DURATION_S:g}; up to twice that "
+                        f"where a trial shows less than {STROKE_SEEN_S:g} s of the task's stroke in them)")
     r.add_argument("--rule-wearer", choices=list(WEARER_PRESETS), default=DEFAULT_WEARER_PRESET,
                    help=f"the simulated wearer of the choice (default {DEFAULT_WEARER_PRESET})")
     r.add_argument("--no-rule-choice", action="store_true",

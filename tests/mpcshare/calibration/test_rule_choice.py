@@ -289,3 +289,35 @@ def test_constant_mixtures_are_reported_and_the_why_says_when_one_would_win(monk
     assert choose_rule(_Bundle(), None, [3], mixes=())["mixes"] == [] and not any(c[0].startswith("mix") for c in calls)
     with pytest.raises(ValueError, match="not constant mixtures"):
         choose_rule(_Bundle(), None, [3], mixes=("gate",))
+
+
+def test_the_choice_runs_long_enough_for_every_trial_to_show_the_stroke(monkeypatch):
+    """A choice trial whose first seconds hold no cutting cannot tell a sawing candidate from one that does not:
+    choose_for_bundle runs every trial until each has shown 3 s of it (here trial 5's starts at 78 s), logs it,
+    and records the seconds it ran; ``stroke_seen_s=None`` keeps the seconds it was given."""
+    from types import SimpleNamespace
+
+    from mpcshare.calibration.rule_choice import choose_for_bundle
+
+    figures = {"voluntary": (0.010, 0.08, 0.95), "reactive": (0.020, 0.02, 0.1)}
+    by_modes = {(1,): (0.012, 0.04, 0.8), (1, 2): (0.0125, 0.05, 0.9), (): (0.02, 0.02, 0.1)}
+    fake, durations = _fake_runs(figures, by_modes, []), []
+
+    def spy(bundle, demos, trials, specs, duration_s, *args, **kwargs):
+        durations.append(duration_s)
+        return fake(bundle, demos, trials, specs, duration_s, *args, **kwargs)
+
+    monkeypatch.setattr(rule_choice, "pooled_runs", spy)
+    labels = {4: np.r_[np.ones(100), np.zeros(50), np.ones(1050)], 5: np.r_[np.ones(780), np.zeros(100), np.ones(320)]}
+    demos = SimpleNamespace(rate_hz=10.0, trials=[SimpleNamespace(trial_id=t, subject=0, mode=m.astype(int))
+                                                  for t, m in labels.items()])
+    bundle, said = _Bundle(), []
+    bundle.heldout_trials = [4, 5]
+    choice = choose_for_bundle(bundle, demos, n_trials=2, duration_s=60.0, mode_names=("cutting", "other"),
+                               log=said.append, workers=1, robot_alphas=(1.0,))
+    assert choice["duration_s"] == 81.0 and set(durations) == {81.0} and choice["trials"] == [4, 5]
+    assert any("81 s of each trial, not 60" in line for line in said)
+    durations.clear()
+    choice = choose_for_bundle(bundle, demos, n_trials=2, duration_s=60.0, mode_names=("cutting", "other"), log=None,
+                               workers=1, robot_alphas=(1.0,), stroke_seen_s=None)
+    assert choice["duration_s"] == 60.0 and set(durations) == {60.0}
