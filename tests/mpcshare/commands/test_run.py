@@ -58,8 +58,10 @@ def test_run_publishes_stamped_commands_at_100_hz_and_stops_when_an_input_goes_s
     model, _ = ros_model
     held_out = generate_demonstrations(n_subjects=1, minutes=0.1, seed=11,
                                        config=GeneratorConfig(trial_minutes=0.1)).trials[0]
-    # the arm's stop after 0.5 s, not 0.1 s: this test's Python publisher stalls on a loaded machine
-    cfg = write_config(tmp_path, replace={r"^stop_after_s = 0.1": "stop_after_s = 0.5"})
+    # the arm's and the shoulder's stops after 1 s, not 0.1 and 0.3 s: this test's Python publisher stalls on a
+    # loaded machine, and a stop for either would hide the fork's, which the test is about
+    cfg = write_config(tmp_path, replace={r"^stop_after_s = 0.1": "stop_after_s = 1.0",
+                                          r"^stop_after_s = 0.3": "stop_after_s = 1.0"})
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("CYCLONEDDS_URI", None)
     proc = subprocess.Popen([sys.executable, "-m", "mpcshare", "run", "--model", str(model), "--config", str(cfg),
@@ -102,7 +104,7 @@ def test_run_publishes_stamped_commands_at_100_hz_and_stops_when_an_input_goes_s
                 k += 1
                 if fork_silent_at is None and k - k_first >= FEED_S * 100:
                     fork_silent_at = time.monotonic()
-                stopped = any(m.status and m.status[0].message.startswith("protective stop") for _, m in stats)
+                stopped = any(m.status and m.status[0].message.startswith("protective stop: fork") for _, m in stats)
                 # a second after the silence, and the stop seen on /mpcshare/status (at most 5 s: a loaded machine)
                 if fork_silent_at is not None and now - fork_silent_at > (1.0 if stopped else 5.0):
                     break
