@@ -6,6 +6,7 @@ the wearer's shoulder; then the fork goes silent (protective stop), then SIGTERM
 
 from __future__ import annotations
 
+import gc
 import json
 import os
 import signal
@@ -67,6 +68,7 @@ def test_run_publishes_stamped_commands_at_100_hz_and_stops_when_an_input_goes_s
     proc = subprocess.Popen([sys.executable, "-m", "mpcshare", "run", "--model", str(model), "--config", str(cfg),
                              "--duration", "60", "--timing", "timing.json"], cwd=tmp_path, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    gc.disable()  # the inputs are published from this process: no collector pause of the suite's large heap
     try:
         t = Transport(NetworkSettings(domain_id=DOMAIN))
         arm = t.writer("/joint_states", JointState)
@@ -117,6 +119,7 @@ def test_run_publishes_stamped_commands_at_100_hz_and_stops_when_an_input_goes_s
         time.sleep(0.2)
         got += [(time.monotonic(), c) for c in commands.take(100)]
     finally:
+        gc.enable()
         if proc.poll() is None:
             proc.kill()
             proc.communicate()
