@@ -2,14 +2,16 @@
 
 Criterion (in words: :func:`mpcshare.reports.rule_choice.criterion_words`): among the candidates whose effort is at
 most ``max_effort`` × the voluntary effort, those that meet the task's criterion (:func:`saws`: ``task.done``;
-eating's: the knife saws) in every episode of its stroke mode (one per trial) where the wearer alone does
-(:func:`saws_where_the_wearer_saws`; an episode where the wearer alone does not does not count against a
-candidate), and of those the lowest line ratio; where the line is
+eating's: the knife saws) in every episode of its stroke mode (each run of it at least
+:data:`sim.task.metrics.MIN_EPISODE_S` long; a trial's pooled figures where the rows have no episodes) where the
+wearer alone does (:func:`saws_where_the_wearer_saws`; an episode where the wearer alone does not does not count
+against a candidate), and of those the lowest line ratio; where the line is
 ill-posed (the robot alone costs the wearer at least ``max_effort`` × the effort of doing it alone), the lowest
 tracking RMS of those. When none is within the effort cap, the same without the cap. A row is a dict with
 ``tracking_rmse_m``, ``voluntary_effort``, ``effort_vs_voluntary``, ``line_ratio`` (None where undefined), the
 pooled ``saw_correlation`` / ``saw_amplitude_ratio`` and, where known, ``saws_by_trial`` (per trial: None
-without cutting, else whether it saws) and ``by_trial`` (per trial: RMS, effort, control steps).
+without cutting, else whether it saws), ``saws_by_episode`` (per trial: whether it saws in each of its cutting
+episodes, in time order) and ``by_trial`` (per trial: RMS, effort, control steps).
 :func:`criterion` returns the winner and the reason as a record (:func:`criterion`'s fields), never words.
 :func:`predicted` is what the choice predicts of the chosen rule; :func:`cross_validated` the same predicted
 leave one trial out (the rule chosen on the other trials, scored on the one left out).
@@ -34,16 +36,24 @@ def saws(row: dict[str, Any], task: Task = EATING) -> bool:
 
 
 def wearer_saws(voluntary: dict[str, Any], task: Task = EATING) -> bool:
-    """Whether the wearer alone meets ``task``'s criterion in at least one episode (``saws_by_trial``; without
-    it, the pooled figures' :func:`saws`)."""
-    alone = voluntary.get("saws_by_trial")
+    """Whether the wearer alone meets ``task``'s criterion in at least one cutting episode (``saws_by_episode``;
+    without it, in one trial, ``saws_by_trial``; without that, the pooled figures' :func:`saws`)."""
+    episodes, alone = voluntary.get("saws_by_episode"), voluntary.get("saws_by_trial")
+    if episodes is not None and any(len(e or ()) for e in episodes):
+        return any(bool(a) for e in episodes for a in (e or ()))
     return any(bool(a) for a in alone) if alone is not None else saws(voluntary, task)
 
 
 def saws_where_the_wearer_saws(row: dict[str, Any], voluntary: dict[str, Any], task: Task = EATING) -> bool:
-    """Whether ``row`` saws (:func:`saws`) in every cutting episode, one per trial (``saws_by_trial``), in which
-    the wearer alone (``voluntary``) saws; an episode where the wearer alone does not saw does not count. Without
-    per-trial figures on both (or of different lengths), :func:`saws` of the pooled figures."""
+    """Whether ``row`` saws (:func:`saws`) in every cutting episode in which the wearer alone (``voluntary``)
+    saws; an episode where the wearer alone does not saw does not count. The episodes are ``saws_by_episode``'s
+    where both rows have them, trial by trial, in the same number (the same trials and seconds: the same
+    labelled episodes); else a trial's pooled figures (``saws_by_trial``); without those on both (or of
+    different lengths), :func:`saws` of the pooled figures."""
+    mine, alone = row.get("saws_by_episode"), voluntary.get("saws_by_episode")
+    if (mine is not None and alone is not None and len(mine) == len(alone)
+            and all(len(m or ()) == len(a or ()) for m, a in zip(mine, alone)) and any(len(a or ()) for a in alone)):
+        return all(bool(m) for ms, As in zip(mine, alone) for m, a in zip(ms or (), As or ()) if a)
     mine, alone = row.get("saws_by_trial"), voluntary.get("saws_by_trial")
     if mine is None or alone is None or len(mine) != len(alone):
         return saws(row, task)
@@ -126,8 +136,9 @@ def _subset(row: dict[str, Any], keep: list[int]) -> dict[str, Any]:
     out["tracking_rmse_m"] = math.sqrt(sum(t["steps"] * t["tracking_rmse_m"] ** 2 for t in per) / n)
     out["voluntary_effort"] = sum(t["steps"] * t["voluntary_effort"] for t in per) / n
     out["by_trial"] = per
-    if row.get("saws_by_trial") is not None:
-        out["saws_by_trial"] = [row["saws_by_trial"][k] for k in keep]
+    for key in ("saws_by_trial", "saws_by_episode"):
+        if row.get(key) is not None:
+            out[key] = [row[key][k] for k in keep]
     return out
 
 

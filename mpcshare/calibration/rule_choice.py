@@ -184,6 +184,9 @@ def _pooled(done: Sequence[tuple[Any, dict[str, Any]]], task: Task = EATING) -> 
     # per trial: whether it meets the task's criterion; None for a trial without the stroke mode
     out["saws_by_trial"] = [None if task.stroke_mode is not None and m.get("saw_correlation") is None
                             else saws(m, task) for m in ms]
+    # per trial: whether it meets the criterion in each cutting episode (sim.task.metrics.sawing_by_episode)
+    out["saws_by_episode"] = None if task.stroke_mode is None else [
+        [saws(e, task) for e in (m.get("saw_by_episode") or ())] for m in ms]
     out["by_trial"] = [{"tracking_rmse_m": float(m["tracking_rmse_m"]),
                         "voluntary_effort": float(m["voluntary_effort"]), "steps": int(len(s))}
                        for m, s in zip(ms, steps)]

@@ -29,7 +29,7 @@ import numpy as np
 
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation.episode import simulate_episode
-from mpcshare.evaluation.keepout_replay import RecordedKeepOut, ZoneLog
+from mpcshare.evaluation.keepout_replay import RecordedKeepOut, ZoneLog, float_bytes
 
 __all__ = ["FrontEndDiverged", "FrontEndRecording", "decisions", "record_front_end", "replay_front_end", "replayable",
            "simulate_cached"]
@@ -56,10 +56,6 @@ class FrontEndRecording:
     def steps(self) -> int:
         """Control steps recorded."""
         return len(self.calls["frontend"])
-
-
-def _key(t: float, obs: Any) -> tuple[float, bytes | None]:
-    return float(t), None if obs is None else np.asarray(obs, dtype=float).tobytes()
 
 
 def _outcome(fn: Callable[[], Any]) -> tuple[bool, Any]:
@@ -144,7 +140,7 @@ class _Part:
 
 class _FrontEnd(_Part):
     def step(self, t: float, obs: Any) -> Any:
-        key = _key(t, obs)
+        key = float(t), float_bytes(obs)
         if isinstance(self._via, _Recorder):
             return self._via.call("frontend", key, lambda: self._live.step(t, obs))
         return self._via.call("frontend", key)

@@ -16,14 +16,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["RecordedKeepOut", "ZoneLog"]
+__all__ = ["RecordedKeepOut", "ZoneLog", "float_bytes"]
 
 #: per ``update`` call in order: (its inputs and prior state as bytes, (zones, faults added, state after)), or
 #: None where the live call raised
 ZoneLog = list[tuple[tuple[bytes | None, ...], tuple[Any, ...]] | None]
 
 
-def _bytes(x: Any) -> bytes | None:
+def float_bytes(x: Any) -> bytes | None:
+    """``x`` as float64 bytes (a replay log's key: equal only for the same values to the bit); None for None."""
     return None if x is None else np.asarray(x, dtype=float).tobytes()
 
 
@@ -53,8 +54,8 @@ class RecordedKeepOut:
                faults: list[tuple[str, str]]) -> None:
         """:meth:`mpcshare.control.keepout.KeepOut.update`: the same zones, faults and state after it."""
         pose, t_seen, age = self._state()
-        key = (np.array([t, t_seen, age, bool(repeated)], dtype=float).tobytes(), _bytes(obs),
-               _bytes(fork_velocity), _bytes(base_pose), _bytes(pose))
+        key = (np.array([t, t_seen, age, bool(repeated)], dtype=float).tobytes(), float_bytes(obs),
+               float_bytes(fork_velocity), float_bytes(base_pose), float_bytes(pose))
         live, log, i = self._live, self._log, self._cursor
         self._cursor = i + 1
         if self._replaying:

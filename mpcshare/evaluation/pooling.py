@@ -55,7 +55,8 @@ def pool_task_metrics(metrics: Sequence[dict[str, Any]], step_times: Sequence[np
                       task: Task = EATING) -> dict[str, Any]:
     """Pool the figures of ``task`` (the keys its ``metric_keys``, in that order): lag and RMS at
     it weighted by steps; the sawing amplitude and correlation weighted by time in the stroke mode
-    (``cutting_s``); strokes summed (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n); the wearer's
+    (``cutting_s``); the cutting episodes (``saw_by_episode``) listed in the episodes' order; strokes summed
+    (share = executed / intended); RMS per mode √(Σ n·rms² / Σ n); the wearer's
     pick-ups (:func:`sim.task.metrics.pickup_error`) counted and timed in sum, their RMS √(Σ s·rms² / Σ s) over
     their times s, their share of the squared error weighted by each episode's Σ‖e‖² = n·rms²; any other key of
     the task the step-weighted mean of its numbers (None where no episode has one)."""
@@ -86,7 +87,9 @@ def _pool_known(metrics: Sequence[dict[str, Any]], n: np.ndarray) -> dict[str, A
         by_mode[name] = float(math.sqrt(sum(w * v * v for w, v in vals) / sum(w for w, _ in vals))) if vals else None
     return {"lag_s": weighted("lag_s", n), "rms_at_lag_m": weighted("rms_at_lag_m", n),
             "saw_amplitude_ratio": weighted("saw_amplitude_ratio", cut),
-            "saw_correlation": weighted("saw_correlation", cut), "strokes_intended": intended,
+            "saw_correlation": weighted("saw_correlation", cut),
+            "saw_by_episode": [e for m in metrics for e in (m.get("saw_by_episode") or [])],
+            "strokes_intended": intended,
             "strokes_executed": executed, "stroke_share": executed / intended if intended else None,
             "cutting_s": float(cut.sum()), "rms_by_mode_m": by_mode, **_pool_wearer_share(metrics),
             **_pool_pickups(metrics, n)}

@@ -29,8 +29,9 @@ from typing import Any
 from mpcshare.control.strategies import by_role
 from mpcshare.line_ratio import add_line_ratios
 from sim.task import EATING, Task
+from sim.task.metrics import MIN_EPISODE_S
 
-__all__ = ["MIX_RUNS", "Headline", "better_mixes", "choice_note",
+__all__ = ["MIX_RUNS", "Headline", "better_mixes", "choice_note", "episode_words",
            "headline_lines", "headlines", "lag_words", "line_ratio", "shared_strategy", "trials_words"]
 
 EFFORT_TARGET = 0.75  # the shared strategy's effort, at most this share of the wearer's alone (docs/design.md)
@@ -103,8 +104,22 @@ def _task(name: str, m: dict[str, Any], rule_choice: dict[str, Any] | None, tria
     note = choice_note(rule_choice, cut, trials, task)
     return Headline("The task", "yes, it sawed" if cut else "NO, it did not saw",
                     f"under `{name}` the stroke correlates {corr:.2f} with the intended one at {amp:.2f} of its "
-                    f"amplitude (sawing needs {task.criterion}).{lag_text}"
+                    f"amplitude (sawing needs {task.criterion}).{episode_words(m, task)}{lag_text}"
                     + (f" {note}" if note else ""))
+
+
+def episode_words(m: dict[str, Any], task: Task = EATING) -> str:
+    """The criterion per cutting episode in words (`` It sawed in 2 of 3 cutting episodes; the worst: …``),
+    from ``m["saw_by_episode"]`` (:func:`sim.task.metrics.sawing_by_episode`); "" without episodes."""
+    episodes = [e for e in m.get("saw_by_episode") or () if e.get("saw_correlation") is not None]
+    if not episodes:
+        return ""
+    done = sum(bool(task.done(e)) for e in episodes)
+    worst = min(episodes, key=lambda e: (bool(task.done(e)), e["saw_correlation"]))
+    amp = worst.get("saw_amplitude_ratio")
+    return (f" It sawed in {done} of {len(episodes)} {task.stroke_mode} episodes (each at least "
+            f"{MIN_EPISODE_S:g} s); the worst correlates {worst['saw_correlation']:.2f}"
+            + (f" at {amp:.2f} of the amplitude." if amp is not None else "."))
 
 
 def chosen_row(rule_choice: dict[str, Any]) -> dict[str, Any] | None:

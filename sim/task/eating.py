@@ -29,7 +29,7 @@ import numpy as np
 from robot.shoulder import ShoulderMap
 from robot.wearer_body import WearerBody
 
-from .metrics import pickup_error, rms_by_mode, sawing_fidelity, time_lag, wearer_share_by_mode
+from .metrics import pickup_error, rms_by_mode, sawing_by_episode, sawing_fidelity, time_lag, wearer_share_by_mode
 
 __all__ = ["BODY", "MODE_COLOURS", "MODE_NAMES", "METRIC_KEYS", "SAWING_CRITERION", "SAWING_MIN_AMPLITUDE",
            "SAWING_MIN_CORRELATION", "SHOULDER_CHANNELS", "SHOULDER_TO_PLATE", "STROKE_BAND_HZ", "STROKE_MODE",
@@ -62,9 +62,9 @@ SHOULDER_TO_PLATE = np.array([[0.0, 1.0, 0.0],
 SHOULDER_TO_PLATE.setflags(write=False)
 
 #: keys of :func:`episode_task_metrics` (``comparison.json`` per strategy)
-METRIC_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "strokes_intended",
-               "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m", "wearer_share_by_mode", "mode_steps",
-               "pickups", "pickup_rms_m", "pickup_s", "pickup_error_share")
+METRIC_KEYS = ("lag_s", "rms_at_lag_m", "saw_amplitude_ratio", "saw_correlation", "saw_by_episode",
+               "strokes_intended", "strokes_executed", "stroke_share", "cutting_s", "rms_by_mode_m",
+               "wearer_share_by_mode", "mode_steps", "pickups", "pickup_rms_m", "pickup_s", "pickup_error_share")
 
 
 def saws(correlation: float | None, amplitude_ratio: float | None) -> bool:
@@ -81,13 +81,15 @@ def episode_task_metrics(tip: np.ndarray, intent: np.ndarray, dt: float, true_mo
     the lag (:func:`sim.task.metrics.time_lag`), the pick-ups (:func:`sim.task.metrics.pickup_error`, with
     ``alpha``), and with ``true_mode`` (N,) labels into ``mode_names`` the RMS and wearer's share per mode and
     the sawing figures over the steps of the mode named :data:`STROKE_MODE`
-    (:func:`sim.task.metrics.sawing_fidelity`).
+    (:func:`sim.task.metrics.sawing_fidelity`) and per cutting episode (``saw_by_episode``: one
+    ``{"start_s", "cutting_s", "saw_correlation", "saw_amplitude_ratio"}`` per episode of at least
+    :data:`sim.task.metrics.MIN_EPISODE_S`, :func:`sim.task.metrics.sawing_by_episode`; [] without one).
     """
     names = tuple(mode_names) if mode_names is not None and len(mode_names) else None
     lag, rms_lag = time_lag(tip, intent, dt)
     out: dict = {"lag_s": None if not np.isfinite(lag) else lag,
                  "rms_at_lag_m": None if not np.isfinite(rms_lag) else rms_lag,
-                 "saw_amplitude_ratio": None, "saw_correlation": None, "strokes_intended": 0,
+                 "saw_amplitude_ratio": None, "saw_correlation": None, "saw_by_episode": [], "strokes_intended": 0,
                  "strokes_executed": 0, "stroke_share": None, "cutting_s": 0.0, "rms_by_mode_m": {},
                  "wearer_share_by_mode": {}, "mode_steps": {}}
     if alpha is not None:
@@ -100,7 +102,11 @@ def episode_task_metrics(tip: np.ndarray, intent: np.ndarray, dt: float, true_mo
     if alpha is not None:
         out["wearer_share_by_mode"], out["mode_steps"] = wearer_share_by_mode(alpha, true_mode, names)
     if names is not None and STROKE_MODE in names:
-        f = sawing_fidelity(tip, intent, np.asarray(true_mode) == names.index(STROKE_MODE), dt, STROKE_BAND_HZ)
+        cutting = np.asarray(true_mode) == names.index(STROKE_MODE)
+        f = sawing_fidelity(tip, intent, cutting, dt, STROKE_BAND_HZ)
+        out["saw_by_episode"] = [{"start_s": start, "cutting_s": e.cutting_s, "saw_correlation": e.correlation,
+                                  "saw_amplitude_ratio": e.amplitude_ratio}
+                                 for start, e in sawing_by_episode(tip, intent, cutting, dt, STROKE_BAND_HZ)]
         out.update(saw_amplitude_ratio=f.amplitude_ratio, saw_correlation=f.correlation,
                    strokes_intended=f.strokes_intended, strokes_executed=f.strokes_executed,
                    stroke_share=f.stroke_share, cutting_s=f.cutting_s)

@@ -25,6 +25,20 @@ def test_a_row_must_saw_in_each_episode_where_the_wearer_alone_saws():
     assert not wearer_saws({"saw_correlation": None, "saw_amplitude_ratio": None})
 
 
+def test_the_episodes_within_a_trial_are_judged_one_by_one():
+    """Trial 0 has two cutting episodes, trial 1 one. A row that saws in trial 0's pooled figures but not in its
+    second episode, where the wearer alone saws, fails; one that fails only where the wearer alone does not saw
+    passes. Episodes that do not line up with the wearer's fall back to the trials' figures."""
+    alone = {"saws_by_trial": [True, True], "saws_by_episode": [[True, True], [False]]}
+    pooled_only = {"saws_by_trial": [True, True]}
+    assert saws_where_the_wearer_saws(pooled_only, alone)
+    assert not saws_where_the_wearer_saws({**pooled_only, "saws_by_episode": [[True, False], [True]]}, alone)
+    assert saws_where_the_wearer_saws({**pooled_only, "saws_by_episode": [[True, True], [False]]}, alone)
+    assert saws_where_the_wearer_saws({**pooled_only, "saws_by_episode": [[True], [False]]}, alone)  # by trial
+    assert wearer_saws({"saws_by_trial": [True], "saws_by_episode": [[False, False]]}) is False
+    assert wearer_saws({"saws_by_trial": [True], "saws_by_episode": [[]]})  # no episode long enough: the trial
+
+
 def test_the_prediction_is_the_chosen_rows_figures():
     row = {"line_ratio": 0.66, "effort_vs_voluntary": 0.5, "tracking_rmse_m": 0.004, "saw_correlation": 0.9,
            "saw_amplitude_ratio": 0.9, "saws_by_trial": [True, False]}

@@ -51,6 +51,16 @@ def test_effort_task_and_keepout_each_have_a_figure_and_a_verdict():
     assert bad["Keep-out"].verdict == "NO" and "3 control step" in bad["Keep-out"].text
 
 
+def test_the_task_line_counts_the_cutting_episodes_and_names_the_worst():
+    ep = [{"start_s": 1.0, "cutting_s": 4.0, "saw_correlation": 0.95, "saw_amplitude_ratio": 0.9},
+          {"start_s": 30.0, "cutting_s": 3.0, "saw_correlation": 0.41, "saw_amplitude_ratio": 0.7},
+          {"start_s": 50.0, "cutting_s": 2.0, "saw_correlation": 0.8, "saw_amplitude_ratio": 0.5}]
+    h = {x.topic: x for x in headlines(_runs(5.0, saw_by_episode=ep))}
+    assert "It sawed in 1 of 3 cutting episodes (each at least 1 s)" in h["The task"].text
+    assert "the worst correlates 0.41 at 0.70 of the amplitude" in h["The task"].text
+    assert "episodes" not in {x.topic: x for x in headlines(_runs(5.0))}["The task"].text  # none recorded
+
+
 def test_the_four_lines_come_in_order_and_nothing_without_a_shared_run():
     lines = headline_lines(_runs(15.7), markdown=False)
     assert [ln.split(":")[0] for ln in lines] == ["The task", "Sharing", "Effort", "Keep-out"]

@@ -40,11 +40,13 @@ def test_the_figures_judge_the_strokes_of_the_cutting_mode_only():
     want = sawing_fidelity(tip, intent, cut, DT, STROKE_BAND_HZ)
     assert m["saw_correlation"] == want.correlation and m["cutting_s"] == pytest.approx(cut.sum() * DT)
     assert set(m["rms_by_mode_m"]) == {"cutting", "collecting"} and TASK.done(m)
+    assert [(e["start_s"], e["cutting_s"]) for e in m["saw_by_episode"]] == [(0.0, pytest.approx(cut.sum() * DT))]
+    assert m["saw_by_episode"][0]["saw_correlation"] == want.correlation  # one episode: the pooled figures
     tip_late, _, _ = _episode(late_s=0.125)  # a quarter stroke late
     late = episode_task_metrics(tip_late, intent, DT, mode, MODE_NAMES)
     assert not TASK.done(late) and late["lag_s"] == pytest.approx(0.13, abs=0.011)
     unnamed = episode_task_metrics(tip, intent, DT, mode, None)  # no names: no mode to saw in
-    assert unnamed["saw_correlation"] is None and unnamed["cutting_s"] == 0.0
+    assert unnamed["saw_correlation"] is None and unnamed["cutting_s"] == 0.0 and unnamed["saw_by_episode"] == []
     assert TASK.episode_metrics(tip, intent, DT, mode, MODE_NAMES) == episode_task_metrics(tip, intent, DT, mode,
                                                                                            MODE_NAMES)
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.task.metrics import rms_by_mode, sawing_fidelity, time_lag
+from sim.task.metrics import MIN_EPISODE_S, rms_by_mode, sawing_by_episode, sawing_fidelity, time_lag
 
 DT = 0.01
 BAND = (0.8, 3.0)  # [Hz] a stroke band about the 2 Hz strokes below
@@ -81,6 +81,39 @@ def test_no_cutting_and_bad_input():
         sawing_fidelity(drift, drift, mask[:-1], DT, BAND)
     with pytest.raises(ValueError, match="stroke band"):
         sawing_fidelity(drift, drift, mask, DT, band=(1.0, 80.0))
+
+
+def test_each_cutting_episode_is_judged_on_its_own():
+    """Three cutting runs: 4–8 s sawn as intended, 10–14 s not sawn (the tip holds still in the band), 16.0–16.5 s
+    too short to judge. Pooled, the tip looks half right; per episode, the first scores 1 and the second near 0,
+    each exactly :func:`sawing_fidelity` on that run's samples alone (the band-pass runs over the whole signal)."""
+    n = 2400
+    t = np.arange(n) * DT
+    drift = 0.5 * _smooth(n, seed=3, f_max=0.3)
+    runs = [(4.0, 8.0), (10.0, 14.0), (16.0, 16.5)]
+    mask = np.zeros(n, bool)
+    for a, z in runs:
+        mask[round(a / DT):round(z / DT)] = True
+    stroke = np.zeros((n, 3))
+    stroke[mask, 0] = 0.01 * np.sin(2 * np.pi * 2.0 * t[mask])
+    tip = drift + np.where((t < 9.0)[:, None], stroke, 0.0)
+    got = sawing_by_episode(tip, drift + stroke, mask, DT, BAND)
+    assert [round(s, 6) for s, _ in got] == [4.0, 10.0]  # the 0.5-s run is below MIN_EPISODE_S
+    for (start, f), (a, z) in zip(got, runs):
+        alone = np.zeros(n, bool)
+        alone[round(a / DT):round(z / DT)] = True
+        want = sawing_fidelity(tip, drift + stroke, alone, DT, BAND)
+        assert f == want and f.cutting_s == pytest.approx(z - a)
+    assert got[0][1].correlation == pytest.approx(1.0, abs=1e-3) and got[1][1].amplitude_ratio < 0.1
+    pooled = sawing_fidelity(tip, drift + stroke, mask, DT, BAND)
+    assert 0.3 < pooled.amplitude_ratio < 0.9  # the pooled figure hides the episode that did not saw
+    assert [s for s, _ in sawing_by_episode(tip, drift + stroke, mask, DT, BAND, min_episode_s=0.5)] == [
+        4.0, 10.0, 16.0]
+    assert sawing_by_episode(tip, tip, np.zeros(n, bool), DT, BAND) == [] and MIN_EPISODE_S == 1.0
+    with pytest.raises(ValueError, match="cutting_mask must have shape"):
+        sawing_by_episode(tip, tip, mask[:-1], DT, BAND)
+    with pytest.raises(ValueError, match="min_episode_s"):
+        sawing_by_episode(tip, tip, mask, DT, BAND, min_episode_s=-1.0)
 
 
 def test_rms_by_mode_matches_a_direct_computation():
