@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import time
 from contextlib import nullcontext
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -41,12 +41,13 @@ from mpcshare.calibration.choice_criterion import (
     wearer_saws,
 )
 from mpcshare.calibration.mode_cost import cutting_effort, cutting_modes, mode_costs, price_order, prune_sets
-from mpcshare.calibration.trials import STROKE_SEEN_S, choice_duration, choice_trials
+from mpcshare.calibration.trials import STROKE_SEEN_S, choice_seconds, choice_trials
 from mpcshare.control.strategies import by_role
 from mpcshare.control.strategies.gate import GateSettings
 from mpcshare.control.types import ControllerConfig
 from mpcshare.evaluation import StrategyRun, pool_metrics, simulate_episode
 from mpcshare.evaluation.distinct import map_distinct, trace_key
+from mpcshare.evaluation.episode import Seconds, trial_seconds
 from mpcshare.evaluation.episode_pool import EpisodeJob, EpisodePool, default_workers
 from mpcshare.evaluation.frontend_replay import simulate_cached
 from mpcshare.line_ratio import line_ratio as _line_ratio
@@ -114,7 +115,7 @@ def _variants(sets: list[list[int]], timings: Sequence[str], wearer_alphas: Sequ
 
 
 def pooled_runs(bundle: Any, demos: Demonstrations, trials: Sequence[int],
-                specs: Sequence[tuple[str, dict | None]], duration_s: float | None, wearer: WearerConfig | None,
+                specs: Sequence[tuple[str, dict | None]], duration_s: Seconds, wearer: WearerConfig | None,
                 seed: int, mode_names: Sequence[str] | None = None,
                 pool: EpisodePool | None = None,
                 seen: dict[int, np.ndarray] | None = None,
@@ -161,7 +162,7 @@ def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
 
 
 def pooled_run(bundle: Any, demos: Demonstrations, trials: Sequence[int], strategy: str, options: dict | None,
-               duration_s: float | None, wearer: WearerConfig | None, seed: int,
+               duration_s: Seconds, wearer: WearerConfig | None, seed: int,
                mode_names: Sequence[str] | None = None,
                pool: EpisodePool | None = None, task: Task = EATING) -> tuple[dict[str, float], list[Any]]:
     """Pooled figures of ``strategy`` on ``trials`` (RMS, effort, limit violations, mean stroke correlation
@@ -258,32 +259,32 @@ def _log_ran(log: Callable[[str], None] | None, ran: int, planned: int) -> None:
 
 
 def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
-                duration_s: float | None = RULE_DURATION_S,
+                duration_s: Seconds = RULE_DURATION_S,
                 max_effort: float = 0.75, wearer: WearerConfig | None = None, seed: int = 0,
                 mode_names: Sequence[str] | None = None, wearer_alphas: Sequence[float] = WEARER_ALPHAS,
                 timings: Sequence[str] = tuple(HANDOVER_TIMINGS), robot_alphas: Sequence[float] = ROBOT_ALPHAS,
                 log: Callable[[str], None] | None = None, pool: EpisodePool | None = None,
                 prune: bool = True, mixes: Sequence[str] = MIXES, task: Task = EATING) -> dict[str, Any]:
-    """Choose the gate's wearer modes in the closed loop (module docstring).
-
-    ``mode_names``: the names of the demonstrations' mode labels (the one named ``task.stroke_mode`` is
-    the task's stroke; None: no sawing figures); ``timings``: the names of :data:`HANDOVER_TIMINGS` each
-    wearer-mode set is tried with; ``wearer_alphas``: the robot's shares while the wearer
-    leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the robot's
-    shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
+    """Choose the gate's wearer modes in the closed loop (module docstring). ``duration_s``: the seconds of each
+    trial simulated (:data:`~mpcshare.evaluation.episode.Seconds`); ``mode_names``: the names of the demonstrations'
+    mode labels (the one named ``task.stroke_mode`` is the task's stroke; None: no sawing figures); ``timings``:
+    the names of :data:`HANDOVER_TIMINGS` each wearer-mode set is tried with; ``wearer_alphas``: the robot's shares
+    while the wearer leads that each wearer-mode set is tried with (:data:`WEARER_ALPHAS`); ``robot_alphas``: the
+    robot's shares while it leads, in [0.5, 1] (:data:`ROBOT_ALPHAS`): the first with every candidate, the others
     with the second stage's (module docstring); ``pool``: where the episodes run (default: this process; each
     stage's episodes are one batch); ``prune``: leave out the wearer-mode sets the per-mode costs put at no
     less effort and error than the wearer alone (:func:`mpcshare.calibration.mode_cost.prune_sets`; listed under
     ``"pruned"``); ``mixes``: the constant mixtures run beside the parties as comparators (:data:`MIXES`; rows under
-    ``"mixes"``; the why says so where one would win the criterion).
+    ``"mixes"``; the why says so where one would win the criterion); ``task``: whose figures and criterion.
     Returns ``{"settings", "wearer_modes", "reason" (``criterion``: :func:`~mpcshare.calibration.choice_criterion.
     criterion`'s record; ``mixture``: :func:`~mpcshare.calibration.choice_criterion.mix_winner`'s; ``task_effort``:
     None, or the cutting modes whose lead costs more than ``max_effort``), "why" (the reason in words:
     :func:`mpcshare.reports.rule_choice.why_words`), "criterion", "predicted", "cross_validated", "candidates",
     "mixes", "pruned", "voluntary", "reactive", "mode_costs", "price_order", "cutting_modes",
     "cutting_effort_vs_voluntary" (:func:`mpcshare.calibration.mode_cost.cutting_effort`), "robot_alphas" (the
-    shares tried), "trials", "duration_s", "episodes_run" (an episode that decides as another at every step is that
-    episode), "seconds"}``. ValueError without a mode model or a trial. ``task``: whose figures and criterion.
+    shares tried), "trials", "duration_s" (the longest of a trial's; None: whole trials), "duration_by_trial"
+    ([trial, seconds] each, where per trial), "episodes_run" (an episode that decides as another at every step
+    is that episode), "seconds"}``. ValueError without a mode model or a trial.
     """
     if not len(trials):
         raise ValueError("choose_rule needs at least one held-out trial")
@@ -335,8 +336,18 @@ def choose_rule(bundle: Any, demos: Demonstrations, trials: Sequence[int], *,
             "cutting_effort_vs_voluntary": task_effort, "max_effort": max_effort, "candidates": rows,
             "mixes": mix_rows, "voluntary": vol, "reactive": rea, "mode_costs": costs, "price_order": order,
             "cutting_modes": cutting, "pruned": pruned, "robot_alphas": [float(a) for a in robot_alphas],
-            "trials": [int(t) for t in trials], "duration_s": duration_s, "episodes_run": sum(ran),
+            "trials": [int(t) for t in trials], **_duration_record(duration_s, trials), "episodes_run": sum(ran),
             "seconds": round(time.perf_counter() - t0, 1)}
+
+
+def _duration_record(duration_s: Seconds, trials: Sequence[int]) -> dict[str, Any]:
+    """The choice record's ``duration_s`` (the longest; None where a trial runs whole) and, for seconds per trial,
+    ``duration_by_trial``."""
+    if not isinstance(duration_s, Mapping):
+        return {"duration_s": duration_s}
+    by_trial = [[int(t), trial_seconds(duration_s, t)] for t in trials]
+    whole = any(s is None for _, s in by_trial)
+    return {"duration_s": None if whole else max(float(s) for _, s in by_trial), "duration_by_trial": by_trial}
 
 
 def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | None = None,
@@ -348,8 +359,8 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
                       by_subject: bool = True, stroke_seen_s: float | None = STROKE_SEEN_S) -> dict[str, Any]:
     """:func:`choose_rule` on ``n_trials`` held-out trials of ``bundle`` (:func:`choice_trials`: default half of
     them, 1 to 2, dealt round the demonstrations' subjects; ``by_subject`` False: the last ones), ``duration_s``
-    of each or longer where a trial shows less than ``stroke_seen_s`` of the task's stroke in them
-    (:func:`choice_duration`, logged; None: ``duration_s`` whatever the trials show), with the wearer
+    of each, longer for a trial that shows less than ``stroke_seen_s`` of the task's stroke in them
+    (:func:`choice_seconds`, logged; None: ``duration_s`` whatever the trials show), with the wearer
     preset ``wearer_name`` (default the default preset), the demonstrations' ``mode_names`` (for ``task``'s
     stroke modes), the comparators ``mixes`` and the robot's shares ``robot_alphas`` (:func:`choose_rule`),
     recorded as the bundle's rule (``bundle.rule``, a :class:`~mpcshare.bundle.rule.CalibratedRule` for
@@ -364,11 +375,14 @@ def choose_for_bundle(bundle: Any, demos: Demonstrations, *, n_trials: int | Non
     trials = choice_trials(bundle.heldout_trials, n_trials, subjects)
     stroke = list(mode_names).index(task.stroke_mode) if mode_names and task.stroke_mode in mode_names else None
     by_id = {int(tr.trial_id): tr for tr in demos.trials}
-    seconds = duration_s if stroke_seen_s is None else choice_duration(
+    own = {} if stroke_seen_s is None else choice_seconds(
         [by_id[t] for t in trials if t in by_id], duration_s, demos.rate_hz, stroke, stroke_seen_s)
-    if log is not None and seconds != duration_s:
-        log(f"the choice runs {seconds:g} s of each trial, not {duration_s:g}: trial(s) {trials} show less than "
-            f"{stroke_seen_s:g} s of the stroke ({task.stroke_mode}) in their first {duration_s:g} s")
+    longer = {t: s for t, s in own.items() if s != duration_s}
+    seconds: Seconds = {t: own.get(t, duration_s) for t in trials} if longer else duration_s
+    if log is not None and longer:
+        log(f"the choice runs {', '.join(f'{s:g} s of trial {t}' for t, s in longer.items())} (the others "
+            f"{duration_s:g} s): less than {stroke_seen_s:g} s of the stroke ({task.stroke_mode}) in the first "
+            f"{duration_s:g} s")
     with EpisodePool(demos, workers or default_workers()) if pool is None else nullcontext(pool) as episodes:
         choice = choose_rule(bundle, demos, trials, duration_s=seconds, log=log, wearer=wearer_preset(name),
                              mode_names=mode_names, pool=episodes, task=task, mixes=mixes,

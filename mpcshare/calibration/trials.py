@@ -5,7 +5,7 @@ first held-out trial, then every subject's second, …; the choice takes the las
 choice and the evaluation draw on the same subjects where the split allows. :func:`unseen_trials`: the held-out
 trials the choice did not run on; :func:`evaluation_trials`: those, then the choice's own. Pure: trial ids in,
 trial ids out. :func:`choice_duration`: how long the choice simulates its trials, so that each shows the task's
-stroke where it has one (from the trials' mode labels).
+stroke where it has one (from the trials' mode labels); :func:`choice_seconds`: the same per trial.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["STROKE_SEEN_S", "STROKE_STRETCH", "bundle_evaluation_trials", "choice_duration", "choice_trials",
-           "evaluation_trials", "unseen_trials"]
+__all__ = ["STROKE_SEEN_S", "STROKE_STRETCH", "bundle_evaluation_trials", "choice_duration", "choice_seconds",
+           "choice_trials", "evaluation_trials", "unseen_trials"]
 
 #: seconds of the task's stroke every choice trial must show (or all it has): a few strokes at 0.8–3 Hz, enough
 #: for the stroke-band correlation that says whether a candidate saws
@@ -89,6 +89,14 @@ def choice_duration(trials: Sequence[Any], duration_s: float | None, rate_hz: fl
             end = int(np.searchsorted(stroke, want)) + 1  # samples up to the one that completes it
             need = max(need, float(math.ceil(end / rate_hz)))
     return min(need, stretch * float(duration_s))
+
+
+def choice_seconds(trials: Sequence[Any], duration_s: float | None, rate_hz: float, stroke_label: int | None,
+                   stroke_seen_s: float = STROKE_SEEN_S, stretch: float = STROKE_STRETCH) -> dict[int, float | None]:
+    """Each of ``trials``' own choice window [s], by trial id: :func:`choice_duration` of that trial alone, so
+    that only a trial whose first ``duration_s`` lack the stroke runs longer. Errors: :func:`choice_duration`'s."""
+    return {int(tr.trial_id): choice_duration([tr], duration_s, rate_hz, stroke_label, stroke_seen_s, stretch)
+            for tr in trials}
 
 
 def _dealt(held: list[int], subjects: Mapping[int, Any] | None) -> list[int]:

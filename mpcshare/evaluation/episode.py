@@ -8,7 +8,7 @@ the task's (:meth:`sim.task.Task.episode_metrics`) and :mod:`sim.keepout_metrics
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -26,7 +26,18 @@ from sim.wearer import WearerConfig
 if TYPE_CHECKING:  # annotations only: importing the bundle module pulls in torch
     from mpcshare.bundle import ModelBundle
 
-__all__ = ["intent_preview", "simulate_episode"]
+__all__ = ["Seconds", "intent_preview", "simulate_episode", "trial_seconds"]
+
+#: how much of each trial an episode simulates [s]: one figure for every trial, or one per trial id (a trial
+#: missing from the mapping: whole); None: whole trials
+Seconds = float | Mapping[int, float | None] | None
+
+
+def trial_seconds(duration_s: Seconds, trial_id: int) -> float | None:
+    """The seconds ``duration_s`` gives the trial ``trial_id`` (:data:`Seconds`; None: the whole trial)."""
+    if isinstance(duration_s, Mapping):
+        return duration_s.get(int(trial_id))
+    return duration_s
 
 
 def _from_bundle(bundle: ModelBundle, **options: Any) -> Any:
@@ -54,19 +65,21 @@ def intent_preview(trial: Any, act_names: Sequence[str], wearer: WearerConfig | 
 
 
 def simulate_episode(bundle: Any, demos: Demonstrations, trial: Any, run: StrategyRun, options: dict[str, Any],
-                     *, beta: float, duration_s: float | None, seed: int, wearer: WearerConfig | None,
+                     *, beta: float, duration_s: Seconds, seed: int, wearer: WearerConfig | None,
                      mode_names: Sequence[str] | None,
                      make_controller: Callable[..., Any] | None = None,
                      scene: SceneConfig | None = None, scenario: Any = None, task: Task = EATING
                      ) -> tuple[Any, dict[str, Any]]:
     """One episode of ``run`` on ``trial`` (controller ``options`` added, e.g. a ``schedule``) and
     its metrics: :func:`sim.metrics.episode_metrics`, the figures of ``task`` (:meth:`sim.task.Task.episode_metrics`)
-    and the keep-out figures of :mod:`sim.keepout_metrics`. ``scene``: the world and its arm (default
+    and the keep-out figures of :mod:`sim.keepout_metrics`, over ``duration_s`` of the trial
+    (:func:`trial_seconds`). ``scene``: the world and its arm (default
     ``SceneConfig()``, the SuperLimb), with ``task``'s body zones; the controller is given the scene's arm
     (``robot=``) and keeps out the body zones of its bundle's task.
     ``scenario``: a :class:`mpcshare.conflicts.Scenario` that transforms the trial (and the bundle's
     predictor) first."""
     make_controller = make_controller or _from_bundle
+    duration_s = trial_seconds(duration_s, trial.trial_id)
     fork_truth = None
     if scenario is not None:
         st = scenario.apply(trial, duration_s)

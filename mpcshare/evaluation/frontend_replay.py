@@ -28,7 +28,7 @@ from typing import Any, Callable
 import numpy as np
 
 from mpcshare.control.types import ControllerConfig
-from mpcshare.evaluation.episode import simulate_episode
+from mpcshare.evaluation.episode import simulate_episode, trial_seconds
 from mpcshare.evaluation.keepout_replay import RecordedKeepOut, ZoneLog, float_bytes
 
 __all__ = ["FrontEndDiverged", "FrontEndRecording", "decisions", "record_front_end", "replay_front_end", "replayable",
@@ -331,7 +331,8 @@ def _cache_key(bundle: Any, trial: Any, options: dict[str, Any], settings: dict[
     config = options.get("config") or ControllerConfig()
     rest["config"] = replace(config, strategy_settings=None) if is_dataclass(config) else config
     parts = tuple(id(getattr(bundle, a, None)) for a in ("predictor", "gates", "fast", "modes", "preprocessor"))
-    return id(bundle), parts, int(trial.trial_id), settings.get("duration_s"), repr(rest)
+    seconds = trial_seconds(settings.get("duration_s"), trial.trial_id)
+    return id(bundle), parts, int(trial.trial_id), seconds, repr(rest)
 
 
 def simulate_cached(bundle: Any, demos: Any, trial: Any, run: Any, options: dict[str, Any],

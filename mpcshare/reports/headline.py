@@ -28,6 +28,7 @@ from typing import Any
 
 from mpcshare.control.strategies import by_role
 from mpcshare.line_ratio import add_line_ratios
+from mpcshare.reports.rule_choice import span_words
 from sim.task import EATING, Task
 from sim.task.metrics import MIN_EPISODE_S
 
@@ -143,7 +144,7 @@ def choice_note(rule_choice: dict[str, Any] | None, sawed: bool, trials: str, ta
     chose_sawing = bool(task.done(row)) if task.stroke_mode is not None else all(bool(x) for x in per_trial)
     if chose_sawing == sawed:
         return ""
-    span = "whole trials" if rule_choice.get("duration_s") is None else f"first {rule_choice['duration_s']:g} s"
+    span = span_words(rule_choice)
     if task.stroke_mode is None:
         there = f"on trial(s) {', '.join(str(t) for t in rule_choice.get('trials', []))} ({span})"
         return (f"Training chose this hand-over rule as one that meets the task's criterion {there}; this "

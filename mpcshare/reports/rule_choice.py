@@ -10,7 +10,7 @@ from typing import Any, Mapping
 from sim.task import EATING, Task
 
 __all__ = ["CRITERION", "candidate_line", "criterion_why", "criterion_words", "pruned_line", "pruned_why", "ran_line",
-           "rule_markdown", "skipped_markdown", "why_words"]
+           "rule_markdown", "span_words", "skipped_markdown", "why_words"]
 
 
 def _sawed(stroke_mode: str | None, trial: str = "") -> str:
@@ -101,9 +101,21 @@ def ran_line(ran: int, planned: int) -> str:
             "(the same episode)")
 
 
+def span_words(choice: dict[str, Any]) -> str:
+    """How much of its trials the choice ran, in words: "whole trials", "first 60 s" or, per trial
+    (``duration_by_trial``), "first 82 s of trial 3 and 60 s of trial 11"."""
+    by_trial = choice.get("duration_by_trial")
+    if by_trial and len({s for _, s in by_trial}) > 1:
+        parts = ["whole" if s is None else f"{s:g} s" for _, s in by_trial]
+        each = [f"{p} of trial {t}" for p, (t, _) in zip(parts, by_trial)]
+        return "first " + (", ".join(each[:-1]) + " and " + each[-1] if len(each) > 1 else each[0])
+    return "whole trials" if choice.get("duration_s") is None else f"first {choice['duration_s']:g} s"
+
+
 def rule_markdown(choice: dict[str, Any]) -> str:
     """The choice as a Markdown section (for ``training.md``)."""
-    dur = "whole trials" if choice["duration_s"] is None else f"the first {choice['duration_s']:g} s"
+    dur = span_words(choice)
+    dur = dur if dur == "whole trials" else f"the {dur}"
     lines = ["## Hand-over rule (closed-loop choice)", "",
              f"Chosen on held-out trials {choice['trials']} ({dur}, wearer {choice.get('wearer', 'default')}) in "
              f"{choice['seconds']:g} s: "

@@ -8,7 +8,7 @@ import pytest
 from mpcshare.calibration import rule_choice
 from mpcshare.calibration.rule_choice import candidate_sets, choose_rule, line_ratio
 from mpcshare.control.strategies.gate import GateSettings, wearer_indicator
-from mpcshare.reports.rule_choice import rule_markdown
+from mpcshare.reports.rule_choice import rule_markdown, span_words
 
 
 def test_candidates_are_price_prefixes_with_and_without_the_cutting_modes():
@@ -293,8 +293,9 @@ def test_constant_mixtures_are_reported_and_the_why_says_when_one_would_win(monk
 
 def test_the_choice_runs_long_enough_for_every_trial_to_show_the_stroke(monkeypatch):
     """A choice trial whose first seconds hold no cutting cannot tell a sawing candidate from one that does not:
-    choose_for_bundle runs every trial until each has shown 3 s of it (here trial 5's starts at 78 s), logs it,
-    and records the seconds it ran; ``stroke_seen_s=None`` keeps the seconds it was given."""
+    choose_for_bundle runs such a trial until it has shown 3 s of it (here trial 5's starts at 78 s), the others
+    for the seconds given, logs it, and records the seconds each ran; ``stroke_seen_s=None`` keeps the seconds it
+    was given."""
     from types import SimpleNamespace
 
     from mpcshare.calibration.rule_choice import choose_for_bundle
@@ -315,9 +316,12 @@ def test_the_choice_runs_long_enough_for_every_trial_to_show_the_stroke(monkeypa
     bundle.heldout_trials = [4, 5]
     choice = choose_for_bundle(bundle, demos, n_trials=2, duration_s=60.0, mode_names=("cutting", "other"),
                                log=said.append, workers=1, robot_alphas=(1.0,))
-    assert choice["duration_s"] == 81.0 and set(durations) == {81.0} and choice["trials"] == [4, 5]
-    assert any("81 s of each trial, not 60" in line for line in said)
+    assert durations and all(d == {4: 60.0, 5: 81.0} for d in durations) and choice["trials"] == [4, 5]
+    assert choice["duration_s"] == 81.0 and choice["duration_by_trial"] == [[4, 60.0], [5, 81.0]]
+    assert any("81 s of trial 5 (the others 60 s)" in line for line in said)  # only the trial that lacks it
+    assert span_words(choice) == "first 60 s of trial 4 and 81 s of trial 5"
     durations.clear()
     choice = choose_for_bundle(bundle, demos, n_trials=2, duration_s=60.0, mode_names=("cutting", "other"), log=None,
                                workers=1, robot_alphas=(1.0,), stroke_seen_s=None)
-    assert choice["duration_s"] == 60.0 and set(durations) == {60.0}
+    assert choice["duration_s"] == 60.0 and set(durations) == {60.0} and "duration_by_trial" not in choice
+    assert span_words(choice) == "first 60 s"

@@ -10,6 +10,7 @@ import pytest
 from mpcshare.calibration.trials import (
     bundle_evaluation_trials,
     choice_duration,
+    choice_seconds,
     choice_trials,
     evaluation_trials,
     unseen_trials,
@@ -54,6 +55,8 @@ def test_the_choice_runs_until_every_trial_has_shown_the_stroke():
     late = _labelled([(1, 78.0), (0, 10.0), (1, 32.0)])  # from 78 to 88 s
     never = _labelled([(1, 120.0)])
     assert choice_duration([early, never], 60.0, 10.0, 0) == 60.0  # every trial that has a stroke shows it
+    own = [SimpleNamespace(trial_id=i, mode=t.mode) for i, t in enumerate((early, late, never))]
+    assert choice_seconds(own, 60.0, 10.0, 0) == {0: 60.0, 1: 81.0, 2: 60.0}  # only the late one runs longer
     assert choice_duration([early, late], 60.0, 10.0, 0) == 81.0  # 3 s of the late stroke: 78 to 81 s
     assert choice_duration([late], 60.0, 10.0, 0, stroke_seen_s=10.0) == 88.0
     short = _labelled([(1, 70.0), (0, 1.0), (1, 9.0)])  # one second of stroke in all: all of it

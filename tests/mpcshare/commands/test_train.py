@@ -25,5 +25,5 @@ def test_train_workers_1_chooses_the_rule_in_this_process(data_file, tmp_path, m
     assert main(["train", str(data_file), "--out", str(out), "--epochs", "2", "--rule-duration", "2",
                  "--workers", "1", "--quiet"]) == 0
     rule = json.loads((out / "rule.json").read_text())["rule"]
-    # the seconds given, or up to twice them where a choice trial shows too little of the stroke (choice_duration)
+    # the seconds given, or up to twice them where a choice trial shows too little of the stroke (choice_seconds)
     assert rule["choice"]["episodes_run"] > 0 and 2.0 <= rule["choice"]["duration_s"] <= 4.0

@@ -54,3 +54,25 @@ def test_workers_need_what_pickles_and_at_least_one_worker(trained):
     with EpisodePool(demos, 2) as pool, pytest.raises(ValueError, match="defined at module level"):
         pool.map(lambda *a, **k: None, bundle, [job], beta=0.5)
     assert 1 <= default_workers() <= MAX_DEFAULT_WORKERS
+
+
+def test_seconds_per_trial_reach_each_episode_live_and_replayed(trained):
+    """``duration_s`` as {trial: seconds}: each trial's episode runs its own seconds (a trial missing from the
+    mapping runs whole), the same whether the front end runs live or is replayed from a recording."""
+    from mpcshare.evaluation.episode import simulate_episode, trial_seconds
+    from mpcshare.evaluation.frontend_replay import simulate_cached
+
+    demos, bundle = trained
+    held = list(bundle.heldout_trials)
+    seconds = {held[0]: 0.6, **({held[1]: 1.2} if len(held) > 1 else {})}
+    job = StrategyRun("voluntary", "voluntary")
+    jobs = [EpisodeJob(t, job) for t in held[:2]]
+    settings = dict(beta=0.5, duration_s=seconds, seed=0, wearer=None, mode_names=MODE_NAMES)
+    with EpisodePool(demos, 1) as pool:
+        live = pool.map(simulate_episode, bundle, jobs, **settings)
+        replayed = [r[:2] for r in pool.map(simulate_cached, bundle, jobs * 2, **settings)][len(jobs):]
+    for j, (episode, _), (again, _) in zip(jobs, live, replayed):
+        want = trial_seconds(seconds, j.trial)
+        assert episode.t[-1] - episode.t[0] == pytest.approx(want, abs=0.02)
+        assert again.t.shape == episode.t.shape and (again.tip == episode.tip).all()
+    assert trial_seconds(seconds, -1) is None and trial_seconds(2.0, held[0]) == 2.0
