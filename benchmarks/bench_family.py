@@ -10,12 +10,12 @@ constant mixtures ``mix25``/``mix50``/``mix75``, ``paper_gate``, ``gate``, ``ble
 ``random_handover`` (matched to ``gate``, mean of 5 draws) and ``oracle_handover`` (best replay,
 an upper bound); with ``--oracle-line`` also ``oracle_line`` (the effort-aware hand-over oracle: the lowest
 line ratio a schedule that knows the future reaches within 0.75x the wearer's effort, replayed).
-Per world it prints one JSON line (``"world"``): per run the tracking RMS [mm],
-the effort [rad], the line ratio (:mod:`mpcshare.line_ratio`), the stroke-band correlation while
-cutting, the robot's share, the limit violations, the knife's lag behind the intent [s] (negative: ahead) and
-its least clearance to a body zone [mm]; ``best_mix`` (the constant α with the lowest
-line ratio); one-sided paired Wilcoxon p-values over (trial, seed) pairs of ``gate`` against
-``random_handover``, ``paper_gate`` and the best mixture; and what the oracle guarantees. At the
+Per world it prints one JSON line (``"world"``): per run the tracking RMS [mm], the effort [rad], the line ratio
+(:mod:`mpcshare.line_ratio`), the stroke-band correlation while cutting (pooled, and per cutting episode with the
+number that sawed), the robot's share, the limit violations, the knife's lag behind the intent [s] (negative:
+ahead) and its least clearance to a body zone [mm]; ``best_mix`` (the constant α with the lowest line ratio);
+one-sided paired Wilcoxon p-values over (trial, seed) pairs of ``gate`` against ``random_handover``, ``paper_gate``
+and the best mixture; and what the oracle guarantees. At the
 end one JSON object: every world, and the distribution over the family's worlds and over all
 (median, min, max, share ≤ 0.9 and ≤ 0.8 of the line ratios; effort against ``voluntary``).
 
@@ -91,6 +91,15 @@ def _candidates_on_eval(bundle: Any, demos: Any, trials: list[int], choice: dict
     return rows
 
 
+def _by_episode(row: dict[str, Any]) -> dict[str, Any]:
+    """A run's stroke correlation per cutting episode (seed 0, the trials in order) and how many sawed."""
+    from sim.task import EATING
+
+    episodes = [e for e in row.get("saw_by_episode") or () if e.get("saw_correlation") is not None]
+    return {"stroke_correlation_by_episode": [round(e["saw_correlation"], 3) for e in episodes],
+            "episodes_sawn": [sum(bool(EATING.done(e)) for e in episodes), len(episodes)]}
+
+
 def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
               oracle_line: bool = False, wearer: str | None = None) -> dict[str, Any]:
     """Train on the world, simulate every run on its held-out trials, summarise (module docstring); ``wearer``:
@@ -132,7 +141,7 @@ def run_world(world: str, quick: bool, seeds: int, all_candidates: bool = False,
         if seed == 0:
             pooled = comp.strategies
     out = {name: {k2: (None if pooled[name].get(k) is None else pooled[name][k] * s) for k, (k2, s) in FIGURES.items()}
-           for name in names}
+           | _by_episode(pooled[name]) for name in names}
     best_mix = min(MIXES, key=lambda m: (pooled[m]["line_ratio"] is None, pooled[m]["line_ratio"] or 0.0,
                                          pooled[m]["tracking_rmse_m"]))
     better = min(pooled["voluntary"]["tracking_rmse_m"], pooled["reactive"]["tracking_rmse_m"])
