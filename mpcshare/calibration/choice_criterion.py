@@ -3,9 +3,9 @@
 Criterion (in words: :func:`mpcshare.reports.rule_choice.criterion_words`): among the candidates whose effort is at
 most ``max_effort`` × the voluntary effort, those that meet the task's criterion (:func:`saws`: ``task.done``;
 eating's: the knife saws) in every episode of its stroke mode (each run of it at least
-:data:`sim.task.metrics.MIN_EPISODE_S` long; a trial's pooled figures where the rows have no episodes) where the
-wearer alone does (:func:`saws_where_the_wearer_saws`; an episode where the wearer alone does not does not count
-against a candidate), and of those the lowest line ratio; where the line is
+:data:`sim.task.metrics.MIN_EPISODE_S` long; where no candidate does, or the rows have no episodes, in each trial's
+episodes as a whole) where the wearer alone does (:func:`saws_where_the_wearer_saws`; an episode where the wearer
+alone does not does not count against a candidate), and of those the lowest line ratio; where the line is
 ill-posed (the robot alone costs the wearer at least ``max_effort`` × the effort of doing it alone), the lowest
 tracking RMS of those. When none is within the effort cap, the same without the cap. A row is a dict with
 ``tracking_rmse_m``, ``voluntary_effort``, ``effort_vs_voluntary``, ``line_ratio`` (None where undefined), the
@@ -25,8 +25,8 @@ from typing import Any
 from mpcshare.line_ratio import line_ratio
 from sim.task import EATING, Task
 
-__all__ = ["criterion", "cross_validated", "mix_winner", "predicted", "saws", "saws_where_the_wearer_saws",
-           "second_stage", "wearer_saws"]
+__all__ = ["criterion", "cross_validated", "episode_pairs", "mix_winner", "predicted", "saws",
+           "saws_where_the_wearer_saws", "second_stage", "wearer_saws"]
 
 
 def saws(row: dict[str, Any], task: Task = EATING) -> bool:
@@ -44,20 +44,30 @@ def wearer_saws(voluntary: dict[str, Any], task: Task = EATING) -> bool:
     return any(bool(a) for a in alone) if alone is not None else saws(voluntary, task)
 
 
-def saws_where_the_wearer_saws(row: dict[str, Any], voluntary: dict[str, Any], task: Task = EATING) -> bool:
+def saws_where_the_wearer_saws(row: dict[str, Any], voluntary: dict[str, Any], task: Task = EATING,
+                               by_episode: bool = True) -> bool:
     """Whether ``row`` saws (:func:`saws`) in every cutting episode in which the wearer alone (``voluntary``)
     saws; an episode where the wearer alone does not saw does not count. The episodes are ``saws_by_episode``'s
     where both rows have them, trial by trial, in the same number (the same trials and seconds: the same
-    labelled episodes); else a trial's pooled figures (``saws_by_trial``); without those on both (or of
-    different lengths), :func:`saws` of the pooled figures."""
-    mine, alone = row.get("saws_by_episode"), voluntary.get("saws_by_episode")
-    if (mine is not None and alone is not None and len(mine) == len(alone)
-            and all(len(m or ()) == len(a or ()) for m, a in zip(mine, alone)) and any(len(a or ()) for a in alone)):
-        return all(bool(m) for ms, As in zip(mine, alone) for m, a in zip(ms or (), As or ()) if a)
+    labelled episodes) and ``by_episode``; else each trial's cutting as a whole (``saws_by_trial``); without
+    those on both (or of different lengths), :func:`saws` of the pooled figures."""
+    pairs = episode_pairs(row, voluntary) if by_episode else None
+    if pairs is not None:
+        return all(bool(m) for m, a in pairs if a)
     mine, alone = row.get("saws_by_trial"), voluntary.get("saws_by_trial")
     if mine is None or alone is None or len(mine) != len(alone):
         return saws(row, task)
     return all(bool(m) for m, a in zip(mine, alone) if a)
+
+
+def episode_pairs(row: dict[str, Any], voluntary: dict[str, Any]) -> list[tuple[bool, bool]] | None:
+    """(``row`` saws, the wearer alone saws) per cutting episode, over the trials in order; None where the two
+    rows' ``saws_by_episode`` are missing, hold no episode or do not line up trial by trial."""
+    mine, alone = row.get("saws_by_episode"), voluntary.get("saws_by_episode")
+    if (mine is None or alone is None or len(mine) != len(alone)
+            or any(len(m or ()) != len(a or ()) for m, a in zip(mine, alone)) or not any(len(a or ()) for a in alone)):
+        return None
+    return [(bool(m), bool(a)) for ms, As in zip(mine, alone) for m, a in zip(ms or (), As or ())]
 
 
 def criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any],
@@ -66,15 +76,22 @@ def criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, An
     ``within_cap`` (some candidate has effort <= ``max_effort`` × voluntary), ``n_within`` of ``n_candidates``,
     ``max_effort``, ``by`` (``"line_ratio"`` or ``"tracking_rmse_m"``: what ranked the pool), the winner's
     ``line_ratio`` (None where undefined) and ``tracking_rmse_m`` [m], ``ill_posed`` (within the cap: reactive
-    alone costs >= ``max_effort`` × voluntary), ``reactive_effort_vs_voluntary``, ``task_filter`` (the pool was
-    narrowed to the rows that meet the task's criterion where the wearer alone does) and ``stroke_mode``
-    (``task.stroke_mode``: whose episodes)."""
+    alone costs >= ``max_effort`` × voluntary), ``reactive_effort_vs_voluntary``, ``task_filter`` (False, or the
+    pool was narrowed to the rows that meet the task's criterion where the wearer alone does: ``"episode"`` in
+    every episode, or, where no candidate does, ``"trial"`` over each trial's episodes as a whole) and
+    ``stroke_mode`` (``task.stroke_mode``: whose episodes)."""
     within = [r for r in rows if r["effort_vs_voluntary"] <= max_effort]
     capped = bool(within)
     candidates = within if capped else rows
-    sawing = [r for r in candidates if saws_where_the_wearer_saws(r, vol, task)]
-    filtered = wearer_saws(vol, task) and bool(sawing)
-    pool = sawing if filtered else candidates
+    level: str | bool = False
+    if wearer_saws(vol, task):
+        for level in ("episode", "trial"):
+            sawing = [r for r in candidates if saws_where_the_wearer_saws(r, vol, task, level == "episode")]
+            if sawing:
+                break
+        else:
+            level = False
+    pool = sawing if level else candidates
     posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
     ranked = [r for r in pool if r["line_ratio"] is not None]
     if ranked and (posed or not capped):
@@ -86,7 +103,7 @@ def criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, An
                   "tracking_rmse_m": float(best["tracking_rmse_m"]), "ill_posed": capped and not posed,
                   "reactive_effort_vs_voluntary": (float(rea["voluntary_effort"] / vol["voluntary_effort"])
                                                    if vol["voluntary_effort"] else None),
-                  "task_filter": filtered, "stroke_mode": task.stroke_mode}
+                  "task_filter": level, "stroke_mode": task.stroke_mode}
 
 
 def second_stage(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, Any], max_effort: float,

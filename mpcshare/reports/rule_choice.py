@@ -13,22 +13,30 @@ __all__ = ["CRITERION", "candidate_line", "criterion_why", "criterion_words", "p
            "rule_markdown", "span_words", "skipped_markdown", "why_words"]
 
 
-def _sawed(stroke_mode: str | None, trial: str = "") -> str:
+def _sawed(stroke_mode: str | None, level: str | bool = "episode") -> str:
     """Who passes the task's criterion, in words: eating's "that saw in every cutting episode where the wearer
-    alone saws" (a task with a stroke mode: sawing in that mode; without one: the criterion met)."""
+    alone saws" (a task with a stroke mode: sawing in that mode; without one: the criterion met); ``level``
+    ``"trial"`` (the criterion's ``task_filter`` where no candidate passes every episode): over each trial's
+    episodes as a whole."""
     if stroke_mode is None:
-        return f"that meet the task's criterion in every episode{trial} where the wearer alone meets it"
-    return f"that saw in every {stroke_mode} episode{trial} where the wearer alone saws"
+        return ("that meet the task's criterion in every trial's episodes as a whole where the wearer alone meets "
+                "it (none does in every episode)" if level == "trial" else
+                "that meet the task's criterion in every episode where the wearer alone meets it")
+    return (f"that saw in every trial's {stroke_mode} episodes as a whole where the wearer alone saws (none saws in "
+            f"every {stroke_mode} episode)" if level == "trial" else
+            f"that saw in every {stroke_mode} episode where the wearer alone saws")
 
 
 def criterion_words(task: Task = EATING) -> str:
     """The choice's criterion (:mod:`mpcshare.calibration.choice_criterion`) in ``task``'s words (eating's:
     :data:`CRITERION`)."""
     passed = "that saw" if task.stroke_mode is not None else "that meet it"
-    return (f"among the candidates with effort <= max_effort x voluntary, those "
-            f"{_sawed(task.stroke_mode, ' (trial)')}, the lowest line ratio (the lowest tracking RMS where reactive "
-            "itself costs >= max_effort x voluntary); if none is within the cap, the same without the cap (the "
-            f"lowest line ratio of those {passed})")
+    which = ("that meet the task's criterion in every episode (trial) where the wearer alone meets it"
+             if task.stroke_mode is None else f"{_sawed(task.stroke_mode)} (where none does, in every trial's "
+             f"{task.stroke_mode} episodes as a whole)")
+    return (f"among the candidates with effort <= max_effort x voluntary, those {which}, the lowest line "
+            "ratio (the lowest tracking RMS where reactive itself costs >= max_effort x voluntary); if none is "
+            f"within the cap, the same without the cap (the lowest line ratio of those {passed})")
 
 
 #: the criterion in eating's words
@@ -40,7 +48,7 @@ def criterion_why(reason: Mapping[str, Any]) -> str:
     (:func:`mpcshare.calibration.choice_criterion.criterion`)."""
     cap = f"{reason['max_effort']:g}x voluntary"
     rms = f"{reason['tracking_rmse_m'] * 1e3:.1f} mm"
-    sawed = " of those " + _sawed(reason["stroke_mode"]) if reason["task_filter"] else ""
+    sawed = " of those " + _sawed(reason["stroke_mode"], reason["task_filter"]) if reason["task_filter"] else ""
     if not reason["within_cap"]:
         if reason["by"] == "line_ratio":
             return f"no candidate has effort <= {cap}; the lowest line ratio ({reason['line_ratio']:.3f}){sawed}"

@@ -39,6 +39,29 @@ def test_the_episodes_within_a_trial_are_judged_one_by_one():
     assert wearer_saws({"saws_by_trial": [True], "saws_by_episode": [[]]})  # no episode long enough: the trial
 
 
+def test_where_no_candidate_saws_in_every_episode_the_trials_as_a_whole_decide():
+    """No candidate saws in all four episodes where the wearer alone saws: the criterion falls back to the trials'
+    cutting as a whole (``task_filter`` "trial"), so the candidate that saws there wins over a lower line ratio
+    that does not saw at all; with one that saws in every episode, that one wins ("episode")."""
+    vol = {"saws_by_trial": [True, True], "saws_by_episode": [[True, True], [True, True]],
+           "voluntary_effort": 0.1, "tracking_rmse_m": 0.01}
+    rea = {"voluntary_effort": 0.02, "tracking_rmse_m": 0.02}
+
+    def row(name, line, by_trial, by_episode):
+        return {"name": name, "effort_vs_voluntary": 0.5, "line_ratio": line, "tracking_rmse_m": 0.01,
+                "saws_by_trial": by_trial, "saws_by_episode": by_episode}
+
+    mostly = row("mostly", 0.95, [True, True], [[True, False], [True, True]])
+    never = row("never", 0.80, [False, False], [[False, False], [False, False]])
+    best, reason = criterion([mostly, never], vol, rea, 0.75)
+    assert best["name"] == "mostly" and reason["task_filter"] == "trial"
+    every = row("every", 0.99, [True, True], [[True, True], [True, True]])
+    best, reason = criterion([mostly, never, every], vol, rea, 0.75)
+    assert best["name"] == "every" and reason["task_filter"] == "episode"
+    best, reason = criterion([never], vol, rea, 0.75)
+    assert best["name"] == "never" and reason["task_filter"] is False  # nothing saws: the line ratio alone
+
+
 def test_the_prediction_is_the_chosen_rows_figures():
     row = {"line_ratio": 0.66, "effort_vs_voluntary": 0.5, "tracking_rmse_m": 0.004, "saw_correlation": 0.9,
            "saw_amplitude_ratio": 0.9, "saws_by_trial": [True, False]}

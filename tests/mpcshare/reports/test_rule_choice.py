@@ -9,6 +9,7 @@ from mpcshare.calibration.choice_criterion import criterion, mix_winner
 from mpcshare.reports.rule_choice import (
     CRITERION,
     candidate_line,
+    criterion_why,
     criterion_words,
     pruned_line,
     pruned_why,
@@ -129,10 +130,10 @@ def test_the_mixture_and_the_cutting_effort_add_their_sentences():
 
 def test_the_criterion_and_the_progress_lines_read_as_before():
     assert CRITERION == criterion_words(EATING) == (
-        "among the candidates with effort <= max_effort x voluntary, those that saw in every cutting episode (trial) "
-        "where the wearer alone saws, the lowest line ratio (the lowest tracking RMS where reactive itself costs >= "
-        "max_effort x voluntary); if none is within the cap, the same without the cap (the lowest line ratio of those "
-        "that saw)")
+        "among the candidates with effort <= max_effort x voluntary, those that saw in every cutting episode where "
+        "the wearer alone saws (where none does, in every trial's cutting episodes as a whole), the lowest line "
+        "ratio (the lowest tracking RMS where reactive itself costs >= max_effort x voluntary); if none is within "
+        "the cap, the same without the cap (the lowest line ratio of those that saw)")
     assert criterion_words(Pouring()) == (
         "among the candidates with effort <= max_effort x voluntary, those that meet the task's criterion in every "
         "episode (trial) where the wearer alone meets it, the lowest line ratio (the lowest tracking RMS where "
@@ -148,3 +149,11 @@ def test_the_criterion_and_the_progress_lines_read_as_before():
                                            "better than the wearer alone on either")
     assert ran_line(7, 12) == ("  7 of the 12 episodes simulated: the others decide as one of them at every step "
                                "(the same episode)")
+
+
+def test_the_why_says_when_only_the_trials_as_a_whole_saw():
+    reason = {"max_effort": 0.75, "tracking_rmse_m": 0.01, "task_filter": "trial", "stroke_mode": "cutting",
+              "within_cap": True, "n_within": 3, "n_candidates": 5, "by": "line_ratio", "line_ratio": 0.9}
+    assert criterion_why(reason) == (
+        "lowest line ratio (0.900) among the 3 of 5 candidates with effort <= 0.75x voluntary, of those that saw in "
+        "every trial's cutting episodes as a whole where the wearer alone saws (none saws in every cutting episode)")
