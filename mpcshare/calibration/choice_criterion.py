@@ -84,14 +84,12 @@ def criterion(rows: list[dict[str, Any]], vol: dict[str, Any], rea: dict[str, An
     capped = bool(within)
     candidates = within if capped else rows
     level: str | bool = False
-    if wearer_saws(vol, task):
-        for level in ("episode", "trial"):
-            sawing = [r for r in candidates if saws_where_the_wearer_saws(r, vol, task, level == "episode")]
-            if sawing:
-                break
-        else:
-            level = False
-    pool = sawing if level else candidates
+    pool = candidates
+    for by in ("episode", "trial") if wearer_saws(vol, task) else ():
+        sawing = [r for r in candidates if saws_where_the_wearer_saws(r, vol, task, by == "episode")]
+        if sawing:
+            level, pool = by, sawing
+            break
     posed = rea["voluntary_effort"] < max_effort * vol["voluntary_effort"]
     ranked = [r for r in pool if r["line_ratio"] is not None]
     if ranked and (posed or not capped):
